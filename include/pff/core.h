@@ -1,0 +1,68 @@
+/* core: package registration, log events, option checks, progress line, Morton codes. */
+#pragma once
+
+#include <stdint.h>
+#include <petscsys.h>
+
+#if PETSC_VERSION_LT(3, 19, 0) && !defined(PETSC_SUCCESS)
+  #define PETSC_SUCCESS ((PetscErrorCode)0)
+#endif
+
+/* Class id and log events, registered once by PffInitializePackage(). */
+PETSC_EXTERN PetscClassId  PFF_CLASSID;
+PETSC_EXTERN PetscLogEvent PFF_GridSetUp, PFF_GridRefine, PFF_GridPartition, PFF_HaloSetUp, PFF_HaloBegin, PFF_HaloEnd,
+  PFF_HaloRevBegin, PFF_HaloRevEnd, PFF_GridInterp, PFF_GridLaplacian, PFF_IOWrite, PFF_IORead;
+
+/* Registers the class id and every log event. Not collective; idempotent. */
+PETSC_EXTERN PetscErrorCode PffInitializePackage(void);
+
+/* Fails with one message naming the first option that no object read (a misspelt or
+   unknown key). Collective. Call once all SetFromOptions() have run. */
+PETSC_EXTERN PetscErrorCode PffOptionsCheckUnused(MPI_Comm comm);
+
+/* Library versions and build revision as one line, e.g. for HDF5 attributes. Not collective.
+   buf receives at most len characters. */
+PETSC_EXTERN PetscErrorCode PffGetVersionString(char buf[], size_t len);
+
+/* One line per step on rank 0: step, simulated time, wall time per step, ETA. */
+typedef struct {
+  PetscLogDouble start, last;
+  PetscReal      tend;
+  PetscInt       nsteps;
+} PffProgress;
+/* Starts the clock. tend (simulated end time) or nsteps (step count) gives the ETA; pass 0 for unknown. */
+PETSC_EXTERN PetscErrorCode PffProgressStart(PffProgress *p, PetscReal tend, PetscInt nsteps);
+/* Prints "step <s> t <t> wall/step <w> s ETA <e> s <extra>". Collective (reduces nothing; rank 0 prints). */
+PETSC_EXTERN PetscErrorCode PffProgressPrint(MPI_Comm comm, PffProgress *p, PetscInt step, PetscReal t, const char extra[]);
+
+/* Morton (Z-order) key of block coordinates, 21 bits per axis, x in the lowest bit. */
+static inline uint64_t PffMortonSpread_Private(uint64_t v)
+{
+  v &= 0x1fffff;
+  v = (v | v << 32) & 0x1f00000000ffffULL;
+  v = (v | v << 16) & 0x1f0000ff0000ffULL;
+  v = (v | v << 8) & 0x100f00f00f00f00fULL;
+  v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+  v = (v | v << 2) & 0x1249249249249249ULL;
+  return v;
+}
+static inline uint64_t PffMortonCompact_Private(uint64_t v)
+{
+  v &= 0x1249249249249249ULL;
+  v = (v ^ (v >> 2)) & 0x10c30c30c30c30c3ULL;
+  v = (v ^ (v >> 4)) & 0x100f00f00f00f00fULL;
+  v = (v ^ (v >> 8)) & 0x1f0000ff0000ffULL;
+  v = (v ^ (v >> 16)) & 0x1f00000000ffffULL;
+  v = (v ^ (v >> 32)) & 0x1fffff;
+  return v;
+}
+static inline uint64_t PffMortonEncode(uint32_t x, uint32_t y, uint32_t z)
+{
+  return PffMortonSpread_Private(x) | PffMortonSpread_Private(y) << 1 | PffMortonSpread_Private(z) << 2;
+}
+static inline void PffMortonDecode(uint64_t key, uint32_t *x, uint32_t *y, uint32_t *z)
+{
+  *x = (uint32_t)PffMortonCompact_Private(key);
+  *y = (uint32_t)PffMortonCompact_Private(key >> 1);
+  *z = (uint32_t)PffMortonCompact_Private(key >> 2);
+}

@@ -1,0 +1,176 @@
+/* grid: the distributed Multiresolution Sparse Block Grid (MSBG, PF-FLIP paper Sec. 4.2).
+
+   The domain is a raster of nb[0] x nb[1] x nb[2] blocks of equal geometric size. Block b has a
+   level l (-1 = inactive) and n0 >> l cells per axis. The raster (level, owner, Morton key) is
+   replicated on every rank; cell data lives only on the owning rank, one contiguous float array
+   per channel per block, x fastest. Face neighbours, edge neighbours and corner neighbours of an
+   active block differ by at most one level (2:1 grading over all 26 neighbours). */
+#pragma once
+
+#include <pff/core.h>
+
+typedef struct _n_PffGrid *PffGrid;
+
+typedef enum {
+  PFF_PARTITION_MORTON,
+  PFF_PARTITION_METIS
+} PffPartitionType;
+PETSC_EXTERN const char *const PffPartitionTypes[];
+
+typedef enum {
+  PFF_REFINE_NONE,
+  PFF_REFINE_PLANE,
+  PFF_REFINE_SPHERE
+} PffRefineType;
+PETSC_EXTERN const char *const PffRefineTypes[];
+
+/* A cell channel holds one value per cell; a face channel holds the three MAC components,
+   component d at the lower d-face of each cell (position (i + 1/2 - e_d/2) h). */
+typedef enum {
+  PFF_CHANNEL_CELL,
+  PFF_CHANNEL_FACE
+} PffChannelKind;
+PETSC_EXTERN const char *const PffChannelKinds[];
+
+#define PFF_GRID_BLOCK_SIZE_DEFAULT 16
+#define PFF_GRID_BLOCK_SIZE_MIN     4
+#define PFF_GRID_BLOCK_SIZE_MAX     64
+#define PFF_GRID_LEVELS_DEFAULT     1
+#define PFF_GRID_MAX_LEVELS         7
+#define PFF_GRID_MAX_CHANNELS       32
+#define PFF_GRID_MAX_WIDTH          4
+
+/* Requested level of the block with box [lo, hi]; -1 makes the block inactive. */
+typedef PetscErrorCode (*PffRefineFn)(PffGrid grid, const PetscReal lo[3], const PetscReal hi[3], PetscInt *level,
+                                      void *ctx);
+
+/* Where the values of block-neighbourhood region r (see PffRegionIndex) live: the value at block-local
+   cell (i, j, k) is ptr[off + i*sx + j*sy + k*sz]. For a same-level neighbour on this rank ptr is the
+   neighbour's own storage (reads see its current values, writes land in it); otherwise ptr is a ghost
+   buffer filled by PffGridHaloBegin/End and summed back by PffGridHaloReverseBegin/End. Regions
+   across a wall or facing an inactive block have a zero ghost buffer that no exchange touches. */
+typedef struct {
+  float    *ptr;
+  ptrdiff_t off, sx, sy, sz;
+} PffView;
+
+typedef struct {
+  PetscInt  gid;    /* global block index in the raster, x fastest */
+  PetscInt  ijk[3]; /* block coordinates in the raster */
+  PetscInt  level;  /* resolution level */
+  PetscInt  n;      /* cells per axis, n0 >> level */
+  PetscReal lo[3];  /* lower corner */
+  PetscReal h;      /* cell size h0 * 2^level */
+} PffBlockInfo;
+
+typedef struct {
+  PetscReal imbalance;     /* max over ranks of work / mean work */
+  PetscInt  cutFaces;      /* block faces whose two blocks have different owners */
+  PetscReal haloBytesMax;  /* bytes received per rank by one exchange of a width-1 cell channel */
+  PetscReal haloBytesMean; /* mean of the same over ranks */
+} PffPartitionQuality;
+
+/* Region index 0..26 of block-local cell (i, j, k) for a block with n cells per axis; 13 is the block itself. */
+static inline PetscInt PffRegionIndex(PetscInt i, PetscInt j, PetscInt k, PetscInt n)
+{
+  const PetscInt rx = i < 0 ? 0 : (i >= n ? 2 : 1), ry = j < 0 ? 0 : (j >= n ? 2 : 1), rz = k < 0 ? 0 : (k >= n ? 2 : 1);
+  return rx + 3 * ry + 9 * rz;
+}
+/* Address of block-local cell (i, j, k), -width <= i,j,k < n + width, through the block's 27 views. */
+static inline float *PffViewsAt(const PffView *views, PetscInt i, PetscInt j, PetscInt k, PetscInt n)
+{
+  const PffView *v = &views[PffRegionIndex(i, j, k, n)];
+  return v->ptr + (v->off + i * v->sx + j * v->sy + k * v->sz);
+}
+
+/* Life cycle. Create: collective, duplicates comm. SetFromOptions reads
+   -grid_cells nx,ny,nz        finest-level cells per axis (multiples of the block size)
+   -grid_block_size n0         cells per block axis at level 0, power of two in [4, 64]
+   -grid_levels L              resolution levels 0..L-1, L-1 <= log2(n0)
+   -grid_origin x,y,z          lower corner of the domain
+   -grid_h h0                  finest cell size (default 1/nx)
+   -grid_periodic x,z          periodic axes (any of x, y, z; others are walls)
+   -grid_refine none|plane|sphere, -grid_refine_point, -grid_refine_normal, -grid_refine_radius,
+   -grid_refine_band b         static refinement: level = floor(distance / (b block sizes))
+   -partition_type morton|metis
+   SetUp builds the raster, grades it, partitions it and allocates the channels; it validates every
+   parameter first and allocates nothing when one is impossible. Destroy is NULL-safe. */
+PETSC_EXTERN PetscErrorCode PffGridCreate(MPI_Comm comm, PffGrid *grid);
+PETSC_EXTERN PetscErrorCode PffGridSetFromOptions(PffGrid grid);
+PETSC_EXTERN PetscErrorCode PffGridSetUp(PffGrid grid);
+PETSC_EXTERN PetscErrorCode PffGridDestroy(PffGrid *grid);
+PETSC_EXTERN PetscErrorCode PffGridView(PffGrid grid, PetscViewer viewer);
+PETSC_EXTERN PetscErrorCode PffGridViewFromOptions(PffGrid grid, const char name[]);
+
+/* Setters (before SetUp; not collective but every rank must pass the same values). */
+PETSC_EXTERN PetscErrorCode PffGridSetCells(PffGrid grid, const PetscInt cells[3]);
+PETSC_EXTERN PetscErrorCode PffGridSetBlockSize(PffGrid grid, PetscInt n0);
+PETSC_EXTERN PetscErrorCode PffGridSetLevels(PffGrid grid, PetscInt nlevels);
+PETSC_EXTERN PetscErrorCode PffGridSetDomain(PffGrid grid, const PetscReal origin[3], PetscReal h0);
+PETSC_EXTERN PetscErrorCode PffGridSetPeriodic(PffGrid grid, const PetscBool periodic[3]);
+PETSC_EXTERN PetscErrorCode PffGridSetPartitionType(PffGrid grid, PffPartitionType type);
+/* Refinement by callback, evaluated per block on every rank (must be deterministic). */
+PETSC_EXTERN PetscErrorCode PffGridSetRefinementFunction(PffGrid grid, PffRefineFn fn, void *ctx);
+/* Refinement from an explicit requested-level map over the raster (copied); -1 = inactive. */
+PETSC_EXTERN PetscErrorCode PffGridSetRefinementMap(PffGrid grid, const PetscInt level[]);
+
+/* Getters (after SetUp, not collective). */
+PETSC_EXTERN PetscErrorCode PffGridGetRaster(PffGrid grid, PetscInt nb[3], const PetscInt **level,
+                                             const PetscMPIInt **owner);
+PETSC_EXTERN PetscErrorCode PffGridGetSizes(PffGrid grid, PetscInt *n0, PetscInt *nlevels, PetscReal origin[3],
+                                            PetscReal *h0, PetscBool periodic[3]);
+PETSC_EXTERN PetscErrorCode PffGridGetLocalBlocks(PffGrid grid, PetscInt *nlocal);
+PETSC_EXTERN PetscErrorCode PffGridGetBlockInfo(PffGrid grid, PetscInt lb, PffBlockInfo *info);
+/* Active blocks in global Morton order (the order of files and checksums); borrowed. */
+PETSC_EXTERN PetscErrorCode PffGridGetMortonOrder(PffGrid grid, PetscInt *nactive, const PetscInt **gids);
+/* Local index of global block gid, or -1 when another rank owns it. */
+PETSC_EXTERN PetscErrorCode PffGridGetLocalIndex(PffGrid grid, PetscInt gid, PetscInt *lb);
+PETSC_EXTERN PetscErrorCode PffGridGetPartitionQuality(PffGrid grid, PffPartitionQuality *q);
+/* Global number of active cells at each level and in total (collective-free: from the raster). */
+PETSC_EXTERN PetscErrorCode PffGridGetCellCounts(PffGrid grid, PetscInt64 perLevel[PFF_GRID_MAX_LEVELS],
+                                                 PetscInt64 *total);
+
+/* Channels. AddChannel may be called before or after SetUp; the data is zeroed. width is the halo
+   width in cells of the block's own level, 1..PFF_GRID_MAX_WIDTH and at most the cells per axis
+   of the coarsest block. Not collective, but every rank must add the same channels in the same order. */
+PETSC_EXTERN PetscErrorCode PffGridAddChannel(PffGrid grid, const char name[], PffChannelKind kind, PetscInt width,
+                                              PetscInt *ch);
+PETSC_EXTERN PetscErrorCode PffGridGetChannelInfo(PffGrid grid, PetscInt ch, const char **name, PffChannelKind *kind,
+                                                  PetscInt *ncomp, PetscInt *width);
+PETSC_EXTERN PetscErrorCode PffGridGetNumChannels(PffGrid grid, PetscInt *nch);
+/* Owned values of component comp of local block lb: n^3 floats, x fastest. Borrowed. */
+PETSC_EXTERN PetscErrorCode PffGridGetBlockData(PffGrid grid, PetscInt ch, PetscInt lb, PetscInt comp, float **data);
+/* The 27 region views of component comp of local block lb (see PffView). Borrowed. */
+PETSC_EXTERN PetscErrorCode PffGridGetBlockViews(PffGrid grid, PetscInt ch, PetscInt lb, PetscInt comp,
+                                                 const PffView **views);
+
+/* Halo exchange of block face, edge and corner layers of width w (the channel's), across ranks and
+   levels: same level copies, a coarser neighbour is interpolated (trilinear, linear extrapolation
+   inside the neighbour), a finer neighbour is averaged. Split phase: work that does not read ghosts
+   may run between Begin and End. Collective. */
+PETSC_EXTERN PetscErrorCode PffGridHaloBegin(PffGrid grid, PetscInt ch);
+PETSC_EXTERN PetscErrorCode PffGridHaloEnd(PffGrid grid, PetscInt ch);
+/* Reverse halo: sums what was written into ghost buffers back into the owners' cells (for splatting),
+   conserving the global sum, and zeroes the ghost buffers. Collective. */
+PETSC_EXTERN PetscErrorCode PffGridHaloReverseBegin(PffGrid grid, PetscInt ch);
+PETSC_EXTERN PetscErrorCode PffGridHaloReverseEnd(PffGrid grid, PetscInt ch);
+
+/* World position -> block and cell at the block's level (shifts and masks). gid = -1 outside the
+   domain or in an inactive block. Not collective. */
+PETSC_EXTERN PetscErrorCode PffGridLocate(PffGrid grid, const PetscReal x[3], PetscInt *gid, PetscInt *level,
+                                          PetscInt cell[3]);
+/* Trilinear interpolation of channel ch at np points x[3*np] that lie in locally owned blocks; val
+   receives ncomp values per point (MAC components each on their own staggered lattice). Ghosts must be
+   current (PffGridHaloBegin/End). Exact for linear fields, also across level boundaries. Not collective. */
+PETSC_EXTERN PetscErrorCode PffGridInterpolate(PffGrid grid, PetscInt ch, PetscInt np, const PetscReal x[],
+                                               PetscReal val[]);
+
+/* 7-point Laplacian dst = lap(src) on cell channels, using src's ghosts (exchanged by the caller). */
+PETSC_EXTERN PetscErrorCode PffGridApplyLaplacian(PffGrid grid, PetscInt src, PetscInt dst);
+
+/* Pure helpers on a raster of nb blocks (x fastest), exposed for tests and tools. */
+/* Refines (never coarsens) level[] so that active 26-neighbours differ by at most one level. */
+PETSC_EXTERN PetscErrorCode PffGradeLevels(const PetscInt nb[3], const PetscBool periodic[3], PetscInt level[]);
+/* Global index of the neighbour of block (i,j,k) in direction d[3] in {-1,0,1}^3, or -1 across a wall. */
+PETSC_EXTERN PetscInt PffRasterNeighbour(const PetscInt nb[3], const PetscBool periodic[3], const PetscInt ijk[3],
+                                         const PetscInt d[3]);

@@ -1,0 +1,97 @@
+/* Private state of PffGrid; only src/grid/ includes this. */
+#pragma once
+
+#include <pff.h>
+
+/* One region of one block component that is not read directly from a neighbour's storage. */
+typedef struct {
+  PetscInt  lb, comp, region;
+  PetscInt  nbgid;     /* neighbour block, -1 across a wall or towards an inactive block */
+  PetscInt  rel;       /* level(neighbour) - level(block): 0, +1 (coarser) or -1 (finer) */
+  PetscInt  glo[3];    /* first ghost cell, block-local coordinates at the block's level */
+  PetscInt  gn[3];     /* ghost box extent */
+  PetscInt  slo[3];    /* first source cell, neighbour-local coordinates at the neighbour's level */
+  PetscInt  sn[3];     /* source box extent (cross-level only) */
+  PetscInt64 goff;     /* ghost box offset in the halo buffer */
+  PetscInt64 soff;     /* source box offset in the halo buffer (cross-level only) */
+} PffHaloXfer;
+
+/* Communication plan shared by every channel of one kind and width; rebuilt when the raster changes. */
+typedef struct {
+  PffChannelKind kind;
+  PetscInt       width, ncomp;
+  PetscInt64     nhalo;  /* floats in the halo buffer: ghost boxes, then source boxes */
+  PetscInt64     nghost; /* of which ghost boxes */
+  PetscInt64    *goff;   /* [nlocal][ncomp][27] ghost box offset, -1 for a direct (same rank, same level) view */
+  PetscInt       nxfer;
+  PffHaloXfer   *xfer;
+  PetscSF        sf;     /* roots: channel data; leaves: halo buffer */
+  PetscInt64     recvRemote; /* leaves fed by other ranks (floats) */
+} PffHaloPlan;
+
+typedef struct {
+  char           name[64];
+  PffChannelKind kind;
+  PetscInt       ncomp, width;
+  float         *data;  /* owned values, [local block][comp][n^3] */
+  float         *halo;  /* ghost and source boxes of the plan */
+  PffView       *views; /* [nlocal][ncomp][27] */
+  PffHaloPlan   *plan;  /* borrowed from the grid */
+} PffChannel;
+
+struct _n_PffGrid {
+  MPI_Comm    comm;
+  PetscMPIInt rank, size;
+  PetscBool   setupcalled;
+
+  /* parameters */
+  PetscInt         cells[3], n0, log2n0, nlevels;
+  PetscReal        origin[3], h0;
+  PetscBool        periodic[3];
+  PffPartitionType ptype;
+  PffRefineType    rtype;
+  PetscReal        rpoint[3], rnormal[3], rradius, rband;
+  PffRefineFn      refine;
+  void            *refinectx;
+  PetscInt        *usermap;
+
+  /* replicated raster */
+  PetscInt     nb[3], nblocks, nactive;
+  PetscInt    *level;  /* [nblocks], -1 inactive */
+  PetscMPIInt *owner;  /* [nblocks], -1 inactive */
+  uint64_t    *morton; /* [nblocks] */
+  PetscInt    *order;  /* [nactive] active blocks by Morton key */
+  PetscInt64  *offset; /* [nblocks] cell offset of the block in its owner's storage */
+  PetscInt    *local;  /* [nblocks] local index on this rank or -1 */
+
+  /* owned blocks, Morton order */
+  PetscInt    nlocal;
+  PetscInt   *lgid;   /* [nlocal] */
+  PetscInt64 *loff;   /* [nlocal + 1] cell offsets */
+  PetscInt64  ncells; /* owned cells */
+
+  PetscInt    nch;
+  PffChannel *ch[PFF_GRID_MAX_CHANNELS];
+  PetscInt    nplans;
+  PffHaloPlan *plans[2 * PFF_GRID_MAX_WIDTH];
+
+  PffPartitionQuality quality;
+};
+
+static inline PetscInt PffGridBlockN_Private(PffGrid g, PetscInt gid)
+{
+  return g->n0 >> g->level[gid];
+}
+
+PETSC_INTERN PetscErrorCode PffGridBuildRaster_Private(PffGrid);
+PETSC_INTERN PetscErrorCode PffGridPartition_Private(PffGrid);
+PETSC_INTERN PetscErrorCode PffGridAllocateChannel_Private(PffGrid, PffChannel *);
+PETSC_INTERN PetscErrorCode PffGridDestroyChannel_Private(PffChannel **);
+PETSC_INTERN PetscErrorCode PffHaloPlanGet_Private(PffGrid, PffChannelKind, PetscInt, PffHaloPlan **);
+PETSC_INTERN PetscErrorCode PffHaloPlanDestroy_Private(PffHaloPlan **);
+PETSC_INTERN PetscErrorCode PffGridComputeQuality_Private(PffGrid);
+/* Lattice offset (0 or 1/2 cell) of component comp of a channel kind along axis d. */
+static inline PetscReal PffChannelOffset_Private(PffChannelKind kind, PetscInt comp, PetscInt d)
+{
+  return (kind == PFF_CHANNEL_FACE && comp == d) ? 0.0 : 0.5;
+}
