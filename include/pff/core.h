@@ -3,6 +3,7 @@
 
 #include <stdint.h>
 #include <petscsys.h>
+#include <petscviewer.h>
 
 #if PETSC_VERSION_LT(3, 19, 0) && !defined(PETSC_SUCCESS)
   #define PETSC_SUCCESS ((PetscErrorCode)0)

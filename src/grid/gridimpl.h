@@ -2,6 +2,8 @@
 #pragma once
 
 #include <pff.h>
+#include <petscsf.h>
+#include <petscviewer.h>
 
 /* One region of one block component that is not read directly from a neighbour's storage. */
 typedef struct {
@@ -34,6 +36,7 @@ typedef struct {
   PffChannelKind kind;
   PetscInt       ncomp, width;
   float         *data;  /* owned values, [local block][comp][n^3] */
+  float         *alloc; /* data - PFF_CHANNEL_PAD: row kernels may read one value past either end */
   float         *halo;  /* ghost and source boxes of the plan */
   PffView       *views; /* [nlocal][ncomp][27] */
   PffHaloPlan   *plan;  /* borrowed from the grid */
@@ -77,6 +80,8 @@ struct _n_PffGrid {
 
   PffPartitionQuality quality;
 };
+
+#define PFF_CHANNEL_PAD 16
 
 static inline PetscInt PffGridBlockN_Private(PffGrid g, PetscInt gid)
 {

@@ -1,0 +1,68 @@
+/* pfflip: the driver. Options -> scene set-up (every option read and checked) -> run -> finalize.
+
+   mpiexec -n 2 build/bin/pfflip -options_file_yaml config/grid_demo.yaml [-key value ...]
+
+   Input errors (bad or unknown options, missing files) print one line naming the key and exit
+   with status 1; internal errors keep PETSc's full traceback. */
+#include <pff.h>
+
+static const char usage[] = "pfflip: Adaptive Phase-Field-FLIP on Multiresolution Sparse Block Grids.\n"
+                           "Usage: mpiexec -n <ranks> pfflip -options_file_yaml config/<scene>.yaml [-key value ...]\n";
+
+static PetscBool PffIsInputError(PetscErrorCode n)
+{
+  switch (n) {
+  case PETSC_ERR_ARG_OUTOFRANGE:
+  case PETSC_ERR_ARG_WRONG:
+  case PETSC_ERR_ARG_SIZ:
+  case PETSC_ERR_ARG_INCOMP:
+  case PETSC_ERR_ARG_UNKNOWN_TYPE:
+  case PETSC_ERR_ARG_WRONGSTATE:
+  case PETSC_ERR_FILE_OPEN:
+  case PETSC_ERR_FILE_READ:
+  case PETSC_ERR_FILE_UNEXPECTED:
+  case PETSC_ERR_USER_INPUT:
+    return PETSC_TRUE;
+  default:
+    return PETSC_FALSE;
+  }
+}
+
+/* Prints an input error once per communicator: the first rank of a collective check, or the rank
+   that found it. Everything else goes to PETSc's traceback handler. */
+static PetscErrorCode PffErrorHandler(MPI_Comm comm, int line, const char *fun, const char *file, PetscErrorCode n,
+                                      PetscErrorType p, const char *mess, void *ctx)
+{
+  PetscMPIInt rank = 0;
+  if (!PffIsInputError(n)) return PetscTraceBackErrorHandler(comm, line, fun, file, n, p, mess, ctx);
+  if (p == PETSC_ERROR_INITIAL) {
+    if (comm != MPI_COMM_NULL) MPI_Comm_rank(comm, &rank);
+    if (rank == 0) fprintf(stderr, "pfflip: error: %s\n", mess ? mess : "input error");
+  }
+  return n;
+}
+
+int main(int argc, char **argv)
+{
+  PffScene       scene = NULL;
+  PetscBool      help  = PETSC_FALSE;
+  PetscErrorCode ierr;
+
+  PetscCall(PetscInitialize(&argc, &argv, NULL, usage));
+  PetscCall(PetscPushErrorHandler(PffErrorHandler, NULL));
+  PetscCall(PetscOptionsHasName(NULL, NULL, "-help", &help));
+  ierr = PffSceneCreate(PETSC_COMM_WORLD, &scene);
+  if (!ierr) ierr = PffSceneSetFromOptions(scene);
+  if (!ierr) ierr = PffOptionsCheckUnused(PETSC_COMM_WORLD);
+  if (!ierr && !help) ierr = PffSceneRun(scene);
+  if (ierr) {
+    /* an input error found on every rank ends cleanly; anything else may have left ranks behind */
+    if (!PffIsInputError(ierr)) MPI_Abort(MPI_COMM_WORLD, 1);
+    (void)PffSceneDestroy(&scene);
+    (void)PetscFinalize();
+    return 1;
+  }
+  PetscCall(PffSceneDestroy(&scene));
+  PetscCall(PetscFinalize());
+  return 0;
+}

@@ -1,0 +1,30 @@
+/* Package registration: the class id and one log event per pipeline operation, so -log_view
+   shows where the time goes. Registered once; names stay within 16 characters. */
+#include <pff.h>
+
+PetscClassId  PFF_CLASSID;
+PetscLogEvent PFF_GridSetUp, PFF_GridRefine, PFF_GridPartition, PFF_HaloSetUp, PFF_HaloBegin, PFF_HaloEnd,
+  PFF_HaloRevBegin, PFF_HaloRevEnd, PFF_GridInterp, PFF_GridLaplacian, PFF_IOWrite, PFF_IORead;
+
+static PetscBool PffPackageInitialized = PETSC_FALSE;
+
+PetscErrorCode PffInitializePackage(void)
+{
+  PetscFunctionBeginUser;
+  if (PffPackageInitialized) PetscFunctionReturn(PETSC_SUCCESS);
+  PffPackageInitialized = PETSC_TRUE;
+  PetscCall(PetscClassIdRegister("PFF", &PFF_CLASSID));
+  PetscCall(PetscLogEventRegister("GridSetUp", PFF_CLASSID, &PFF_GridSetUp));
+  PetscCall(PetscLogEventRegister("GridRefine", PFF_CLASSID, &PFF_GridRefine));
+  PetscCall(PetscLogEventRegister("GridPartition", PFF_CLASSID, &PFF_GridPartition));
+  PetscCall(PetscLogEventRegister("HaloSetUp", PFF_CLASSID, &PFF_HaloSetUp));
+  PetscCall(PetscLogEventRegister("HaloBegin", PFF_CLASSID, &PFF_HaloBegin));
+  PetscCall(PetscLogEventRegister("HaloEnd", PFF_CLASSID, &PFF_HaloEnd));
+  PetscCall(PetscLogEventRegister("HaloRevBegin", PFF_CLASSID, &PFF_HaloRevBegin));
+  PetscCall(PetscLogEventRegister("HaloRevEnd", PFF_CLASSID, &PFF_HaloRevEnd));
+  PetscCall(PetscLogEventRegister("GridInterp", PFF_CLASSID, &PFF_GridInterp));
+  PetscCall(PetscLogEventRegister("GridLaplacian", PFF_CLASSID, &PFF_GridLaplacian));
+  PetscCall(PetscLogEventRegister("IOWrite", PFF_CLASSID, &PFF_IOWrite));
+  PetscCall(PetscLogEventRegister("IORead", PFF_CLASSID, &PFF_IORead));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}

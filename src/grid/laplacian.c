@@ -1,0 +1,70 @@
+/* 7-point Laplacian on cell channels, dst = (sum of the 6 neighbours - 6 u) / h^2 at each block's
+   own level, with neighbours across block faces read through the region views (ghosts at the
+   block's level). It is the bandwidth probe of pff-bench-grid (paper Table 3) and the diffusion of
+   the grid demo; the symmetric coarse-fine pressure operator lives in src/pressure/.
+   Rows along x are contiguous in every region a row can fall into, so the inner loop is a
+   unit-stride, vectorisable sweep; only the two end cells of a row look across x faces. */
+#include "gridimpl.h"
+
+/* Address of row (j, k) (i = 0) of the block's neighbourhood, for rows inside the block's x range. */
+static inline const float *PffRow(const PffView *in, PetscInt j, PetscInt k, PetscInt n)
+{
+  return PffViewsAt(in, 0, j, k, n);
+}
+
+/* One block; n is a compile-time constant at the call sites below, so the row loop unrolls into
+   whole SIMD vectors. The vector sweep covers the whole row and so reads c[-1] and c[n], which are
+   other rows' values (the channel allocation is padded, so they exist); the two end cells are
+   then recomputed with their true x neighbours. */
+static inline __attribute__((always_inline)) void PffLaplacianBlockN(const PffView *restrict in, float *restrict out,
+                                                                      const PetscInt n, float ih2)
+{
+  const float   *c0 = in[13].ptr;
+  const PffView *vxm = &in[12], *vxp = &in[14];
+  for (PetscInt k = 0; k < n; k++)
+    for (PetscInt j = 0; j < n; j++) {
+      const float *restrict c  = c0 + n * (j + n * k);
+      const float *restrict ym = j > 0 ? c - n : PffRow(in, j - 1, k, n);
+      const float *restrict yp = j < n - 1 ? c + n : PffRow(in, j + 1, k, n);
+      const float *restrict zm = k > 0 ? c - n * n : PffRow(in, j, k - 1, n);
+      const float *restrict zp = k < n - 1 ? c + n * n : PffRow(in, j, k + 1, n);
+      float *restrict o        = out + n * (j + n * k);
+      const float     xm       = vxm->ptr[vxm->off - vxm->sx + j * vxm->sy + k * vxm->sz];
+      const float     xp       = vxp->ptr[vxp->off + n * vxp->sx + j * vxp->sy + k * vxp->sz];
+#pragma omp simd
+      for (PetscInt i = 0; i < n; i++) o[i] = (c[i - 1] + c[i + 1] + ym[i] + yp[i] + zm[i] + zp[i] - 6.0f * c[i]) * ih2;
+      const PetscInt e = n - 1;
+      o[0]             = (xm + (n > 1 ? c[1] : xp) + ym[0] + yp[0] + zm[0] + zp[0] - 6.0f * c[0]) * ih2;
+      o[e]             = ((n > 1 ? c[e - 1] : xm) + xp + ym[e] + yp[e] + zm[e] + zp[e] - 6.0f * c[e]) * ih2;
+    }
+}
+
+static void PffLaplacianBlock(const PffView *restrict in, float *restrict out, PetscInt n, float ih2)
+{
+  switch (n) {
+  case 64: PffLaplacianBlockN(in, out, 64, ih2); break;
+  case 32: PffLaplacianBlockN(in, out, 32, ih2); break;
+  case 16: PffLaplacianBlockN(in, out, 16, ih2); break;
+  case 8: PffLaplacianBlockN(in, out, 8, ih2); break;
+  default: PffLaplacianBlockN(in, out, n, ih2); break;
+  }
+}
+
+PetscErrorCode PffGridApplyLaplacian(PffGrid g, PetscInt src, PetscInt dst)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(src >= 0 && src < g->nch && dst >= 0 && dst < g->nch && src != dst, PETSC_COMM_SELF,
+             PETSC_ERR_ARG_OUTOFRANGE, "need two different channels");
+  const PffChannel *in = g->ch[src], *out = g->ch[dst];
+  PetscCheck(in->kind == PFF_CHANNEL_CELL && out->kind == PFF_CHANNEL_CELL, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
+             "the Laplacian works on cell channels");
+  PetscCall(PetscLogEventBegin(PFF_GridLaplacian, 0, 0, 0, 0));
+#pragma omp parallel for schedule(dynamic, 1)
+  for (PetscInt lb = 0; lb < g->nlocal; lb++) {
+    const PetscInt  l = g->level[g->lgid[lb]], n = g->n0 >> l;
+    const PetscReal h = g->h0 * (PetscReal)((PetscInt)1 << l);
+    PffLaplacianBlock(&in->views[lb * 27], out->data + g->loff[lb], n, (float)(1.0 / (h * h)));
+  }
+  PetscCall(PetscLogEventEnd(PFF_GridLaplacian, 0, 0, 0, 0));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}

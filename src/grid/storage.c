@@ -1,0 +1,135 @@
+/* Block storage: per channel one allocation holding each owned block's components contiguously
+   ([block][comp][n^3], x fastest, blocks in Morton order), and the 27 region views per block
+   component through which kernels reach the block's neighbourhood without branching on where
+   the data lives (own storage, a same-level neighbour on this rank, or a ghost buffer). */
+#include "gridimpl.h"
+
+PetscErrorCode PffGridAddChannel(PffGrid g, const char name[], PffChannelKind kind, PetscInt width, PetscInt *ch)
+{
+  PffChannel *c;
+
+  PetscFunctionBeginUser;
+  PetscCheck(g->nch < PFF_GRID_MAX_CHANNELS, g->comm, PETSC_ERR_SUP, "at most %d channels", PFF_GRID_MAX_CHANNELS);
+  PetscCheck(width >= 1 && width <= PFF_GRID_MAX_WIDTH, g->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "channel %s: halo width %" PetscInt_FMT " must be in [1, %d]", name, width, PFF_GRID_MAX_WIDTH);
+  for (PetscInt i = 0; i < g->nch; i++)
+    PetscCheck(strcmp(g->ch[i]->name, name), g->comm, PETSC_ERR_ARG_WRONG, "channel %s exists already", name);
+  PetscCall(PetscNew(&c));
+  PetscCall(PetscStrncpy(c->name, name, sizeof(c->name)));
+  c->kind  = kind;
+  c->ncomp = kind == PFF_CHANNEL_FACE ? 3 : 1;
+  c->width = width;
+  if (g->setupcalled) PetscCall(PffGridAllocateChannel_Private(g, c));
+  g->ch[g->nch] = c;
+  *ch           = g->nch++;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffGridAllocateChannel_Private(PffGrid g, PffChannel *c)
+{
+  const PetscInt nmin = g->n0 >> (g->nlevels - 1);
+
+  PetscFunctionBeginUser;
+  PetscCheck(c->width <= nmin, g->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "channel %s: halo width %" PetscInt_FMT " exceeds the %" PetscInt_FMT
+             " cells per axis of the coarsest blocks; lower -grid_levels or raise -grid_block_size",
+             c->name, c->width, nmin);
+  PetscCall(PffHaloPlanGet_Private(g, c->kind, c->width, &c->plan));
+  PetscCall(PetscCalloc1(c->ncomp * g->ncells + 2 * PFF_CHANNEL_PAD, &c->alloc));
+  c->data = c->alloc + PFF_CHANNEL_PAD;
+  PetscCall(PetscCalloc1(PetscMax(c->plan->nhalo, 1), &c->halo));
+  PetscCall(PetscMalloc1(g->nlocal * c->ncomp * 27, &c->views));
+  for (PetscInt lb = 0; lb < g->nlocal; lb++) {
+    const PetscInt gid = g->lgid[lb], n = PffGridBlockN_Private(g, gid);
+    const PetscInt ijk[3] = {gid % g->nb[0], (gid / g->nb[0]) % g->nb[1], gid / (g->nb[0] * g->nb[1])};
+    for (PetscInt comp = 0; comp < c->ncomp; comp++) {
+      for (PetscInt r = 0; r < 27; r++) {
+        PffView       *v    = &c->views[(lb * c->ncomp + comp) * 27 + r];
+        const PetscInt d[3] = {r % 3 - 1, (r / 3) % 3 - 1, r / 9 - 1};
+        const PetscInt64 go = c->plan->goff[(lb * c->ncomp + comp) * 27 + r];
+        if (r == 13 || go < 0) {
+          /* own storage, or a same-level neighbour on this rank read in place */
+          const PetscInt src = r == 13 ? gid : PffRasterNeighbour(g->nb, g->periodic, ijk, d);
+          v->ptr             = c->data + c->ncomp * g->offset[src] + comp * n * n * n;
+          v->off             = -(ptrdiff_t)(d[0] * n + d[1] * n * n + d[2] * n * n * n);
+          v->sx              = 1;
+          v->sy              = n;
+          v->sz              = n * n;
+        } else {
+          PetscInt lo[3], ext[3];
+          for (int a = 0; a < 3; a++) {
+            lo[a]  = d[a] < 0 ? -c->width : (d[a] > 0 ? n : 0);
+            ext[a] = d[a] ? c->width : n;
+          }
+          v->ptr = c->halo + go;
+          v->sx  = 1;
+          v->sy  = ext[0];
+          v->sz  = ext[0] * ext[1];
+          v->off = -(ptrdiff_t)(lo[0] + lo[1] * v->sy + lo[2] * v->sz);
+        }
+      }
+    }
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffGridDestroyChannel_Private(PffChannel **c)
+{
+  PetscFunctionBeginUser;
+  if (!*c) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PetscFree((*c)->alloc));
+  PetscCall(PetscFree((*c)->halo));
+  PetscCall(PetscFree((*c)->views));
+  PetscCall(PetscFree(*c));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffGridCheckChannel(PffGrid g, PetscInt ch)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(ch >= 0 && ch < g->nch, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "no channel %" PetscInt_FMT, ch);
+  PetscCheck(g->setupcalled, PETSC_COMM_SELF, PETSC_ERR_ORDER, "call PffGridSetUp() first");
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffGridGetNumChannels(PffGrid g, PetscInt *nch)
+{
+  PetscFunctionBeginUser;
+  *nch = g->nch;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffGridGetChannelInfo(PffGrid g, PetscInt ch, const char **name, PffChannelKind *kind, PetscInt *ncomp,
+                                     PetscInt *width)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(ch >= 0 && ch < g->nch, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "no channel %" PetscInt_FMT, ch);
+  if (name) *name = g->ch[ch]->name;
+  if (kind) *kind = g->ch[ch]->kind;
+  if (ncomp) *ncomp = g->ch[ch]->ncomp;
+  if (width) *width = g->ch[ch]->width;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffGridGetBlockData(PffGrid g, PetscInt ch, PetscInt lb, PetscInt comp, float **data)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffGridCheckChannel(g, ch));
+  const PffChannel *c = g->ch[ch];
+  PetscCheck(lb >= 0 && lb < g->nlocal && comp >= 0 && comp < c->ncomp, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+             "block %" PetscInt_FMT " component %" PetscInt_FMT " out of range", lb, comp);
+  const PetscInt n = PffGridBlockN_Private(g, g->lgid[lb]);
+  *data            = c->data + c->ncomp * g->loff[lb] + comp * n * n * n;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffGridGetBlockViews(PffGrid g, PetscInt ch, PetscInt lb, PetscInt comp, const PffView **views)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffGridCheckChannel(g, ch));
+  const PffChannel *c = g->ch[ch];
+  PetscCheck(lb >= 0 && lb < g->nlocal && comp >= 0 && comp < c->ncomp, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+             "block %" PetscInt_FMT " component %" PetscInt_FMT " out of range", lb, comp);
+  *views = &c->views[(lb * c->ncomp + comp) * 27];
+  PetscFunctionReturn(PETSC_SUCCESS);
+}

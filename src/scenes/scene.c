@@ -1,0 +1,101 @@
+/* Scene registry: -scene picks a set-up by name; -output_dir says where its files go. */
+#include "sceneimpl.h"
+#include <errno.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+typedef struct {
+  const char *name;
+  PetscErrorCode (*create)(PffScene);
+} PffSceneEntry;
+
+static const PffSceneEntry PffScenes[] = {
+  {"grid_demo", PffSceneCreate_GridDemo},
+};
+
+PetscErrorCode PffSceneCreate(MPI_Comm comm, PffScene *scene)
+{
+  PffScene s;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffInitializePackage());
+  PetscCall(PetscNew(&s));
+  s->comm = comm;
+  PetscCall(PetscStrncpy(s->name, "grid_demo", sizeof(s->name)));
+  *scene = s;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffSceneSetFromOptions(PffScene s)
+{
+  const size_t nscenes = PETSC_STATIC_ARRAY_LENGTH(PffScenes);
+  const char  *names[8];
+  PetscInt     pick = 0;
+  PetscBool    set;
+  char         known[256] = "";
+
+  PetscFunctionBeginUser;
+  for (size_t i = 0; i < nscenes; i++) {
+    names[i] = PffScenes[i].name;
+    PetscCall(PetscStrlcat(known, i ? ", " : "", sizeof(known)));
+    PetscCall(PetscStrlcat(known, names[i], sizeof(known)));
+  }
+  PetscOptionsBegin(s->comm, NULL, "Scene", "PffScene");
+  char name[64];
+  PetscCall(PetscStrncpy(name, s->name, sizeof(name)));
+  PetscCall(PetscOptionsString("-scene", "Scene to run", "PffSceneCreate", name, name, sizeof(name), &set));
+  pick = -1;
+  for (size_t i = 0; i < nscenes; i++)
+    if (!strcmp(name, names[i])) pick = (PetscInt)i;
+  PetscCheck(pick >= 0, s->comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "-scene %s is unknown; known scenes: %s", name, known);
+  PetscCall(PetscStrncpy(s->name, name, sizeof(s->name)));
+  PetscCall(PetscSNPrintf(s->outdir, sizeof(s->outdir), "output/%s", s->name));
+  PetscCall(PetscOptionsString("-output_dir", "Directory for frames and logs", NULL, s->outdir, s->outdir,
+                               sizeof(s->outdir), NULL));
+  PetscOptionsEnd();
+  PetscCall(PffScenes[pick].create(s));
+  if (s->ops.setfromoptions) PetscCall(s->ops.setfromoptions(s));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffSceneMakeOutputDir_Private(PffScene s)
+{
+  PetscMPIInt rank;
+  int         err = 0;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+  if (rank == 0) {
+    char path[PETSC_MAX_PATH_LEN];
+    PetscCall(PetscStrncpy(path, s->outdir, sizeof(path)));
+    for (char *c = path + 1; *c && !err; c++) {
+      if (*c != '/') continue;
+      *c = '\0';
+      if (mkdir(path, 0755) && errno != EEXIST) err = errno;
+      *c = '/';
+    }
+    if (!err && mkdir(path, 0755) && errno != EEXIST) err = errno;
+    if (!err && access(path, W_OK)) err = errno;
+  }
+  PetscCallMPI(MPI_Bcast(&err, 1, MPI_INT, 0, s->comm));
+  PetscCheck(!err, s->comm, PETSC_ERR_FILE_OPEN, "-output_dir %s cannot be created or written: %s", s->outdir,
+             strerror(err));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffSceneRun(PffScene s)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffSceneMakeOutputDir_Private(s));
+  PetscCall(s->ops.run(s));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffSceneDestroy(PffScene *scene)
+{
+  PetscFunctionBeginUser;
+  if (!scene || !*scene) PetscFunctionReturn(PETSC_SUCCESS);
+  if ((*scene)->ops.destroy) PetscCall((*scene)->ops.destroy(*scene));
+  PetscCall(PetscFree(*scene));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}

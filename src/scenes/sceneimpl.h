@@ -1,0 +1,22 @@
+/* Private scene interface: each scene fills these hooks; only src/scenes/ includes this. */
+#pragma once
+
+#include <pff.h>
+
+typedef struct {
+  PetscErrorCode (*setfromoptions)(PffScene);
+  PetscErrorCode (*run)(PffScene);
+  PetscErrorCode (*destroy)(PffScene);
+} PffSceneOps;
+
+struct _n_PffScene {
+  MPI_Comm    comm;
+  char        name[64];
+  char        outdir[PETSC_MAX_PATH_LEN];
+  PffSceneOps ops;
+  void       *data;
+};
+
+PETSC_INTERN PetscErrorCode PffSceneCreate_GridDemo(PffScene);
+/* Creates the output directory (rank 0) and checks it is writable; errors name -output_dir. */
+PETSC_INTERN PetscErrorCode PffSceneMakeOutputDir_Private(PffScene);
