@@ -5,6 +5,7 @@
    Input errors (bad or unknown options, missing files) print one line naming the key and exit
    with status 1; internal errors keep PETSc's full traceback. */
 #include <pff.h>
+#include <unistd.h>
 
 static const char usage[] = "pfflip: Adaptive Phase-Field-FLIP on Multiresolution Sparse Block Grids.\n"
                            "Usage: mpiexec -n <ranks> pfflip -options_file_yaml config/<scene>.yaml [-key value ...]\n";
@@ -42,12 +43,33 @@ static PetscErrorCode PffErrorHandler(MPI_Comm comm, int line, const char *fun, 
   return n;
 }
 
+/* PETSc reads option files inside PetscInitialize, where a missing file ends in a traceback; this
+   only checks that the named files exist, so the user gets one line naming the key instead. */
+static int PffCheckOptionFiles(int argc, char **argv)
+{
+  int rank = 0, bad = 0;
+  MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+  for (int i = 1; i + 1 < argc; i++) {
+    if (strcmp(argv[i], "-options_file_yaml") && strcmp(argv[i], "-options_file")) continue;
+    if (access(argv[i + 1], R_OK)) {
+      if (rank == 0 && !bad) fprintf(stderr, "pfflip: error: %s %s: no such file or not readable\n", argv[i], argv[i + 1]);
+      bad = 1;
+    }
+  }
+  return bad;
+}
+
 int main(int argc, char **argv)
 {
   PffScene       scene = NULL;
   PetscBool      help  = PETSC_FALSE;
   PetscErrorCode ierr;
 
+  if (MPI_Init(&argc, &argv) != MPI_SUCCESS) return 1;
+  if (PffCheckOptionFiles(argc, argv)) {
+    MPI_Finalize();
+    return 1;
+  }
   PetscCall(PetscInitialize(&argc, &argv, NULL, usage));
   PetscCall(PetscPushErrorHandler(PffErrorHandler, NULL));
   PetscCall(PetscOptionsHasName(NULL, NULL, "-help", &help));
@@ -60,9 +82,10 @@ int main(int argc, char **argv)
     if (!PffIsInputError(ierr)) MPI_Abort(MPI_COMM_WORLD, 1);
     (void)PffSceneDestroy(&scene);
     (void)PetscFinalize();
+    MPI_Finalize();
     return 1;
   }
   PetscCall(PffSceneDestroy(&scene));
   PetscCall(PetscFinalize());
-  return 0;
+  return MPI_Finalize() == MPI_SUCCESS ? 0 : 1;
 }
