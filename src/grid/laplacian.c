@@ -5,6 +5,9 @@
    Rows along x are contiguous in every region a row can fall into, so the inner loop is a
    unit-stride, vectorisable sweep; only the two end cells of a row look across x faces. */
 #include "gridimpl.h"
+#if defined(__AVX__)
+  #include <immintrin.h>
+#endif
 
 /* Address of row (j, k) (i = 0) of the block's neighbourhood, for rows inside the block's x range. */
 static inline const float *PffRow(const PffView *in, PetscInt j, PetscInt k, PetscInt n)
@@ -15,7 +18,8 @@ static inline const float *PffRow(const PffView *in, PetscInt j, PetscInt k, Pet
 /* One block; n is a compile-time constant at the call sites below, so the row loop unrolls into
    whole SIMD vectors. The vector sweep covers the whole row and so reads c[-1] and c[n], which are
    other rows' values (the channel allocation is padded, so they exist); the two end cells are
-   then recomputed with their true x neighbours. */
+   then corrected by the difference to their true x neighbours, which costs two operations per row
+   instead of two scalar stencils (rounding stays at the level of the stencil's own). */
 static inline __attribute__((always_inline)) void PffLaplacianBlockN(const PffView *restrict in, float *restrict out,
                                                                       const PetscInt n, float ih2)
 {
@@ -31,11 +35,28 @@ static inline __attribute__((always_inline)) void PffLaplacianBlockN(const PffVi
       float *restrict o        = out + n * (j + n * k);
       const float     xm       = vxm->ptr[vxm->off - vxm->sx + j * vxm->sy + k * vxm->sz];
       const float     xp       = vxp->ptr[vxp->off + n * vxp->sx + j * vxp->sy + k * vxp->sz];
+#if defined(__AVX__)
+      if (n % 8 == 0 && ((uintptr_t)o) % 32 == 0) {
+        /* the output is not read again while it is in cache: stream it past the caches, so the
+           kernel moves 8 bytes per cell like the copy it is measured against, not 12 */
+        const __m256 six = _mm256_set1_ps(6.0f), s = _mm256_set1_ps(ih2);
+        for (PetscInt i = 0; i < n; i += 8) {
+          __m256 v = _mm256_add_ps(_mm256_loadu_ps(c + i - 1), _mm256_loadu_ps(c + i + 1));
+          v        = _mm256_add_ps(v, _mm256_add_ps(_mm256_loadu_ps(ym + i), _mm256_loadu_ps(yp + i)));
+          v        = _mm256_add_ps(v, _mm256_add_ps(_mm256_loadu_ps(zm + i), _mm256_loadu_ps(zp + i)));
+          v        = _mm256_sub_ps(v, _mm256_mul_ps(six, _mm256_loadu_ps(c + i)));
+          if (i == 0) v = _mm256_add_ps(v, _mm256_setr_ps(xm - c[-1], 0, 0, 0, 0, 0, 0, 0));
+          if (i == n - 8) v = _mm256_add_ps(v, _mm256_setr_ps(0, 0, 0, 0, 0, 0, 0, xp - c[n]));
+          _mm256_stream_ps(o + i, _mm256_mul_ps(v, s));
+        }
+        continue;
+      }
+#endif
 #pragma omp simd
       for (PetscInt i = 0; i < n; i++) o[i] = (c[i - 1] + c[i + 1] + ym[i] + yp[i] + zm[i] + zp[i] - 6.0f * c[i]) * ih2;
-      const PetscInt e = n - 1;
-      o[0]             = (xm + (n > 1 ? c[1] : xp) + ym[0] + yp[0] + zm[0] + zp[0] - 6.0f * c[0]) * ih2;
-      o[e]             = ((n > 1 ? c[e - 1] : xm) + xp + ym[e] + yp[e] + zm[e] + zp[e] - 6.0f * c[e]) * ih2;
+      /* the sweep used c[-1] and c[n] (neighbouring rows) at the ends: swap in the true x neighbours */
+      o[0] += (xm - c[-1]) * ih2;
+      o[n - 1] += (xp - c[n]) * ih2;
     }
 }
 
@@ -65,6 +86,9 @@ PetscErrorCode PffGridApplyLaplacian(PffGrid g, PetscInt src, PetscInt dst)
     const PetscReal h = g->h0 * (PetscReal)((PetscInt)1 << l);
     PffLaplacianBlock(&in->views[lb * 27], out->data + g->loff[lb], n, (float)(1.0 / (h * h)));
   }
+#if defined(__AVX__)
+  _mm_sfence(); /* streaming stores are weakly ordered */
+#endif
   PetscCall(PetscLogEventEnd(PFF_GridLaplacian, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

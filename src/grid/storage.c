@@ -35,8 +35,10 @@ PetscErrorCode PffGridAllocateChannel_Private(PffGrid g, PffChannel *c)
              " cells per axis of the coarsest blocks; lower -grid_levels or raise -grid_block_size",
              c->name, c->width, nmin);
   PetscCall(PffHaloPlanGet_Private(g, c->kind, c->width, &c->plan));
-  PetscCall(PetscCalloc1(c->ncomp * g->ncells + 2 * PFF_CHANNEL_PAD, &c->alloc));
+  /* rows of n >= 16 cells then start on 64-byte boundaries, which streaming stores need */
+  PetscCall(PetscCalloc1(c->ncomp * g->ncells + 3 * PFF_CHANNEL_PAD, &c->alloc));
   c->data = c->alloc + PFF_CHANNEL_PAD;
+  while (((uintptr_t)c->data) % 64) c->data++;
   PetscCall(PetscCalloc1(PetscMax(c->plan->nhalo, 1), &c->halo));
   PetscCall(PetscMalloc1(g->nlocal * c->ncomp * 27, &c->views));
   for (PetscInt lb = 0; lb < g->nlocal; lb++) {
