@@ -9,7 +9,7 @@
   #include <immintrin.h>
 #endif
 
-/* Address of row (j, k) (i = 0) of the block's neighbourhood, for rows inside the block's x range. */
+/* Address of row (j, k) (i = 0) of the block's neighbourhood: j or k may lie one cell outside. */
 static inline const float *PffRow(const PffView *in, PetscInt j, PetscInt k, PetscInt n)
 {
   return PffViewsAt(in, 0, j, k, n);
@@ -25,16 +25,23 @@ static inline __attribute__((always_inline)) void PffLaplacianBlockN(const PffVi
 {
   const float   *c0 = in[13].ptr;
   const PffView *vxm = &in[12], *vxp = &in[14];
-  for (PetscInt k = 0; k < n; k++)
+  for (PetscInt k = 0; k < n; k++) {
+    /* per plane: where the z-neighbour rows, the two y-ghost rows and the x-ghost columns start,
+       and their strides in j, so the row loop below only adds */
+    const float    *zm0 = PffRow(in, 0, k - 1, n), *zp0 = PffRow(in, 0, k + 1, n);
+    const ptrdiff_t zms = in[PffRegionIndex(0, 0, k - 1, n)].sy, zps = in[PffRegionIndex(0, 0, k + 1, n)].sy;
+    const float    *ymg = PffRow(in, -1, k, n), *ypg = PffRow(in, n, k, n);
+    const float    *xm0 = vxm->ptr + (vxm->off - vxm->sx + k * vxm->sz), *xp0 = vxp->ptr + (vxp->off + n * vxp->sx + k * vxp->sz);
+    const ptrdiff_t xms = vxm->sy, xps = vxp->sy;
     for (PetscInt j = 0; j < n; j++) {
       const float *restrict c  = c0 + n * (j + n * k);
-      const float *restrict ym = j > 0 ? c - n : PffRow(in, j - 1, k, n);
-      const float *restrict yp = j < n - 1 ? c + n : PffRow(in, j + 1, k, n);
-      const float *restrict zm = k > 0 ? c - n * n : PffRow(in, j, k - 1, n);
-      const float *restrict zp = k < n - 1 ? c + n * n : PffRow(in, j, k + 1, n);
+      const float *restrict ym = j > 0 ? c - n : ymg;
+      const float *restrict yp = j < n - 1 ? c + n : ypg;
+      const float *restrict zm = zm0 + j * zms;
+      const float *restrict zp = zp0 + j * zps;
       float *restrict o        = out + n * (j + n * k);
-      const float     xm       = vxm->ptr[vxm->off - vxm->sx + j * vxm->sy + k * vxm->sz];
-      const float     xp       = vxp->ptr[vxp->off + n * vxp->sx + j * vxp->sy + k * vxp->sz];
+      const float     xm       = xm0[j * xms];
+      const float     xp       = xp0[j * xps];
 #if defined(__AVX__)
       if (n % 8 == 0 && ((uintptr_t)o) % 32 == 0) {
         /* the output is not read again while it is in cache: stream it past the caches, so the
@@ -58,6 +65,7 @@ static inline __attribute__((always_inline)) void PffLaplacianBlockN(const PffVi
       o[0] += (xm - c[-1]) * ih2;
       o[n - 1] += (xp - c[n]) * ih2;
     }
+  }
 }
 
 static void PffLaplacianBlock(const PffView *restrict in, float *restrict out, PetscInt n, float ih2)
@@ -67,6 +75,7 @@ static void PffLaplacianBlock(const PffView *restrict in, float *restrict out, P
   case 32: PffLaplacianBlockN(in, out, 32, ih2); break;
   case 16: PffLaplacianBlockN(in, out, 16, ih2); break;
   case 8: PffLaplacianBlockN(in, out, 8, ih2); break;
+  case 4: PffLaplacianBlockN(in, out, 4, ih2); break;
   default: PffLaplacianBlockN(in, out, n, ih2); break;
   }
 }
@@ -80,7 +89,7 @@ PetscErrorCode PffGridApplyLaplacian(PffGrid g, PetscInt src, PetscInt dst)
   PetscCheck(in->kind == PFF_CHANNEL_CELL && out->kind == PFF_CHANNEL_CELL, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
              "the Laplacian works on cell channels");
   PetscCall(PetscLogEventBegin(PFF_GridLaplacian, 0, 0, 0, 0));
-#pragma omp parallel for schedule(dynamic, 1)
+#pragma omp parallel for schedule(guided)
   for (PetscInt lb = 0; lb < g->nlocal; lb++) {
     const PetscInt  l = g->level[g->lgid[lb]], n = g->n0 >> l;
     const PetscReal h = g->h0 * (PetscReal)((PetscInt)1 << l);
