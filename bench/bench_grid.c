@@ -5,12 +5,12 @@
 
    Case uniform: a 256^3 grid (-bench_n) stored as 16^3 blocks, periodic. Case adaptive: a 512^3
    domain (-bench_adaptive_n) with 3 levels refined around a sphere of radius 0.3, about as many active
-   cells as the uniform case, so that neither fits in the last-level cache. Each case times -bench_reps applications of the
-   Laplacian (ghosts exchanged once beforehand, and that exchange timed on its own) and, in the same
-   run, a streaming copy of the same number of cells between two arrays of the same size. Both move
-   4 bytes in and 4 bytes out per cell, so pct_copy = Laplacian cells/s over copy cells/s. Prints
-     RESULT case=<uniform|adaptive> ranks=<r> threads=<t> mcells_s=<x> pct_copy=<y> ...
-   Rates are per run (all ranks), the best of -bench_reps repetitions (after one warm-up). */
+   cells as the uniform case, so that neither fits in the last-level cache. Each case times -bench_reps applications of
+   the Laplacian (ghosts exchanged once beforehand, and that exchange timed on its own) and, in the same run, a
+   streaming copy of the same number of cells between two arrays of the same size. Both move 4 bytes in and 4 bytes out
+   per cell, so pct_copy = Laplacian cells/s over copy cells/s. Prints RESULT case=<uniform|adaptive> ranks=<r>
+   threads=<t> mcells_s=<x> pct_copy=<y> ... Rates are per run (all ranks), the best of -bench_reps repetitions (after
+   one warm-up). */
 #include <pff.h>
 #include <omp.h>
 
@@ -43,12 +43,12 @@ static PetscErrorCode BenchCopy(MPI_Comm comm, PetscInt64 ncells, PetscInt reps,
 
 static PetscErrorCode BenchCase(MPI_Comm comm, const char *name, PetscInt n, PetscInt levels, PetscInt reps)
 {
-  PffGrid    grid;
-  PetscInt   u, lap, nlocal, cells[3] = {n, n, n};
-  PetscBool  periodic[3] = {PETSC_TRUE, PETSC_TRUE, PETSC_TRUE};
-  PetscReal  origin[3]   = {0, 0, 0};
-  PetscInt64 local = 0, total;
-  double     tl = 1e30, th, tc = 1e30;
+  PffGrid     grid;
+  PetscInt    u, lap, nlocal, cells[3] = {n, n, n};
+  PetscBool   periodic[3] = {PETSC_TRUE, PETSC_TRUE, PETSC_TRUE};
+  PetscReal   origin[3]   = {0, 0, 0};
+  PetscInt64  local       = 0, total;
+  double      tl = 1e30, th, tc = 1e30;
   PetscMPIInt size;
 
   PetscFunctionBeginUser;
@@ -92,16 +92,16 @@ static PetscErrorCode BenchCase(MPI_Comm comm, const char *name, PetscInt n, Pet
   PetscCall(PetscPrintf(comm,
                         "RESULT case=%s ranks=%d threads=%d mcells_s=%.1f pct_copy=%.1f cells=%" PetscInt64_FMT
                         " copy_mcells_s=%.1f copy_gb_s=%.2f halo_ms=%.2f\n",
-                        name, size, omp_get_max_threads(), lrate, 100.0 * lrate / crate, total, crate,
-                        crate * 8e-3, th * 1e3));
+                        name, size, omp_get_max_threads(), lrate, 100.0 * lrate / crate, total, crate, crate * 8e-3,
+                        th * 1e3));
   PetscCall(PffGridDestroy(&grid));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 int main(int argc, char **argv)
 {
-  PetscInt  n = 256, na = 512, reps = 10;
-  char      which[32] = "all";
+  PetscInt n = 256, na = 512, reps = 10;
+  char     which[32] = "all";
 
   PetscCall(PetscInitialize(&argc, &argv, NULL, "pff-bench-grid: MSBG Laplacian vs streaming copy\n"));
   PetscCall(PffInitializePackage());

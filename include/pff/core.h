@@ -6,13 +6,13 @@
 #include <petscviewer.h>
 
 #if PETSC_VERSION_LT(3, 19, 0) && !defined(PETSC_SUCCESS)
-  #define PETSC_SUCCESS ((PetscErrorCode)0)
+#define PETSC_SUCCESS ((PetscErrorCode)0)
 #endif
 
 /* Class id and log events, registered once by PffInitializePackage(). */
 PETSC_EXTERN PetscClassId  PFF_CLASSID;
 PETSC_EXTERN PetscLogEvent PFF_GridSetUp, PFF_GridRefine, PFF_GridPartition, PFF_HaloSetUp, PFF_HaloBegin, PFF_HaloEnd,
-  PFF_HaloRevBegin, PFF_HaloRevEnd, PFF_GridInterp, PFF_GridLaplacian, PFF_IOWrite, PFF_IORead;
+    PFF_HaloRevBegin, PFF_HaloRevEnd, PFF_GridInterp, PFF_GridLaplacian, PFF_IOWrite, PFF_IORead;
 
 /* Registers the class id and every log event. Not collective; idempotent. */
 PETSC_EXTERN PetscErrorCode PffInitializePackage(void);
@@ -34,7 +34,8 @@ typedef struct {
 /* Starts the clock. tend (simulated end time) or nsteps (step count) gives the ETA; pass 0 for unknown. */
 PETSC_EXTERN PetscErrorCode PffProgressStart(PffProgress *p, PetscReal tend, PetscInt nsteps);
 /* Prints "step <s> t <t> wall/step <w> s ETA <e> s <extra>". Collective (reduces nothing; rank 0 prints). */
-PETSC_EXTERN PetscErrorCode PffProgressPrint(MPI_Comm comm, PffProgress *p, PetscInt step, PetscReal t, const char extra[]);
+PETSC_EXTERN PetscErrorCode PffProgressPrint(MPI_Comm comm, PffProgress *p, PetscInt step, PetscReal t,
+                                             const char extra[]);
 
 /* Morton (Z-order) key of block coordinates, 21 bits per axis, x in the lowest bit. */
 static inline uint64_t PffMortonSpread_Private(uint64_t v)

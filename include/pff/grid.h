@@ -11,34 +11,24 @@
 
 typedef struct _n_PffGrid *PffGrid;
 
-typedef enum {
-  PFF_PARTITION_MORTON,
-  PFF_PARTITION_METIS
-} PffPartitionType;
+typedef enum { PFF_PARTITION_MORTON, PFF_PARTITION_METIS } PffPartitionType;
 PETSC_EXTERN const char *const PffPartitionTypes[];
 
-typedef enum {
-  PFF_REFINE_NONE,
-  PFF_REFINE_PLANE,
-  PFF_REFINE_SPHERE
-} PffRefineType;
+typedef enum { PFF_REFINE_NONE, PFF_REFINE_PLANE, PFF_REFINE_SPHERE } PffRefineType;
 PETSC_EXTERN const char *const PffRefineTypes[];
 
 /* A cell channel holds one value per cell; a face channel holds the three MAC components,
    component d at the lower d-face of each cell (position (i + 1/2 - e_d/2) h). */
-typedef enum {
-  PFF_CHANNEL_CELL,
-  PFF_CHANNEL_FACE
-} PffChannelKind;
+typedef enum { PFF_CHANNEL_CELL, PFF_CHANNEL_FACE } PffChannelKind;
 PETSC_EXTERN const char *const PffChannelKinds[];
 
 #define PFF_GRID_BLOCK_SIZE_DEFAULT 16
-#define PFF_GRID_BLOCK_SIZE_MIN     4
-#define PFF_GRID_BLOCK_SIZE_MAX     64
-#define PFF_GRID_LEVELS_DEFAULT     1
-#define PFF_GRID_MAX_LEVELS         7
-#define PFF_GRID_MAX_CHANNELS       32
-#define PFF_GRID_MAX_WIDTH          4
+#define PFF_GRID_BLOCK_SIZE_MIN 4
+#define PFF_GRID_BLOCK_SIZE_MAX 64
+#define PFF_GRID_LEVELS_DEFAULT 1
+#define PFF_GRID_MAX_LEVELS 7
+#define PFF_GRID_MAX_CHANNELS 32
+#define PFF_GRID_MAX_WIDTH 4
 
 /* Requested level of the block with box [lo, hi]; -1 makes the block inactive. */
 typedef PetscErrorCode (*PffRefineFn)(PffGrid grid, const PetscReal lo[3], const PetscReal hi[3], PetscInt *level,
@@ -73,7 +63,8 @@ typedef struct {
 /* Region index 0..26 of block-local cell (i, j, k) for a block with n cells per axis; 13 is the block itself. */
 static inline PetscInt PffRegionIndex(PetscInt i, PetscInt j, PetscInt k, PetscInt n)
 {
-  const PetscInt rx = i < 0 ? 0 : (i >= n ? 2 : 1), ry = j < 0 ? 0 : (j >= n ? 2 : 1), rz = k < 0 ? 0 : (k >= n ? 2 : 1);
+  const PetscInt rx = i < 0 ? 0 : (i >= n ? 2 : 1), ry = j < 0 ? 0 : (j >= n ? 2 : 1),
+                 rz = k < 0 ? 0 : (k >= n ? 2 : 1);
   return rx + 3 * ry + 9 * rz;
 }
 /* Address of block-local cell (i, j, k), -width <= i,j,k < n + width, through the block's 27 views. */
@@ -114,6 +105,9 @@ PETSC_EXTERN PetscErrorCode PffGridSetRefinementFunction(PffGrid grid, PffRefine
 /* Refinement from an explicit requested-level map over the raster (copied); -1 = inactive. */
 PETSC_EXTERN PetscErrorCode PffGridSetRefinementMap(PffGrid grid, const PetscInt level[]);
 
+/* The grid's (duplicated) communicator; borrowed. Not collective. */
+PETSC_EXTERN PetscErrorCode PffGridGetComm(PffGrid grid, MPI_Comm *comm);
+
 /* Getters (after SetUp, not collective). */
 PETSC_EXTERN PetscErrorCode PffGridGetRaster(PffGrid grid, PetscInt nb[3], const PetscInt **level,
                                              const PetscMPIInt **owner);
@@ -132,7 +126,8 @@ PETSC_EXTERN PetscErrorCode PffGridGetCellCounts(PffGrid grid, PetscInt64 perLev
 
 /* Channels. AddChannel may be called before or after SetUp; the data is zeroed. width is the halo
    width in cells of the block's own level, 1..PFF_GRID_MAX_WIDTH and at most the cells per axis
-   of the coarsest block. Not collective, but every rank must add the same channels in the same order. */
+   of the coarsest block. *ch receives the channel index (required). Not collective, but every rank must
+   add the same channels in the same order. */
 PETSC_EXTERN PetscErrorCode PffGridAddChannel(PffGrid grid, const char name[], PffChannelKind kind, PetscInt width,
                                               PetscInt *ch);
 PETSC_EXTERN PetscErrorCode PffGridGetChannelInfo(PffGrid grid, PetscInt ch, const char **name, PffChannelKind *kind,

@@ -7,8 +7,9 @@
 #include <pff.h>
 #include <unistd.h>
 
-static const char usage[] = "pfflip: Adaptive Phase-Field-FLIP on Multiresolution Sparse Block Grids.\n"
-                           "Usage: mpiexec -n <ranks> pfflip -options_file_yaml config/<scene>.yaml [-key value ...]\n";
+static const char usage[] =
+    "pfflip: Adaptive Phase-Field-FLIP on Multiresolution Sparse Block Grids.\n"
+    "Usage: mpiexec -n <ranks> pfflip -options_file_yaml config/<scene>.yaml [-key value ...]\n";
 
 static PetscBool PffIsInputError(PetscErrorCode n)
 {
@@ -52,7 +53,8 @@ static int PffCheckOptionFiles(int argc, char **argv)
   for (int i = 1; i + 1 < argc; i++) {
     if (strcmp(argv[i], "-options_file_yaml") && strcmp(argv[i], "-options_file")) continue;
     if (access(argv[i + 1], R_OK)) {
-      if (rank == 0 && !bad) fprintf(stderr, "pfflip: error: %s %s: no such file or not readable\n", argv[i], argv[i + 1]);
+      if (rank == 0 && !bad)
+        fprintf(stderr, "pfflip: error: %s %s: no such file or not readable\n", argv[i], argv[i + 1]);
       bad = 1;
     }
   }

@@ -21,10 +21,12 @@ PetscErrorCode PffProgressPrint(MPI_Comm comm, PffProgress *p, PetscInt step, Pe
   PetscCall(PetscTime(&now));
   const double elapsed = now - p->start, wstep = now - p->last;
   p->last = now;
-  if (p->tend > 0 && t > 0) eta = elapsed * (double)((p->tend - t) / t);
-  else if (p->nsteps > 0 && step > 0) eta = elapsed * (double)(p->nsteps - step) / (double)step;
+  if (p->tend > 0 && t > 0)
+    eta = elapsed * (double)((p->tend - t) / t);
+  else if (p->nsteps > 0 && step > 0)
+    eta = elapsed * (double)(p->nsteps - step) / (double)step;
   if (eta < 0) eta = 0;
-  PetscCall(PetscPrintf(comm, "step %6" PetscInt_FMT "  t %.6e  wall/step %.3e s  elapsed %.1f s  ETA %.1f s%s%s\n", step,
-                        (double)t, wstep, elapsed, eta, extra ? "  " : "", extra ? extra : ""));
+  PetscCall(PetscPrintf(comm, "step %6" PetscInt_FMT "  t %.6e  wall/step %.3e s  elapsed %.1f s  ETA %.1f s%s%s\n",
+                        step, (double)t, wstep, elapsed, eta, extra ? "  " : "", extra ? extra : ""));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

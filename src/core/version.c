@@ -5,7 +5,7 @@
 #include <omp.h>
 
 #ifndef PFF_GIT_REVISION
-  #define PFF_GIT_REVISION "unknown"
+#define PFF_GIT_REVISION "unknown"
 #endif
 
 PetscErrorCode PffGetVersionString(char buf[], size_t len)

@@ -34,7 +34,8 @@ PetscErrorCode PffGridCreate(MPI_Comm comm, PffGrid *grid)
 static PetscErrorCode PffGridCheckNotSetUp(PffGrid g)
 {
   PetscFunctionBeginUser;
-  PetscCheck(!g->setupcalled, g->comm, PETSC_ERR_ORDER, "the grid is already set up; set its parameters before PffGridSetUp()");
+  PetscCheck(!g->setupcalled, g->comm, PETSC_ERR_ORDER,
+             "the grid is already set up; set its parameters before PffGridSetUp()");
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -43,8 +44,9 @@ PetscErrorCode PffGridSetBlockSize(PffGrid g, PetscInt n0)
   PetscFunctionBeginUser;
   PetscCall(PffGridCheckNotSetUp(g));
   PetscCheck(n0 >= PFF_GRID_BLOCK_SIZE_MIN && n0 <= PFF_GRID_BLOCK_SIZE_MAX && (n0 & (n0 - 1)) == 0, g->comm,
-             PETSC_ERR_ARG_OUTOFRANGE, "-grid_block_size %" PetscInt_FMT " is invalid: must be a power of two in [%d, %d]",
-             n0, PFF_GRID_BLOCK_SIZE_MIN, PFF_GRID_BLOCK_SIZE_MAX);
+             PETSC_ERR_ARG_OUTOFRANGE,
+             "-grid_block_size %" PetscInt_FMT " is invalid: must be a power of two in [%d, %d]", n0,
+             PFF_GRID_BLOCK_SIZE_MIN, PFF_GRID_BLOCK_SIZE_MAX);
   g->n0 = n0;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -166,8 +168,8 @@ PetscErrorCode PffGridSetFromOptions(PffGrid g)
   PetscCall(PetscOptionsInt("-grid_block_size", "Cells per block axis at level 0, a power of two in [4, 64]",
                             "PffGridSetBlockSize", n0, &n0, &set));
   if (set) PetscCall(PffGridSetBlockSize(g, n0));
-  PetscCall(PetscOptionsInt("-grid_levels", "Number of resolution levels, at most log2(block size) + 1", "PffGridSetLevels",
-                            nlevels, &nlevels, &set));
+  PetscCall(PetscOptionsInt("-grid_levels", "Number of resolution levels, at most log2(block size) + 1",
+                            "PffGridSetLevels", nlevels, &nlevels, &set));
   if (set) PetscCall(PffGridSetLevels(g, nlevels));
   PetscCall(PetscOptionsRealArray("-grid_origin", "Lower corner of the domain x,y,z", "PffGridSetDomain", origin,
                                   &norigin, &set));
@@ -185,8 +187,8 @@ PetscErrorCode PffGridSetFromOptions(PffGrid g)
     PetscCall(PffParseAxes(g->comm, "-grid_periodic", periodic, axes));
     PetscCall(PffGridSetPeriodic(g, axes));
   }
-  PetscCall(PetscOptionsEnum("-partition_type", "Block partitioner", "PffGridSetPartitionType", PffPartitionTypes, ptype,
-                             &ptype, NULL));
+  PetscCall(PetscOptionsEnum("-partition_type", "Block partitioner", "PffGridSetPartitionType", PffPartitionTypes,
+                             ptype, &ptype, NULL));
   g->ptype = (PffPartitionType)ptype;
   PetscCall(PetscOptionsEnum("-grid_refine", "Static refinement: level grows with the distance to a plane or sphere",
                              "PffGridSetRefinementFunction", PffRefineTypes, rtype, &rtype, NULL));
@@ -194,10 +196,11 @@ PetscErrorCode PffGridSetFromOptions(PffGrid g)
   PetscCall(PetscOptionsRealArray("-grid_refine_point", "Point on the refinement plane, or sphere centre", NULL, point,
                                   &npoint, &set));
   PetscCheck(!set || npoint == 3, g->comm, PETSC_ERR_ARG_SIZ, "-grid_refine_point takes 3 values x,y,z");
-  PetscCall(PetscOptionsRealArray("-grid_refine_normal", "Normal of the refinement plane", NULL, normal, &nnormal, &set));
+  PetscCall(
+      PetscOptionsRealArray("-grid_refine_normal", "Normal of the refinement plane", NULL, normal, &nnormal, &set));
   PetscCheck(!set || nnormal == 3, g->comm, PETSC_ERR_ARG_SIZ, "-grid_refine_normal takes 3 values x,y,z");
-  PetscCall(PetscOptionsReal("-grid_refine_radius", "Radius of the refinement sphere", NULL, g->rradius, &g->rradius,
-                             NULL));
+  PetscCall(
+      PetscOptionsReal("-grid_refine_radius", "Radius of the refinement sphere", NULL, g->rradius, &g->rradius, NULL));
   PetscCall(PetscOptionsReal("-grid_refine_band", "Width of each level band, in block sizes", NULL, g->rband, &g->rband,
                              NULL));
   PetscOptionsEnd();
@@ -222,11 +225,13 @@ static PetscErrorCode PffGridValidate(PffGrid g)
   while (((PetscInt)1 << g->log2n0) < g->n0) g->log2n0++;
   PetscCheck(g->nlevels - 1 <= g->log2n0, g->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-grid_levels %" PetscInt_FMT " is invalid with -grid_block_size %" PetscInt_FMT
-             ": the deepest level must be at most log2(block size) = %" PetscInt_FMT ", so -grid_levels <= %" PetscInt_FMT,
+             ": the deepest level must be at most log2(block size) = %" PetscInt_FMT
+             ", so -grid_levels <= %" PetscInt_FMT,
              g->nlevels, g->n0, g->log2n0, g->log2n0 + 1);
   for (int d = 0; d < 3; d++) {
     PetscCheck(g->cells[d] % g->n0 == 0, g->comm, PETSC_ERR_ARG_OUTOFRANGE,
-               "-grid_cells: %c has %" PetscInt_FMT " cells, not a whole number of blocks of -grid_block_size %" PetscInt_FMT,
+               "-grid_cells: %c has %" PetscInt_FMT
+               " cells, not a whole number of blocks of -grid_block_size %" PetscInt_FMT,
                'x' + d, g->cells[d], g->n0);
     PetscCheck(g->cells[d] / g->n0 <= ((PetscInt)1 << 21), g->comm, PETSC_ERR_ARG_OUTOFRANGE,
                "-grid_cells: %c has more than 2^21 blocks (the Morton key limit)", 'x' + d);
@@ -282,6 +287,13 @@ static PetscErrorCode PffGridCheckSetUp(PffGrid g)
 {
   PetscFunctionBeginUser;
   PetscCheck(g->setupcalled, PETSC_COMM_SELF, PETSC_ERR_ORDER, "call PffGridSetUp() first");
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffGridGetComm(PffGrid g, MPI_Comm *comm)
+{
+  PetscFunctionBeginUser;
+  *comm = g->comm;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -368,7 +380,7 @@ PetscErrorCode PffGridGetCellCounts(PffGrid g, PetscInt64 perLevel[PFF_GRID_MAX_
   PetscFunctionBeginUser;
   PetscCall(PffGridCheckSetUp(g));
   for (PetscInt a = 0; a < g->nactive; a++) {
-    const PetscInt  l = g->level[g->order[a]];
+    const PetscInt   l = g->level[g->order[a]];
     const PetscInt64 n = g->n0 >> l;
     pl[l] += n * n * n;
     sum += n * n * n;
@@ -391,21 +403,23 @@ PetscErrorCode PffGridView(PffGrid g, PetscViewer viewer)
   PetscCall(PffGridCheckSetUp(g));
   PetscCall(PffGridGetCellCounts(g, pl, &total));
   PetscCall(PetscViewerASCIIPrintf(viewer,
-                                   "MSBG: %" PetscInt_FMT "x%" PetscInt_FMT "x%" PetscInt_FMT " cells, block size %" PetscInt_FMT
-                                   ", raster %" PetscInt_FMT "x%" PetscInt_FMT "x%" PetscInt_FMT ", periodic %s%s%s\n",
+                                   "MSBG: %" PetscInt_FMT "x%" PetscInt_FMT "x%" PetscInt_FMT
+                                   " cells, block size %" PetscInt_FMT ", raster %" PetscInt_FMT "x%" PetscInt_FMT
+                                   "x%" PetscInt_FMT ", periodic %s%s%s\n",
                                    g->cells[0], g->cells[1], g->cells[2], g->n0, g->nb[0], g->nb[1], g->nb[2],
                                    g->periodic[0] ? "x" : "", g->periodic[1] ? "y" : "", g->periodic[2] ? "z" : ""));
-  PetscCall(PetscViewerASCIIPrintf(viewer, "  active blocks %" PetscInt_FMT " of %" PetscInt_FMT ", active cells %" PetscInt64_FMT
-                                           " (%.2f%% of the uniform grid)\n",
+  PetscCall(PetscViewerASCIIPrintf(viewer,
+                                   "  active blocks %" PetscInt_FMT " of %" PetscInt_FMT
+                                   ", active cells %" PetscInt64_FMT " (%.2f%% of the uniform grid)\n",
                                    g->nactive, g->nblocks, total,
                                    100.0 * (double)total / ((double)g->cells[0] * g->cells[1] * g->cells[2])));
   for (PetscInt l = 0; l < g->nlevels; l++)
     PetscCall(PetscViewerASCIIPrintf(viewer, "  level %" PetscInt_FMT ": %" PetscInt64_FMT " cells\n", l, pl[l]));
-  PetscCall(PetscViewerASCIIPrintf(viewer,
-                                   "  partition %s on %d ranks: imbalance %.3f, cut faces %" PetscInt_FMT
-                                   ", halo bytes/rank max %.0f mean %.0f\n",
-                                   PffPartitionTypes[g->ptype], g->size, (double)g->quality.imbalance, g->quality.cutFaces,
-                                   (double)g->quality.haloBytesMax, (double)g->quality.haloBytesMean));
+  PetscCall(PetscViewerASCIIPrintf(
+      viewer,
+      "  partition %s on %d ranks: imbalance %.3f, cut faces %" PetscInt_FMT ", halo bytes/rank max %.0f mean %.0f\n",
+      PffPartitionTypes[g->ptype], g->size, (double)g->quality.imbalance, g->quality.cutFaces,
+      (double)g->quality.haloBytesMax, (double)g->quality.haloBytesMean));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

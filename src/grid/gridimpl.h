@@ -7,15 +7,15 @@
 
 /* One region of one block component that is not read directly from a neighbour's storage. */
 typedef struct {
-  PetscInt  lb, comp, region;
-  PetscInt  nbgid;     /* neighbour block, -1 across a wall or towards an inactive block */
-  PetscInt  rel;       /* level(neighbour) - level(block): 0, +1 (coarser) or -1 (finer) */
-  PetscInt  glo[3];    /* first ghost cell, block-local coordinates at the block's level */
-  PetscInt  gn[3];     /* ghost box extent */
-  PetscInt  slo[3];    /* first source cell, neighbour-local coordinates at the neighbour's level */
-  PetscInt  sn[3];     /* source box extent (cross-level only) */
-  PetscInt64 goff;     /* ghost box offset in the halo buffer */
-  PetscInt64 soff;     /* source box offset in the halo buffer (cross-level only) */
+  PetscInt   lb, comp, region;
+  PetscInt   nbgid;  /* neighbour block, -1 across a wall or towards an inactive block */
+  PetscInt   rel;    /* level(neighbour) - level(block): 0, +1 (coarser) or -1 (finer) */
+  PetscInt   glo[3]; /* first ghost cell, block-local coordinates at the block's level */
+  PetscInt   gn[3];  /* ghost box extent */
+  PetscInt   slo[3]; /* first source cell, neighbour-local coordinates at the neighbour's level */
+  PetscInt   sn[3];  /* source box extent (cross-level only) */
+  PetscInt64 goff;   /* ghost box offset in the halo buffer */
+  PetscInt64 soff;   /* source box offset in the halo buffer (cross-level only) */
 } PffHaloXfer;
 
 /* Communication plan shared by every channel of one kind and width; rebuilt when the raster changes. */
@@ -27,7 +27,7 @@ typedef struct {
   PetscInt64    *goff;   /* [nlocal][ncomp][27] ghost box offset, -1 for a direct (same rank, same level) view */
   PetscInt       nxfer;
   PffHaloXfer   *xfer;
-  PetscSF        sf;     /* roots: channel data; leaves: halo buffer */
+  PetscSF        sf;         /* roots: channel data; leaves: halo buffer */
   PetscInt64     recvRemote; /* leaves fed by other ranks (floats) */
 } PffHaloPlan;
 
@@ -73,9 +73,9 @@ struct _n_PffGrid {
   PetscInt64 *loff;   /* [nlocal + 1] cell offsets */
   PetscInt64  ncells; /* owned cells */
 
-  PetscInt    nch;
-  PffChannel *ch[PFF_GRID_MAX_CHANNELS];
-  PetscInt    nplans;
+  PetscInt     nch;
+  PffChannel  *ch[PFF_GRID_MAX_CHANNELS];
+  PetscInt     nplans;
   PffHaloPlan *plans[2 * PFF_GRID_MAX_WIDTH];
 
   PffPartitionQuality quality;

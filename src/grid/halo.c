@@ -77,15 +77,15 @@ static PetscErrorCode PffHaloPlanBuild(PffGrid g, PffHaloPlan *p)
         PetscInt64    *go   = &p->goff[(lb * nc + comp) * 27 + r];
         *go                 = -1;
         if (r == 13) continue;
-        const PetscInt nbr = PffRasterNeighbour(g->nb, g->periodic, ijk, d);
+        const PetscInt  nbr    = PffRasterNeighbour(g->nb, g->periodic, ijk, d);
         const PetscBool active = (PetscBool)(nbr >= 0 && g->level[nbr] >= 0);
         if (active && g->level[nbr] == g->level[gid] && g->owner[nbr] == g->rank) continue;
-        PffHaloXfer x = {0};
-        x.lb          = lb;
-        x.comp        = comp;
-        x.region      = r;
-        x.nbgid       = active ? nbr : -1;
-        x.rel         = active ? g->level[nbr] - g->level[gid] : 0;
+        PffHaloXfer x  = {0};
+        x.lb           = lb;
+        x.comp         = comp;
+        x.region       = r;
+        x.nbgid        = active ? nbr : -1;
+        x.rel          = active ? g->level[nbr] - g->level[gid] : 0;
         PetscInt64 gsz = 1;
         for (int a = 0; a < 3; a++) {
           x.glo[a] = d[a] < 0 ? -w : (d[a] > 0 ? n : 0);
@@ -100,7 +100,7 @@ static PetscErrorCode PffHaloPlanBuild(PffGrid g, PffHaloPlan *p)
         if (x.rel != 0) {
           PetscInt64 ssz = 1;
           for (int a = 0; a < 3; a++) {
-            const PetscReal o = PffChannelOffset_Private(p->kind, comp, a);
+            const PetscReal o     = PffChannelOffset_Private(p->kind, comp, a);
             const PetscInt  shift = d[a] * n;
             PetscInt        lo = PETSC_MAX_INT, hi = -1;
             if (x.rel > 0) {
@@ -156,12 +156,12 @@ static PetscErrorCode PffHaloPlanBuild(PffGrid g, PffHaloPlan *p)
   for (PetscInt e = 0, l = 0; e < nxfer; e++) {
     const PffHaloXfer *x = &p->xfer[e];
     if (x->nbgid < 0) continue;
-    const PetscInt  n = PffGridBlockN_Private(g, g->lgid[x->lb]), nn = PffGridBlockN_Private(g, x->nbgid);
-    const PetscInt  d[3] = {x->region % 3 - 1, (x->region / 3) % 3 - 1, x->region / 9 - 1};
+    const PetscInt   n = PffGridBlockN_Private(g, g->lgid[x->lb]), nn = PffGridBlockN_Private(g, x->nbgid);
+    const PetscInt   d[3] = {x->region % 3 - 1, (x->region / 3) % 3 - 1, x->region / 9 - 1};
     const PetscInt64 base = nc * g->offset[x->nbgid] + (PetscInt64)x->comp * nn * nn * nn;
-    const PetscInt *lo = x->rel == 0 ? x->glo : x->slo, *ext = x->rel == 0 ? x->gn : x->sn;
+    const PetscInt  *lo = x->rel == 0 ? x->glo : x->slo, *ext = x->rel == 0 ? x->gn : x->sn;
     const PetscInt64 boff = x->rel == 0 ? x->goff : p->nghost + x->soff;
-    PetscInt64      m    = 0;
+    PetscInt64       m    = 0;
     if (g->owner[x->nbgid] != g->rank) p->recvRemote += ext[0] * ext[1] * ext[2];
     for (PetscInt k = 0; k < ext[2]; k++)
       for (PetscInt j = 0; j < ext[1]; j++)
@@ -195,7 +195,8 @@ PetscErrorCode PffHaloPlanGet_Private(PffGrid g, PffChannelKind kind, PetscInt w
       PetscFunctionReturn(PETSC_SUCCESS);
     }
   }
-  PetscCheck(g->nplans < (PetscInt)PETSC_STATIC_ARRAY_LENGTH(g->plans), PETSC_COMM_SELF, PETSC_ERR_PLIB, "too many plans");
+  PetscCheck(g->nplans < (PetscInt)PETSC_STATIC_ARRAY_LENGTH(g->plans), PETSC_COMM_SELF, PETSC_ERR_PLIB,
+             "too many plans");
   PetscCall(PetscLogEventBegin(PFF_HaloSetUp, 0, 0, 0, 0));
   PetscCall(PetscNew(&p));
   p->kind  = kind;
@@ -249,7 +250,7 @@ static void PffHaloFillCrossLevel(PffGrid g, const PffHaloPlan *p, const PffHalo
   float         *gh   = halo + x->goff;
   PetscReal      o[3];
   for (int a = 0; a < 3; a++) o[a] = PffChannelOffset_Private(p->kind, x->comp, a);
-#define SRC(i, j, k) src[((i) - x->slo[0]) + x->sn[0] * (((j) - x->slo[1]) + x->sn[1] * ((k) - x->slo[2]))]
+#define SRC(i, j, k) src[((i)-x->slo[0]) + x->sn[0] * (((j)-x->slo[1]) + x->sn[1] * ((k)-x->slo[2]))]
   for (PetscInt k = 0; k < x->gn[2]; k++)
     for (PetscInt j = 0; j < x->gn[1]; j++)
       for (PetscInt i = 0; i < x->gn[0]; i++) {
@@ -261,8 +262,10 @@ static void PffHaloFillCrossLevel(PffGrid g, const PffHaloPlan *p, const PffHalo
           for (int a = 0; a < 3; a++) PffCoarseStencil(c[a], o[a], d[a] * n, nn, &i0[a], &t[a]);
           const PetscInt di = nn > 1, dj = nn > 1, dk = nn > 1;
           for (int q = 0; q < 8; q++) {
-            const PetscReal wx = (q & 1) ? t[0] : 1 - t[0], wy = (q & 2) ? t[1] : 1 - t[1], wz = (q & 4) ? t[2] : 1 - t[2];
-            v += wx * wy * wz * (PetscReal)SRC(i0[0] + ((q & 1) ? di : 0), i0[1] + ((q & 2) ? dj : 0), i0[2] + ((q & 4) ? dk : 0));
+            const PetscReal wx = (q & 1) ? t[0] : 1 - t[0], wy = (q & 2) ? t[1] : 1 - t[1],
+                            wz = (q & 4) ? t[2] : 1 - t[2];
+            v += wx * wy * wz *
+                 (PetscReal)SRC(i0[0] + ((q & 1) ? di : 0), i0[1] + ((q & 2) ? dj : 0), i0[2] + ((q & 4) ? dk : 0));
           }
         } else {
           PetscInt f0[3], cnt[3];

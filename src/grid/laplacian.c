@@ -6,7 +6,7 @@
    unit-stride, vectorisable sweep; only the two end cells of a row look across x faces. */
 #include "gridimpl.h"
 #if defined(__AVX__)
-  #include <immintrin.h>
+#include <immintrin.h>
 #endif
 
 /* Address of row (j, k) (i = 0) of the block's neighbourhood: j or k may lie one cell outside. */
@@ -21,9 +21,9 @@ static inline const float *PffRow(const PffView *in, PetscInt j, PetscInt k, Pet
    then corrected by the difference to their true x neighbours, which costs two operations per row
    instead of two scalar stencils (rounding stays at the level of the stencil's own). */
 static inline __attribute__((always_inline)) void PffLaplacianBlockN(const PffView *restrict in, float *restrict out,
-                                                                      const PetscInt n, float ih2)
+                                                                     const PetscInt n, float ih2)
 {
-  const float   *c0 = in[13].ptr;
+  const float   *c0  = in[13].ptr;
   const PffView *vxm = &in[12], *vxp = &in[14];
   for (PetscInt k = 0; k < n; k++) {
     /* per plane: where the z-neighbour rows, the two y-ghost rows and the x-ghost columns start,
@@ -31,7 +31,8 @@ static inline __attribute__((always_inline)) void PffLaplacianBlockN(const PffVi
     const float    *zm0 = PffRow(in, 0, k - 1, n), *zp0 = PffRow(in, 0, k + 1, n);
     const ptrdiff_t zms = in[PffRegionIndex(0, 0, k - 1, n)].sy, zps = in[PffRegionIndex(0, 0, k + 1, n)].sy;
     const float    *ymg = PffRow(in, -1, k, n), *ypg = PffRow(in, n, k, n);
-    const float    *xm0 = vxm->ptr + (vxm->off - vxm->sx + k * vxm->sz), *xp0 = vxp->ptr + (vxp->off + n * vxp->sx + k * vxp->sz);
+    const float    *xm0 = vxm->ptr + (vxm->off - vxm->sx + k * vxm->sz),
+                *xp0    = vxp->ptr + (vxp->off + n * vxp->sx + k * vxp->sz);
     const ptrdiff_t xms = vxm->sy, xps = vxp->sy;
     for (PetscInt j = 0; j < n; j++) {
       const float *restrict c  = c0 + n * (j + n * k);
@@ -40,8 +41,8 @@ static inline __attribute__((always_inline)) void PffLaplacianBlockN(const PffVi
       const float *restrict zm = zm0 + j * zms;
       const float *restrict zp = zp0 + j * zps;
       float *restrict o        = out + n * (j + n * k);
-      const float     xm       = xm0[j * xms];
-      const float     xp       = xp0[j * xps];
+      const float xm           = xm0[j * xms];
+      const float xp           = xp0[j * xps];
 #if defined(__AVX__)
       if (n % 8 == 0 && ((uintptr_t)o) % 32 == 0) {
         /* the output is not read again while it is in cache: stream it past the caches, so the
@@ -71,12 +72,24 @@ static inline __attribute__((always_inline)) void PffLaplacianBlockN(const PffVi
 static void PffLaplacianBlock(const PffView *restrict in, float *restrict out, PetscInt n, float ih2)
 {
   switch (n) {
-  case 64: PffLaplacianBlockN(in, out, 64, ih2); break;
-  case 32: PffLaplacianBlockN(in, out, 32, ih2); break;
-  case 16: PffLaplacianBlockN(in, out, 16, ih2); break;
-  case 8: PffLaplacianBlockN(in, out, 8, ih2); break;
-  case 4: PffLaplacianBlockN(in, out, 4, ih2); break;
-  default: PffLaplacianBlockN(in, out, n, ih2); break;
+  case 64:
+    PffLaplacianBlockN(in, out, 64, ih2);
+    break;
+  case 32:
+    PffLaplacianBlockN(in, out, 32, ih2);
+    break;
+  case 16:
+    PffLaplacianBlockN(in, out, 16, ih2);
+    break;
+  case 8:
+    PffLaplacianBlockN(in, out, 8, ih2);
+    break;
+  case 4:
+    PffLaplacianBlockN(in, out, 4, ih2);
+    break;
+  default:
+    PffLaplacianBlockN(in, out, n, ih2);
+    break;
   }
 }
 

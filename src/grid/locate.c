@@ -28,7 +28,7 @@ PetscErrorCode PffGridLocate(PffGrid g, const PetscReal x[3], PetscInt *gid, Pet
     const PetscReal s = (xd - g->origin[d]) / g->h0;
     if (!(s >= 0 && s < (PetscReal)g->cells[d])) PetscFunctionReturn(PETSC_SUCCESS);
     fi[d] = (PetscInt)s;
-    b[d] = fi[d] >> g->log2n0;
+    b[d]  = fi[d] >> g->log2n0;
   }
   const PetscInt id = b[0] + g->nb[0] * (b[1] + g->nb[1] * b[2]);
   if (g->level[id] < 0) PetscFunctionReturn(PETSC_SUCCESS);
@@ -48,18 +48,20 @@ PetscErrorCode PffGridInterpolate(PffGrid g, PetscInt ch, PetscInt np, const Pet
   for (PetscInt p = 0; p < np; p++) {
     PetscInt  gid, level, lb;
     PetscReal xp[3];
-    for (int d = 0; d < 3; d++) xp[d] = g->periodic[d] ? PffWrap(x[3 * p + d], g->origin[d], g->h0 * (PetscReal)g->cells[d]) : x[3 * p + d];
+    for (int d = 0; d < 3; d++)
+      xp[d] = g->periodic[d] ? PffWrap(x[3 * p + d], g->origin[d], g->h0 * (PetscReal)g->cells[d]) : x[3 * p + d];
     PetscCall(PffGridLocate(g, xp, &gid, &level, NULL));
     lb = gid >= 0 ? g->local[gid] : -1;
     PetscCheck(lb >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
                "point (%g, %g, %g) is not in a block owned by this rank", (double)xp[0], (double)xp[1], (double)xp[2]);
-    const PetscInt  n = g->n0 >> level, ijk[3] = {gid % g->nb[0], (gid / g->nb[0]) % g->nb[1], gid / (g->nb[0] * g->nb[1])};
-    const PetscReal h = g->h0 * (PetscReal)((PetscInt)1 << level);
+    const PetscInt n      = g->n0 >> level,
+                   ijk[3] = {gid % g->nb[0], (gid / g->nb[0]) % g->nb[1], gid / (g->nb[0] * g->nb[1])};
+    const PetscReal h     = g->h0 * (PetscReal)((PetscInt)1 << level);
     PetscBool       wall[3][2];
     for (int a = 0; a < 3; a++)
       for (int s = 0; s < 2; s++) {
-        PetscInt d[3] = {0, 0, 0};
-        d[a]          = s ? 1 : -1;
+        PetscInt d[3]      = {0, 0, 0};
+        d[a]               = s ? 1 : -1;
         const PetscInt nbr = PffRasterNeighbour(g->nb, g->periodic, ijk, d);
         wall[a][s]         = (PetscBool)(nbr < 0 || g->level[nbr] < 0);
       }
@@ -88,7 +90,7 @@ PetscErrorCode PffGridInterpolate(PffGrid g, PetscInt ch, PetscInt np, const Pet
       PetscReal v = 0;
       for (int q = 0; q < 8; q++) {
         const PetscInt  ii = (q & 1) ? i1[0] : i0[0], jj = (q & 2) ? i1[1] : i0[1], kk = (q & 4) ? i1[2] : i0[2];
-        const PetscReal w  = ((q & 1) ? t[0] : 1 - t[0]) * ((q & 2) ? t[1] : 1 - t[1]) * ((q & 4) ? t[2] : 1 - t[2]);
+        const PetscReal w = ((q & 1) ? t[0] : 1 - t[0]) * ((q & 2) ? t[1] : 1 - t[1]) * ((q & 4) ? t[2] : 1 - t[2]);
         if (w != 0) v += w * (PetscReal)*PffViewsAt(views, ii, jj, kk, n);
       }
       val[p * c->ncomp + comp] = v;

@@ -24,17 +24,17 @@ static PetscErrorCode PffPartitionMorton(PffGrid g)
   for (PetscInt a = 0; a < g->nactive; a++) {
     const PetscInt64 w = PffBlockWork(g, g->order[a]);
     /* the block goes to the rank whose share holds the block's midpoint */
-    const PetscInt64 r = ((2 * acc + w) * (PetscInt64)g->size) / (2 * total);
+    const PetscInt64 r    = ((2 * acc + w) * (PetscInt64)g->size) / (2 * total);
     g->owner[g->order[a]] = (PetscMPIInt)PetscMin(r, (PetscInt64)g->size - 1);
     acc += w;
   }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-#define PffCallMETIS(call) \
-  do { \
-    int _st = (call); \
-    PetscCheck(_st == METIS_OK, PETSC_COMM_SELF, PETSC_ERR_LIB, "METIS call %s failed with status %d", #call, _st); \
+#define PffCallMETIS(call)                                                                                             \
+  do {                                                                                                                 \
+    int _st = (call);                                                                                                  \
+    PetscCheck(_st == METIS_OK, PETSC_COMM_SELF, PETSC_ERR_LIB, "METIS call %s failed with status %d", #call, _st);    \
   } while (0)
 
 static PetscErrorCode PffPartitionMetis(PffGrid g)
@@ -45,9 +45,9 @@ static PetscErrorCode PffPartitionMetis(PffGrid g)
   PetscCall(PetscMalloc1(g->nactive, &part));
   if (g->rank == 0) {
     PetscInt *pos; /* Morton position of each active block */
-    idx_t    *xadj, *adjncy, *vwgt, *adjwgt, *mpart, nvtxs = (idx_t)g->nactive, ncon = 1, nparts = (idx_t)g->size, objval;
-    idx_t     options[METIS_NOPTIONS];
-    PetscInt  nedge = 0;
+    idx_t *xadj, *adjncy, *vwgt, *adjwgt, *mpart, nvtxs = (idx_t)g->nactive, ncon = 1, nparts = (idx_t)g->size, objval;
+    idx_t  options[METIS_NOPTIONS];
+    PetscInt nedge = 0;
 
     PetscCall(PetscMalloc1(g->nblocks, &pos));
     for (PetscInt a = 0; a < g->nactive; a++) pos[g->order[a]] = a;
@@ -55,12 +55,13 @@ static PetscErrorCode PffPartitionMetis(PffGrid g)
                            g->nactive, &mpart));
     xadj[0] = 0;
     for (PetscInt a = 0; a < g->nactive; a++) {
-      const PetscInt gid = g->order[a], ijk[3] = {gid % g->nb[0], (gid / g->nb[0]) % g->nb[1], gid / (g->nb[0] * g->nb[1])};
-      const idx_t    first = (idx_t)nedge;
-      vwgt[a]              = (idx_t)PffBlockWork(g, gid);
+      const PetscInt gid    = g->order[a],
+                     ijk[3] = {gid % g->nb[0], (gid / g->nb[0]) % g->nb[1], gid / (g->nb[0] * g->nb[1])};
+      const idx_t first     = (idx_t)nedge;
+      vwgt[a]               = (idx_t)PffBlockWork(g, gid);
       for (int f = 0; f < 6; f++) {
-        PetscInt d[3] = {0, 0, 0};
-        d[f / 2]      = (f % 2) ? 1 : -1;
+        PetscInt d[3]      = {0, 0, 0};
+        d[f / 2]           = (f % 2) ? 1 : -1;
         const PetscInt nbr = PffRasterNeighbour(g->nb, g->periodic, ijk, d);
         if (nbr < 0 || nbr == gid || g->level[nbr] < 0) continue;
         PetscBool dup = PETSC_FALSE; /* periodic axes of two blocks meet the same neighbour twice */
@@ -76,7 +77,7 @@ static PetscErrorCode PffPartitionMetis(PffGrid g)
       for (PetscInt a = 0; a < g->nactive; a++) mpart[a] = 0;
     } else {
       PffCallMETIS(METIS_SetDefaultOptions(options));
-      options[METIS_OPTION_SEED]    = 7;
+      options[METIS_OPTION_SEED]      = 7;
       options[METIS_OPTION_NUMBERING] = 0;
       PffCallMETIS(METIS_PartGraphKway(&nvtxs, &ncon, xadj, adjncy, vwgt, NULL, adjwgt, &nparts, NULL, NULL, options,
                                        &objval, mpart));
@@ -104,8 +105,10 @@ PetscErrorCode PffGridPartition_Private(PffGrid g)
     g->offset[b] = -1;
     g->local[b]  = -1;
   }
-  if (g->ptype == PFF_PARTITION_METIS) PetscCall(PffPartitionMetis(g));
-  else PetscCall(PffPartitionMorton(g));
+  if (g->ptype == PFF_PARTITION_METIS)
+    PetscCall(PffPartitionMetis(g));
+  else
+    PetscCall(PffPartitionMorton(g));
 
   /* storage offsets on every owner, so any rank can address a neighbour's cells remotely */
   PetscCall(PetscCalloc1(g->size, &next));
@@ -136,19 +139,20 @@ PetscErrorCode PffGridPartition_Private(PffGrid g)
 
 PetscErrorCode PffGridComputeQuality_Private(PffGrid g)
 {
-  PetscInt64   *work;
-  PffHaloPlan  *plan;
-  PetscInt      cut = 0;
-  PetscReal     recv, rsum, rmax;
+  PetscInt64  *work;
+  PffHaloPlan *plan;
+  PetscInt     cut = 0;
+  PetscReal    recv, rsum, rmax;
 
   PetscFunctionBeginUser;
   PetscCall(PetscCalloc1(g->size, &work));
   for (PetscInt a = 0; a < g->nactive; a++) {
-    const PetscInt gid = g->order[a], ijk[3] = {gid % g->nb[0], (gid / g->nb[0]) % g->nb[1], gid / (g->nb[0] * g->nb[1])};
+    const PetscInt gid    = g->order[a],
+                   ijk[3] = {gid % g->nb[0], (gid / g->nb[0]) % g->nb[1], gid / (g->nb[0] * g->nb[1])};
     work[g->owner[gid]] += PffBlockWork(g, gid);
     for (int d = 0; d < 3; d++) { /* each face counted once, from its lower block */
-      PetscInt dd[3] = {0, 0, 0};
-      dd[d]          = 1;
+      PetscInt dd[3]     = {0, 0, 0};
+      dd[d]              = 1;
       const PetscInt nbr = PffRasterNeighbour(g->nb, g->periodic, ijk, dd);
       if (nbr >= 0 && g->level[nbr] >= 0 && g->owner[nbr] != g->owner[gid]) cut++;
     }

@@ -7,7 +7,8 @@
    finer pass has fixed: O(levels x blocks x 26). */
 #include "gridimpl.h"
 
-PetscInt PffRasterNeighbour(const PetscInt nb[3], const PetscBool periodic[3], const PetscInt ijk[3], const PetscInt d[3])
+PetscInt PffRasterNeighbour(const PetscInt nb[3], const PetscBool periodic[3], const PetscInt ijk[3],
+                            const PetscInt d[3])
 {
   PetscInt c[3];
   for (int a = 0; a < 3; a++) {
@@ -83,11 +84,13 @@ static PetscErrorCode PffGridRequestedLevels(PffGrid g)
       lo[d] = g->origin[d] + (PetscReal)ijk[d] * blen;
       hi[d] = lo[d] + blen;
     }
-    if (g->usermap) l = g->usermap[b];
-    else if (g->refine) PetscCall(g->refine(g, lo, hi, &l, g->refinectx));
+    if (g->usermap)
+      l = g->usermap[b];
+    else if (g->refine)
+      PetscCall(g->refine(g, lo, hi, &l, g->refinectx));
     else if (g->rtype != PFF_REFINE_NONE) {
       const PetscReal dist = PffGridSurfaceDistance(g, lo, hi);
-      l = (PetscInt)PetscMin((PetscReal)(g->nlevels - 1), PetscFloorReal(dist / (g->rband * blen)));
+      l                    = (PetscInt)PetscMin((PetscReal)(g->nlevels - 1), PetscFloorReal(dist / (g->rband * blen)));
     }
     PetscCheck(l >= -1 && l < g->nlevels, g->comm, PETSC_ERR_ARG_OUTOFRANGE,
                "refinement map asks for level %" PetscInt_FMT " at block %" PetscInt_FMT

@@ -9,6 +9,7 @@ PetscErrorCode PffGridAddChannel(PffGrid g, const char name[], PffChannelKind ki
   PffChannel *c;
 
   PetscFunctionBeginUser;
+  PetscCheck(ch != NULL, g->comm, PETSC_ERR_ARG_NULL, "PffGridAddChannel: the channel index argument must not be NULL");
   PetscCheck(g->nch < PFF_GRID_MAX_CHANNELS, g->comm, PETSC_ERR_SUP, "at most %d channels", PFF_GRID_MAX_CHANNELS);
   PetscCheck(width >= 1 && width <= PFF_GRID_MAX_WIDTH, g->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "channel %s: halo width %" PetscInt_FMT " must be in [1, %d]", name, width, PFF_GRID_MAX_WIDTH);
@@ -46,9 +47,9 @@ PetscErrorCode PffGridAllocateChannel_Private(PffGrid g, PffChannel *c)
     const PetscInt ijk[3] = {gid % g->nb[0], (gid / g->nb[0]) % g->nb[1], gid / (g->nb[0] * g->nb[1])};
     for (PetscInt comp = 0; comp < c->ncomp; comp++) {
       for (PetscInt r = 0; r < 27; r++) {
-        PffView       *v    = &c->views[(lb * c->ncomp + comp) * 27 + r];
-        const PetscInt d[3] = {r % 3 - 1, (r / 3) % 3 - 1, r / 9 - 1};
-        const PetscInt64 go = c->plan->goff[(lb * c->ncomp + comp) * 27 + r];
+        PffView         *v    = &c->views[(lb * c->ncomp + comp) * 27 + r];
+        const PetscInt   d[3] = {r % 3 - 1, (r / 3) % 3 - 1, r / 9 - 1};
+        const PetscInt64 go   = c->plan->goff[(lb * c->ncomp + comp) * 27 + r];
         if (r == 13 || go < 0) {
           /* own storage, or a same-level neighbour on this rank read in place */
           const PetscInt src = r == 13 ? gid : PffRasterNeighbour(g->nb, g->periodic, ijk, d);

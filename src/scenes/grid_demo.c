@@ -80,13 +80,13 @@ static PetscErrorCode PffGridDemoStats(MPI_Comm comm, PffGrid grid, PetscInt ch,
 
 static PetscErrorCode PffGridDemoRun(PffScene s)
 {
-  PffGridDemo  *d = (PffGridDemo *)s->data;
-  PffGrid       grid = d->grid;
+  PffGridDemo   *d    = (PffGridDemo *)s->data;
+  PffGrid        grid = d->grid;
   const PetscInt u = d->u, lap = d->lap;
-  PetscInt      nlocal, n0, cellsx, frame = 0;
-  PetscReal     h0, origin[3], t = 0;
-  PetscLogStage stGrid, stHalo, stDiffuse, stOutput;
-  PffProgress   prog;
+  PetscInt       nlocal, n0, cellsx, frame = 0;
+  PetscReal      h0, origin[3], t = 0;
+  PetscLogStage  stGrid, stHalo, stDiffuse, stOutput;
+  PffProgress    prog;
 
   PetscFunctionBeginUser;
   PetscCall(PetscLogStageRegister("Init", &stGrid));
@@ -112,9 +112,9 @@ static PetscErrorCode PffGridDemoRun(PffScene s)
     for (PetscInt k = 0; k < info.n; k++)
       for (PetscInt j = 0; j < info.n; j++)
         for (PetscInt i = 0; i < info.n; i++) {
-          const PetscReal x = info.lo[0] + (i + 0.5) * info.h - (origin[0] + 0.5 * len);
-          const PetscReal y = info.lo[1] + (j + 0.5) * info.h - (origin[1] + 0.5 * len);
-          const PetscReal z = info.lo[2] + (k + 0.5) * info.h - (origin[2] + 0.5 * len);
+          const PetscReal x                = info.lo[0] + (i + 0.5) * info.h - (origin[0] + 0.5 * len);
+          const PetscReal y                = info.lo[1] + (j + 0.5) * info.h - (origin[1] + 0.5 * len);
+          const PetscReal z                = info.lo[2] + (k + 0.5) * info.h - (origin[2] + 0.5 * len);
           v[i + info.n * (j + info.n * k)] = (float)PetscExpReal(-(x * x + y * y + z * z) / (2 * sig * sig));
         }
   }
@@ -172,13 +172,13 @@ PetscErrorCode PffSceneCreate_GridDemo(PffScene s)
 
   PetscFunctionBeginUser;
   PetscCall(PetscNew(&d));
-  d->steps                 = 20;
-  d->every                 = 10;
-  d->nu                    = 1.0;
-  d->sigma                 = 0.1;
-  s->data                  = d;
-  s->ops.setfromoptions    = PffGridDemoSetFromOptions;
-  s->ops.run               = PffGridDemoRun;
-  s->ops.destroy           = PffGridDemoDestroy;
+  d->steps              = 20;
+  d->every              = 10;
+  d->nu                 = 1.0;
+  d->sigma              = 0.1;
+  s->data               = d;
+  s->ops.setfromoptions = PffGridDemoSetFromOptions;
+  s->ops.run            = PffGridDemoRun;
+  s->ops.destroy        = PffGridDemoDestroy;
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -10,7 +10,7 @@ typedef struct {
 } PffSceneEntry;
 
 static const PffSceneEntry PffScenes[] = {
-  {"grid_demo", PffSceneCreate_GridDemo},
+    {"grid_demo", PffSceneCreate_GridDemo},
 };
 
 PetscErrorCode PffSceneCreate(MPI_Comm comm, PffScene *scene)

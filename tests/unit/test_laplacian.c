@@ -7,13 +7,14 @@ static PetscErrorCode CheckCase(PetscInt n0, PetscInt levels, PetscBool periodic
 {
   PffGrid   grid;
   PetscInt  u, lap, nlocal, nb[3] = {3, 2, 4}, cells[3], *map;
-  PetscBool per[3] = {periodic, PETSC_FALSE, periodic};
+  PetscBool per[3]    = {periodic, PETSC_FALSE, periodic};
   PetscReal origin[3] = {0, 0, 0}, maxerr = 0, maxval = 0, gerr, gval;
 
   PetscFunctionBeginUser;
   for (int d = 0; d < 3; d++) cells[d] = nb[d] * n0;
   PetscCall(PetscMalloc1(nb[0] * nb[1] * nb[2], &map));
-  for (PetscInt b = 0; b < nb[0] * nb[1] * nb[2]; b++) map[b] = (PetscInt)(((unsigned)(b * 2654435761u + seed * 40503u) >> 7) % levels);
+  for (PetscInt b = 0; b < nb[0] * nb[1] * nb[2]; b++)
+    map[b] = (PetscInt)(((unsigned)(b * 2654435761u + seed * 40503u) >> 7) % levels);
   PetscCall(PffGridCreate(PETSC_COMM_WORLD, &grid));
   PetscCall(PffGridSetCells(grid, cells));
   PetscCall(PffGridSetBlockSize(grid, n0));
@@ -33,7 +34,8 @@ static PetscErrorCode CheckCase(PetscInt n0, PetscInt levels, PetscBool periodic
     for (PetscInt k = 0; k < info.n; k++)
       for (PetscInt j = 0; j < info.n; j++)
         for (PetscInt i = 0; i < info.n; i++) {
-          const PetscReal x = info.lo[0] + (i + 0.5) * info.h, y = info.lo[1] + (j + 0.5) * info.h, z = info.lo[2] + (k + 0.5) * info.h;
+          const PetscReal x = info.lo[0] + (i + 0.5) * info.h, y = info.lo[1] + (j + 0.5) * info.h,
+                          z                = info.lo[2] + (k + 0.5) * info.h;
           v[i + info.n * (j + info.n * k)] = (float)(PetscSinReal(3 * x + 1) * PetscCosReal(2 * y) + 0.5 * z * z);
         }
   }
@@ -65,10 +67,10 @@ static PetscErrorCode CheckCase(PetscInt n0, PetscInt levels, PetscBool periodic
   PetscCall(MPIU_Allreduce(&maxval, &gval, 1, MPIU_REAL, MPIU_MAX, PETSC_COMM_WORLD));
   /* float stencil: the sum of 7 terms of size |c|/h^2 carries a rounding of a few ulps of that */
   PetscCheck(gerr <= 1e-5 * gval, PETSC_COMM_WORLD, PETSC_ERR_PLIB,
-             "Laplacian n0=%" PetscInt_FMT " levels=%" PetscInt_FMT " periodic=%d: max error %g against scale %g", n0, levels,
-             (int)periodic, (double)gerr, (double)gval);
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "laplacian n0=%" PetscInt_FMT " levels=%" PetscInt_FMT " periodic=%d ok\n", n0,
-                        levels, (int)periodic));
+             "Laplacian n0=%" PetscInt_FMT " levels=%" PetscInt_FMT " periodic=%d: max error %g against scale %g", n0,
+             levels, (int)periodic, (double)gerr, (double)gval);
+  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "laplacian n0=%" PetscInt_FMT " levels=%" PetscInt_FMT " periodic=%d ok\n",
+                        n0, levels, (int)periodic));
   PetscCall(PffGridDestroy(&grid));
   PetscCall(PetscFree(map));
   PetscFunctionReturn(PETSC_SUCCESS);

@@ -1,0 +1,335 @@
+/* Reading frames (restart and post-processing tools): PffIOReadFrame fills a set-up grid from a frame,
+   PffIOReadLevels returns the frame's level map so that a tool can first build a matching grid.
+
+   A frame may be read on any number of ranks and with any partition: each rank selects its owned
+   blocks at their Morton positions (layout.c), exactly as the writer did. Before touching data the
+   reader compares the file with the grid (block size, raster, level map, channel names and kinds) and
+   stops with one message naming the first difference; every rank reads the same metadata, so they all
+   stop together, after closing the file. */
+#include <string.h>
+#include "h5util.h"
+
+/* Opens path collectively and checks that it is a pfflip frame of a version we read. */
+static PetscErrorCode PffIOOpenFrame(MPI_Comm comm, const char path[], hid_t *file)
+{
+  hid_t     fapl;
+  char     *format = NULL, msg[PETSC_MAX_PATH_LEN + 256] = "";
+  int       version = 0;
+  PetscBool found;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffIOCheckReadable_Private(comm, path));
+  PetscCall(PffIOCreateAccessList_Private(comm, &fapl));
+  *file = H5Fopen(path, H5F_ACC_RDONLY, fapl);
+  if (*file < 0) {
+    char h5msg[256];
+    /* Before any other HDF5 call, which would clear the error stack. */
+    PffHDF5ErrorMessage_Private(h5msg, sizeof(h5msg));
+    SETERRQ(comm, PETSC_ERR_FILE_OPEN, "cannot open frame %s: not a readable HDF5 file (%s)", path, h5msg);
+  }
+  PffCallHDF5(H5Pclose(fapl));
+  PetscCall(PffH5ReadAttributeString_Private(*file, "format", &format));
+  PetscCall(PffH5ReadAttribute_Private(*file, "format_version", H5T_NATIVE_INT, 0, &version, &found));
+  if (!format || strcmp(format, PFF_FRAME_FORMAT))
+    PetscCall(PetscSNPrintf(msg, sizeof(msg),
+                            "frame %s: not a pfflip frame (root attribute format is \"%s\", expected \"%s\")", path,
+                            format ? format : "(missing)", PFF_FRAME_FORMAT));
+  else if (!found || version < 1 || version > PFF_FRAME_FORMAT_VERSION)
+    PetscCall(PetscSNPrintf(msg, sizeof(msg), "frame %s: format_version %d is not one this build reads (1 to %d)", path,
+                            version, PFF_FRAME_FORMAT_VERSION));
+  PetscCall(PetscFree(format));
+  if (msg[0]) {
+    PffCallHDF5(H5Fclose(*file));
+    SETERRQ(comm, PETSC_ERR_FILE_UNEXPECTED, "%s", msg);
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Reads /grid/raster and the full /grid/level map (every rank reads all of it). */
+static PetscErrorCode PffIOReadRaster(hid_t file, const char path[], hid_t dxpl, PetscInt nb[3], PetscInt **level)
+{
+  PetscInt64 raster[3];
+  PetscBool  found;
+  htri_t     exists;
+  hid_t      group, dset, space;
+  hssize_t   npoints;
+
+  PetscFunctionBeginUser;
+  PffCallHDF5(exists = H5Lexists(file, "grid", H5P_DEFAULT));
+  PetscCheck(exists, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "frame %s: no /grid group", path);
+  PffCallHDF5(group = H5Gopen2(file, "grid", H5P_DEFAULT));
+  PetscCall(PffH5ReadAttribute_Private(group, "raster", H5T_NATIVE_INT64, 3, raster, &found));
+  PetscCheck(found, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "frame %s: /grid has no raster attribute of 3 values",
+             path);
+  for (int d = 0; d < 3; d++) {
+    PetscCheck(raster[d] > 0 && raster[d] <= PETSC_MAX_INT, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED,
+               "frame %s: /grid raster %" PetscInt64_FMT " is not a block count", path, raster[d]);
+    nb[d] = (PetscInt)raster[d];
+  }
+  const PetscInt64 nblocks = raster[0] * raster[1] * raster[2];
+  PffCallHDF5(exists = H5Lexists(group, "level", H5P_DEFAULT));
+  PetscCheck(exists, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED, "frame %s: no /grid/level dataset", path);
+  PffCallHDF5(dset = H5Dopen2(group, "level", H5P_DEFAULT));
+  PffCallHDF5(space = H5Dget_space(dset));
+  PffCallHDF5(npoints = H5Sget_simple_extent_npoints(space));
+  PetscCheck(npoints == nblocks, PETSC_COMM_SELF, PETSC_ERR_FILE_UNEXPECTED,
+             "frame %s: /grid/level has %" PetscInt64_FMT " entries but the raster has %" PetscInt64_FMT " blocks",
+             path, (PetscInt64)npoints, nblocks);
+  PetscCall(PetscMalloc1(nblocks, level));
+  PffCallHDF5(H5Dread(dset, PFF_H5T_NATIVE_PETSCINT, H5S_ALL, H5S_ALL, dxpl, *level));
+  PffCallHDF5(H5Sclose(space));
+  PffCallHDF5(H5Dclose(dset));
+  PffCallHDF5(H5Gclose(group));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffIOReadLevels(MPI_Comm comm, const char path[], PetscInt nb[3], PetscInt **level)
+{
+  hid_t file, dxpl;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffIOInitialize_Private());
+  PetscCall(PffIOOpenFrame(comm, path, &file));
+  PetscCall(PffIOCreateTransferList_Private(&dxpl));
+  PetscCall(PffIOReadRaster(file, path, dxpl, nb, level));
+  PffCallHDF5(H5Pclose(dxpl));
+  PffCallHDF5(H5Fclose(file));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Compares the frame's raster with the grid's; msg stays empty when they agree. */
+static PetscErrorCode PffIOCompareRaster(PffGrid grid, hid_t file, const char path[], hid_t dxpl, char msg[],
+                                         size_t len)
+{
+  const PetscInt *glevel;
+  PetscInt       *flevel, fnb[3], nb[3], n0;
+  int             fn0 = 0;
+  PetscBool       found;
+  hid_t           group;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetRaster(grid, nb, &glevel, NULL));
+  PetscCall(PffGridGetSizes(grid, &n0, NULL, NULL, NULL, NULL));
+  PetscCall(PffIOReadRaster(file, path, dxpl, fnb, &flevel));
+  PffCallHDF5(group = H5Gopen2(file, "grid", H5P_DEFAULT));
+  PetscCall(PffH5ReadAttribute_Private(group, "block_size", H5T_NATIVE_INT, 0, &fn0, &found));
+  PffCallHDF5(H5Gclose(group));
+  if (!found)
+    PetscCall(PetscSNPrintf(msg, len, "frame %s: /grid has no block_size attribute", path));
+  else if (fn0 != n0)
+    PetscCall(
+        PetscSNPrintf(msg, len, "frame %s: block size %d differs from -grid_block_size %" PetscInt_FMT, path, fn0, n0));
+  else if (fnb[0] != nb[0] || fnb[1] != nb[1] || fnb[2] != nb[2])
+    PetscCall(PetscSNPrintf(msg, len,
+                            "frame %s: raster of %" PetscInt_FMT "x%" PetscInt_FMT "x%" PetscInt_FMT
+                            " blocks differs from the grid's %" PetscInt_FMT "x%" PetscInt_FMT "x%" PetscInt_FMT
+                            " (-grid_cells / -grid_block_size)",
+                            path, fnb[0], fnb[1], fnb[2], nb[0], nb[1], nb[2]));
+  else {
+    for (PetscInt b = 0; b < nb[0] * nb[1] * nb[2]; b++) {
+      if (flevel[b] == glevel[b]) continue;
+      PetscCall(PetscSNPrintf(msg, len,
+                              "frame %s: block %" PetscInt_FMT " (%" PetscInt_FMT ",%" PetscInt_FMT ",%" PetscInt_FMT
+                              ") has level %" PetscInt_FMT " in the file but %" PetscInt_FMT
+                              " in the grid (-1 = inactive); build the grid from PffIOReadLevels()",
+                              path, b, b % nb[0], (b / nb[0]) % nb[1], b / (nb[0] * nb[1]), flevel[b], glevel[b]));
+      break;
+    }
+  }
+  PetscCall(PetscFree(flevel));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Checks that every component of every grid channel has a dataset of the right kind and length. */
+static PetscErrorCode PffIOCompareChannels(PffGrid grid, const PffFrameLayout *L, hid_t file, const char path[],
+                                           char msg[], size_t len)
+{
+  PetscInt nch;
+  htri_t   exists;
+  hid_t    group;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetNumChannels(grid, &nch));
+  PffCallHDF5(exists = H5Lexists(file, "fields", H5P_DEFAULT));
+  if (!exists) {
+    if (nch > 0) PetscCall(PetscSNPrintf(msg, len, "frame %s: no /fields group", path));
+    PetscFunctionReturn(PETSC_SUCCESS);
+  }
+  PffCallHDF5(group = H5Gopen2(file, "fields", H5P_DEFAULT));
+  for (PetscInt c = 0; c < nch && !msg[0]; c++) {
+    const char    *name;
+    PffChannelKind kind;
+    PetscInt       ncomp;
+
+    PetscCall(PffGridGetChannelInfo(grid, c, &name, &kind, &ncomp, NULL));
+    for (PetscInt comp = 0; comp < ncomp && !msg[0]; comp++) {
+      char     dname[256], *fkind = NULL;
+      hid_t    dset, space;
+      hssize_t npoints;
+
+      PetscCall(PffIOFieldName_Private(name, kind, comp, dname, sizeof(dname)));
+      PffCallHDF5(exists = H5Lexists(group, dname, H5P_DEFAULT));
+      if (!exists) {
+        PetscCall(PetscSNPrintf(msg, len, "frame %s: channel %s (%s) is missing: no dataset /fields/%s", path, name,
+                                PffChannelKinds[kind], dname));
+        break;
+      }
+      PffCallHDF5(dset = H5Dopen2(group, dname, H5P_DEFAULT));
+      PetscCall(PffH5ReadAttributeString_Private(dset, "kind", &fkind));
+      PffCallHDF5(space = H5Dget_space(dset));
+      PffCallHDF5(npoints = H5Sget_simple_extent_npoints(space));
+      if (!fkind || strcmp(fkind, PffChannelKinds[kind]))
+        PetscCall(PetscSNPrintf(msg, len, "frame %s: channel %s is a %s channel in the grid but /fields/%s has kind %s",
+                                path, name, PffChannelKinds[kind], dname, fkind ? fkind : "(missing)"));
+      else if ((PetscInt64)npoints != L->offset[L->nactive])
+        PetscCall(PetscSNPrintf(msg, len,
+                                "frame %s: /fields/%s has %" PetscInt64_FMT " values but the grid has %" PetscInt64_FMT
+                                " active cells",
+                                path, dname, (PetscInt64)npoints, L->offset[L->nactive]));
+      PetscCall(PetscFree(fkind));
+      PffCallHDF5(H5Sclose(space));
+      PffCallHDF5(H5Dclose(dset));
+    }
+  }
+  PffCallHDF5(H5Gclose(group));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The file's own record of its order: /blocks/gid and /blocks/offset of the owned rows must be the
+   grid's Morton order and prefix sum (a guard against a file that followed another convention). */
+static PetscErrorCode PffIOCompareBlocks(MPI_Comm comm, const PffFrameLayout *L, hid_t file, const char path[],
+                                         hid_t dxpl, char msg[], size_t len)
+{
+  const char *names[2] = {"/blocks/gid", "/blocks/offset"};
+  PetscInt64 *buf;
+  int         bad = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc1(L->nlocal > 0 ? L->nlocal : 1, &buf));
+  for (int i = 0; i < 2; i++) {
+    htri_t   exists;
+    hid_t    dset, fspace, mspace;
+    hssize_t npoints;
+
+    PffCallHDF5(exists = H5Lexists(file, "blocks", H5P_DEFAULT));
+    if (exists) PffCallHDF5(exists = H5Lexists(file, names[i], H5P_DEFAULT));
+    if (!exists) {
+      PetscCall(PetscSNPrintf(msg, len, "frame %s: no dataset %s", path, names[i]));
+      break;
+    }
+    PffCallHDF5(dset = H5Dopen2(file, names[i], H5P_DEFAULT));
+    PffCallHDF5(fspace = H5Dget_space(dset));
+    PffCallHDF5(npoints = H5Sget_simple_extent_npoints(fspace));
+    if (npoints != (hssize_t)L->nactive) {
+      PetscCall(PetscSNPrintf(
+          msg, len, "frame %s: %s has %" PetscInt64_FMT " rows but the grid has %" PetscInt_FMT " active blocks", path,
+          names[i], (PetscInt64)npoints, L->nactive));
+    } else {
+      PetscCall(PffIOSelectBlocks_Private(L, fspace));
+      PetscCall(PffIOCreateMemSpace_Private((hsize_t)L->nlocal, 0, &mspace));
+      PffCallHDF5(H5Dread(dset, H5T_NATIVE_INT64, mspace, fspace, dxpl, buf));
+      PffCallHDF5(H5Sclose(mspace));
+      for (PetscInt k = 0; k < L->nlocal; k++) {
+        const PetscInt64 expect = i == 0 ? (PetscInt64)L->order[L->lpos[k]] : L->offset[L->lpos[k]];
+        if (buf[k] != expect) bad = 1;
+      }
+    }
+    PffCallHDF5(H5Sclose(fspace));
+    PffCallHDF5(H5Dclose(dset));
+    if (msg[0]) break;
+  }
+  PetscCall(PetscFree(buf));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &bad, 1, MPI_INT, MPI_LOR, comm));
+  if (!msg[0] && bad)
+    PetscCall(
+        PetscSNPrintf(msg, len, "frame %s: /blocks/gid or /blocks/offset is not in the grid's Morton order", path));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffIOReadFields(PffGrid grid, const PffFrameLayout *L, hid_t file, hid_t dxpl)
+{
+  const hsize_t total = (hsize_t)L->offset[L->nactive];
+  PetscInt      nch;
+  float        *buf;
+  hid_t         group, fspace, mspace;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetNumChannels(grid, &nch));
+  if (nch == 0) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PetscMalloc1(L->ncells > 0 ? L->ncells : 1, &buf));
+  PffCallHDF5(group = H5Gopen2(file, "fields", H5P_DEFAULT));
+  PffCallHDF5(fspace = H5Screate_simple(1, &total, NULL));
+  PetscCall(PffIOSelectCells_Private(L, fspace));
+  PetscCall(PffIOCreateMemSpace_Private((hsize_t)L->ncells, 0, &mspace));
+  for (PetscInt c = 0; c < nch; c++) {
+    const char    *name;
+    PffChannelKind kind;
+    PetscInt       ncomp;
+
+    PetscCall(PffGridGetChannelInfo(grid, c, &name, &kind, &ncomp, NULL));
+    for (PetscInt comp = 0; comp < ncomp; comp++) {
+      char       dname[256];
+      PetscInt64 pos = 0;
+      hid_t      dset;
+
+      PetscCall(PffIOFieldName_Private(name, kind, comp, dname, sizeof(dname)));
+      PffCallHDF5(dset = H5Dopen2(group, dname, H5P_DEFAULT));
+      PffCallHDF5(H5Dread(dset, H5T_NATIVE_FLOAT, mspace, fspace, dxpl, buf));
+      PffCallHDF5(H5Dclose(dset));
+      for (PetscInt k = 0; k < L->nlocal; k++) {
+        const PetscInt64 nc = (PetscInt64)L->ln[k] * L->ln[k] * L->ln[k];
+        float           *data;
+        PetscCall(PffGridGetBlockData(grid, c, L->lb[k], comp, &data));
+        PetscCall(PetscArraycpy(data, buf + pos, nc));
+        pos += nc;
+      }
+    }
+  }
+  PffCallHDF5(H5Sclose(mspace));
+  PffCallHDF5(H5Sclose(fspace));
+  PffCallHDF5(H5Gclose(group));
+  PetscCall(PetscFree(buf));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffIOReadFrame(PffGrid grid, const char path[], PetscReal *time, PetscInt *step)
+{
+  char           msg[PETSC_MAX_PATH_LEN + 512] = "";
+  MPI_Comm       comm;
+  PffFrameLayout L;
+  hid_t          file, dxpl;
+  PetscReal      t  = 0;
+  PetscInt64     st = 0;
+  PetscBool      tfound, sfound;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffIOInitialize_Private());
+  PetscCall(PffIOGetComm_Private(grid, &comm));
+  PetscCall(PffIOOpenFrame(comm, path, &file));
+  PetscCall(PetscLogEventBegin(PFF_IORead, 0, 0, 0, 0));
+  PetscCall(PffIOCreateTransferList_Private(&dxpl));
+  PetscCall(PffIOLayoutCreate_Private(grid, &L));
+  PetscCall(PffIOCompareRaster(grid, file, path, dxpl, msg, sizeof(msg)));
+  if (!msg[0]) PetscCall(PffIOCompareChannels(grid, &L, file, path, msg, sizeof(msg)));
+  if (!msg[0]) PetscCall(PffIOCompareBlocks(comm, &L, file, path, dxpl, msg, sizeof(msg)));
+  if (!msg[0]) {
+    PetscCall(PffH5ReadAttribute_Private(file, "time", PFF_H5T_NATIVE_PETSCREAL, 0, &t, &tfound));
+    PetscCall(PffH5ReadAttribute_Private(file, "step", H5T_NATIVE_INT64, 0, &st, &sfound));
+    if (!tfound || !sfound) PetscCall(PetscSNPrintf(msg, sizeof(msg), "frame %s: no time or step attribute", path));
+  }
+  if (msg[0]) {
+    PetscCall(PffIOLayoutDestroy_Private(&L));
+    PffCallHDF5(H5Pclose(dxpl));
+    PffCallHDF5(H5Fclose(file));
+    PetscCall(PetscLogEventEnd(PFF_IORead, 0, 0, 0, 0));
+    SETERRQ(comm, PETSC_ERR_FILE_UNEXPECTED, "%s", msg);
+  }
+  PetscCall(PffIOReadFields(grid, &L, file, dxpl));
+  PetscCall(PffIOLayoutDestroy_Private(&L));
+  PffCallHDF5(H5Pclose(dxpl));
+  PffCallHDF5(H5Fclose(file));
+  if (time) *time = t;
+  if (step) PetscCall(PetscIntCast(st, step));
+  PetscCall(PetscLogEventEnd(PFF_IORead, 0, 0, 0, 0));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}

@@ -1,0 +1,27 @@
+# io: frame round trip at 1, 2 and 4 ranks. Each rank count writes its own file, so that `ctest -j`
+# never runs two writers on the same frame.
+foreach(np 1 2 4)
+  pff_add_unit(test_io RANKS ${np} ARGS -out test_io_np${np}.h5)
+endforeach()
+
+# The Python reader and the slice plot on the frame the 2-rank run wrote (Debian's python3 with
+# h5py, numpy and matplotlib; skipped when they are missing). --check also parses the XDMF sidecar
+# and checks every hyperslab it refers to.
+find_program(PFF_PYTHON3 python3 HINTS /usr/bin DOC "Python 3 with h5py, numpy and matplotlib for postproc/")
+if(PFF_PYTHON3)
+  execute_process(COMMAND ${PFF_PYTHON3} -c "import h5py, numpy, matplotlib" RESULT_VARIABLE pff_python_missing
+                  OUTPUT_QUIET ERROR_QUIET)
+  if(pff_python_missing EQUAL 0)
+    set_tests_properties(test_io_np2 PROPERTIES FIXTURES_SETUP io_frame)
+    add_test(NAME test_io_postproc_summary
+             COMMAND ${PFF_PYTHON3} ${PROJECT_SOURCE_DIR}/postproc/pff_frame.py --check --summary test_io_np2.h5
+             WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR})
+    add_test(NAME test_io_postproc_slice
+             COMMAND ${PFF_PYTHON3} ${PROJECT_SOURCE_DIR}/postproc/slice.py test_io_np2.h5 phi -o test_io_np2_phi.png
+             WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR})
+    set_tests_properties(test_io_postproc_summary test_io_postproc_slice PROPERTIES FIXTURES_REQUIRED io_frame
+                         LABELS "unit;postproc")
+  else()
+    message(STATUS "postproc tests skipped: ${PFF_PYTHON3} lacks h5py, numpy or matplotlib")
+  endif()
+endif()
