@@ -15,7 +15,7 @@ function(pff_add_mpi_test name)
              COMMAND ${MPIEXEC_EXECUTABLE} ${MPIEXEC_NUMPROC_FLAG} ${np} ${PFF_MPIEXEC_FLAGS} ${T_COMMAND}
              WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR})
     set_tests_properties(${tname} PROPERTIES
-      ENVIRONMENT "OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1;OMP_NUM_THREADS=1;OMPI_MCA_rmaps_base_oversubscribe=1"
+      ENVIRONMENT "OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1;OMP_NUM_THREADS=1;OMPI_MCA_rmaps_base_oversubscribe=1;ASAN_OPTIONS=detect_leaks=0"
       PROCESSORS ${np} TIMEOUT ${T_TIMEOUT} LABELS "${T_LABELS};np${np}")
     if(T_REGEX)
       set_tests_properties(${tname} PROPERTIES PASS_REGULAR_EXPRESSION "${T_REGEX}")
