@@ -9,6 +9,6 @@ outdir=${PFF_OUTPUT_DIR:-$PFF_ROOT/output/$(basename "$scene" .yaml)}
 "${PFF_MPIEXEC[@]}" -n "${PFF_RANKS:-2}" "$PFF_BUILD_DIR/bin/pfflip" -options_file_yaml "$scene" -output_dir "$outdir" "$@"
 last=$(ls "$outdir"/frame_*.h5 2>/dev/null | sort | tail -n 1 || true)
 if [ -n "$last" ] && [ -x /usr/bin/python3 ]; then
-  /usr/bin/python3 "$PFF_ROOT/postproc/slice.py" "$last" u "${last%.h5}_u.png" || true
+  /usr/bin/python3 "$PFF_ROOT/postproc/slice.py" "$last" u -o "${last%.h5}_u.png" && echo "pfflip: slice plot ${last%.h5}_u.png"
 fi
 echo "pfflip: output in $outdir (open the .xmf files in ParaView)"

@@ -24,21 +24,23 @@ static PetscBool PffIsInputError(PetscErrorCode n)
   case PETSC_ERR_FILE_READ:
   case PETSC_ERR_FILE_UNEXPECTED:
   case PETSC_ERR_USER_INPUT:
+  case PETSC_ERR_USER: /* PETSc's own option parsing, e.g. an unknown enum value */
     return PETSC_TRUE;
   default:
     return PETSC_FALSE;
   }
 }
 
-/* Prints an input error once per communicator: the first rank of a collective check, or the rank
-   that found it. Everything else goes to PETSc's traceback handler. */
+/* Prints an input error once: options are the same on every rank, so every rank meets the same
+   error and world rank 0 speaks for all (PETSc's own option checks raise on PETSC_COMM_SELF).
+   Everything else goes to PETSc's traceback handler. */
 static PetscErrorCode PffErrorHandler(MPI_Comm comm, int line, const char *fun, const char *file, PetscErrorCode n,
                                       PetscErrorType p, const char *mess, void *ctx)
 {
   PetscMPIInt rank = 0;
   if (!PffIsInputError(n)) return PetscTraceBackErrorHandler(comm, line, fun, file, n, p, mess, ctx);
   if (p == PETSC_ERROR_INITIAL) {
-    if (comm != MPI_COMM_NULL) MPI_Comm_rank(comm, &rank);
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
     if (rank == 0) fprintf(stderr, "pfflip: error: %s\n", mess ? mess : "input error");
   }
   return n;

@@ -25,3 +25,12 @@ if(PFF_PYTHON3)
     message(STATUS "postproc tests skipped: ${PFF_PYTHON3} lacks h5py, numpy or matplotlib")
   endif()
 endif()
+
+# ParaView's own XDMF reader on the same frame, where ParaView is installed (Debian paraview and
+# python3-paraview; not installed by the set-up script because of their size).
+find_program(PFF_PVBATCH pvbatch)
+if(PFF_PVBATCH AND PFF_PYTHON3 AND pff_python_missing EQUAL 0)
+  add_test(NAME test_io_paraview_xdmf COMMAND ${PFF_PVBATCH} ${PROJECT_SOURCE_DIR}/postproc/pv_check_xdmf.py test_io_np2.xmf
+           WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR})
+  set_tests_properties(test_io_paraview_xdmf PROPERTIES FIXTURES_REQUIRED io_frame LABELS "unit;postproc;paraview")
+endif()

@@ -1,0 +1,353 @@
+/* Unit test of PffGridLocate and PffGridInterpolate on multi-level grids at any rank count.
+
+   Two pseudo-random graded 3-level rasters (n0 = 8): one walled on all sides, one periodic in x with
+   inactive blocks. A cell channel and a face channel (width 1) hold linear functions of each value's
+   sample position (one function per face component; the periodic case's functions do not depend
+   on x). After a halo exchange, at 2000 pseudo-random points per rank inside locally owned blocks and
+   at least 4 h0 (a level-2 cell) from walls and inactive blocks in the max norm, PffGridInterpolate
+   must return the linear function to 1e-5 of the field's scale, for every face component on its own
+   staggered lattice; in the periodic case points are also shifted by a period. Interpolating at a
+   sample position (anywhere, walls included) must return the stored sample exactly.
+   PffGridLocate must return the block whose box holds the (wrapped) point, the raster's level and the
+   cell floor((x - lo) / h); -1 outside walled axes and in inactive blocks; block corners belong to the
+   block above them.
+
+   Sample run:  mpiexec -n 4 ./test_interp
+   Prints (the same on any number of ranks) one "ok" line per raster and channel. */
+#include <pff.h>
+
+static const char help[] = "Point location and trilinear interpolation on multi-level grids.\n";
+
+#define N0 8
+#define NLEVELS 3
+#define NPOINTS 2000
+
+static uint64_t Hash64(uint64_t i)
+{
+  uint64_t z = i + 0x9e3779b97f4a7c15ULL;
+  z          = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z          = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+static uint64_t Key(uint64_t a, uint64_t b, uint64_t c, uint64_t d)
+{
+  return Hash64(Hash64(Hash64(Hash64(a) ^ b) ^ c) ^ d);
+}
+
+/* Uniform in [0, 1) with 53 random bits. */
+static PetscReal Uniform01(uint64_t h)
+{
+  return (PetscReal)(h >> 11) / 9007199254740992.0;
+}
+
+typedef struct {
+  const char *name;
+  PetscInt    nb[3];
+  PetscBool   periodic[3];
+  PetscInt    inactive; /* percentage of requested-inactive blocks */
+  uint64_t    seed;
+} Case;
+
+typedef struct {
+  PffGrid            grid;
+  MPI_Comm           comm;
+  PetscMPIInt        rank;
+  PetscInt           nb[3], nblocks, nlocal;
+  const PetscInt    *level;
+  const PetscMPIInt *owner;
+  PetscBool          periodic[3];
+  PetscReal          origin[3], h0, blen;
+} Ctx;
+
+static PetscErrorCode CreateGrid(MPI_Comm comm, const Case *c, Ctx *ctx)
+{
+  const PetscInt  cells[3]  = {N0 * c->nb[0], N0 * c->nb[1], N0 * c->nb[2]};
+  const PetscReal origin[3] = {0.375, -1.25, 0.5};
+  const PetscInt  nblocks   = c->nb[0] * c->nb[1] * c->nb[2];
+  PetscInt       *request;
+
+  PetscFunctionBeginUser;
+  /* levels grow with the distance from a random block, with random jumps that grading fixes */
+  PetscCall(PetscMalloc1(nblocks, &request));
+  for (PetscInt b = 0; b < nblocks; b++) {
+    const uint64_t h  = Key(c->seed, 1, (uint64_t)b, 0);
+    PetscReal      d2 = 0;
+    for (int a = 0; a < 3; a++) {
+      const PetscInt ia = a == 0 ? b % c->nb[0] : (a == 1 ? (b / c->nb[0]) % c->nb[1] : b / (c->nb[0] * c->nb[1]));
+      d2 += PetscSqr((PetscReal)(ia - (PetscInt)(Key(c->seed, 2, (uint64_t)a, 0) % (uint64_t)c->nb[a])));
+    }
+    request[b] = PetscMax(0, PetscMin(NLEVELS - 1, (PetscInt)(PetscSqrtReal(d2) / 1.5) + (PetscInt)(h % 3) - 1));
+    if ((PetscInt)((h >> 32) % 100) < c->inactive) request[b] = -1;
+  }
+  PetscCall(PffGridCreate(comm, &ctx->grid));
+  PetscCall(PffGridSetCells(ctx->grid, cells));
+  PetscCall(PffGridSetBlockSize(ctx->grid, N0));
+  PetscCall(PffGridSetLevels(ctx->grid, NLEVELS));
+  PetscCall(PffGridSetDomain(ctx->grid, origin, 1.0 / 16));
+  PetscCall(PffGridSetPeriodic(ctx->grid, c->periodic));
+  PetscCall(PffGridSetRefinementMap(ctx->grid, request));
+  PetscCall(PffGridSetUp(ctx->grid));
+  PetscCall(PetscFree(request));
+  ctx->comm = comm;
+  PetscCallMPI(MPI_Comm_rank(comm, &ctx->rank));
+  PetscCall(PffGridGetRaster(ctx->grid, ctx->nb, &ctx->level, &ctx->owner));
+  PetscCall(PffGridGetSizes(ctx->grid, NULL, NULL, ctx->origin, &ctx->h0, ctx->periodic));
+  PetscCall(PffGridGetLocalBlocks(ctx->grid, &ctx->nlocal));
+  ctx->nblocks = ctx->nb[0] * ctx->nb[1] * ctx->nb[2];
+  ctx->blen    = N0 * ctx->h0;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Linear function of component comp; no slope along periodic axes. */
+static PetscReal Linear(const Ctx *ctx, PetscInt comp, const PetscReal x[3])
+{
+  const PetscReal slope[3] = {0.3, -0.7, 0.45};
+  PetscReal       f        = 1.0 + 0.5 * (PetscReal)comp;
+  for (int a = 0; a < 3; a++)
+    if (!ctx->periodic[a]) f += slope[(a + comp) % 3] * x[a];
+  return f;
+}
+
+static PetscReal FieldScale(const Ctx *ctx, PetscInt ncomp)
+{
+  PetscReal scale = 0;
+  for (PetscInt comp = 0; comp < ncomp; comp++)
+    for (int c = 0; c < 8; c++) {
+      PetscReal x[3];
+      for (int a = 0; a < 3; a++) x[a] = ctx->origin[a] + ((c >> a) & 1 ? ctx->blen * ctx->nb[a] : 0.0);
+      scale = PetscMax(scale, PetscAbsReal(Linear(ctx, comp, x)));
+    }
+  return scale;
+}
+
+static PetscErrorCode FillLinear(const Ctx *ctx, PetscInt ch)
+{
+  PetscInt       ncomp;
+  PffChannelKind kind;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetChannelInfo(ctx->grid, ch, NULL, &kind, &ncomp, NULL));
+  for (PetscInt lb = 0; lb < ctx->nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(ctx->grid, lb, &info));
+    for (PetscInt comp = 0; comp < ncomp; comp++) {
+      float *data;
+      PetscCall(PffGridGetBlockData(ctx->grid, ch, lb, comp, &data));
+      for (PetscInt k = 0; k < info.n; k++)
+        for (PetscInt j = 0; j < info.n; j++)
+          for (PetscInt i = 0; i < info.n; i++) {
+            const PetscInt c[3] = {i, j, k};
+            PetscReal      x[3];
+            for (int a = 0; a < 3; a++)
+              x[a] = info.lo[a] + ((PetscReal)c[a] + (kind == PFF_CHANNEL_FACE && comp == a ? 0.0 : 0.5)) * info.h;
+            data[i + info.n * (j + info.n * k)] = (float)Linear(ctx, comp, x);
+          }
+    }
+  }
+  PetscCall(PffGridHaloBegin(ctx->grid, ch));
+  PetscCall(PffGridHaloEnd(ctx->grid, ch));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Whether x (in block gid) is at least dist from every wall and inactive block, in the max norm. */
+static PetscBool FarFromHoles(const Ctx *ctx, PetscInt gid, const PetscReal x[3], PetscReal dist)
+{
+  const PetscInt ijk[3] = {gid % ctx->nb[0], (gid / ctx->nb[0]) % ctx->nb[1], gid / (ctx->nb[0] * ctx->nb[1])};
+  for (PetscInt r = 0; r < 27; r++) {
+    const PetscInt d[3] = {r % 3 - 1, (r / 3) % 3 - 1, r / 9 - 1};
+    const PetscInt nbr  = PffRasterNeighbour(ctx->nb, ctx->periodic, ijk, d);
+    if (r == 13 || (nbr >= 0 && ctx->level[nbr] >= 0)) continue;
+    /* max-norm distance from x to the neighbour's box, which lies beside gid's box */
+    PetscReal m = 0;
+    for (int a = 0; a < 3; a++) {
+      const PetscReal lo = ctx->origin[a] + (PetscReal)((ijk[a] + d[a]) * N0) * ctx->h0, hi = lo + ctx->blen;
+      m = PetscMax(m, x[a] < lo ? lo - x[a] : (x[a] > hi ? x[a] - hi : 0.0));
+    }
+    if (m < dist) return PETSC_FALSE;
+  }
+  return PETSC_TRUE;
+}
+
+/* Locate x and check the answer against the raster: expect is the block that holds x, or -1. */
+static PetscErrorCode CheckLocate(const Ctx *ctx, const PetscReal x[3], PetscInt expect, const char what[])
+{
+  PetscInt gid, level = -2, cell[3] = {-1, -1, -1};
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridLocate(ctx->grid, x, &gid, &level, cell));
+  if (expect >= 0 && ctx->level[expect] < 0) expect = -1;
+  PetscCheck(gid == expect, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+             "%s: PffGridLocate(%.17g, %.17g, %.17g) gives block %" PetscInt_FMT ", expected %" PetscInt_FMT, what,
+             (double)x[0], (double)x[1], (double)x[2], gid, expect);
+  if (gid < 0) PetscFunctionReturn(PETSC_SUCCESS);
+  const PetscInt  ijk[3] = {gid % ctx->nb[0], (gid / ctx->nb[0]) % ctx->nb[1], gid / (ctx->nb[0] * ctx->nb[1])};
+  const PetscReal h      = ctx->h0 * (PetscReal)(1 << ctx->level[gid]);
+  PetscCheck(level == ctx->level[gid], PETSC_COMM_SELF, PETSC_ERR_PLIB,
+             "%s: PffGridLocate gives level %" PetscInt_FMT " for block %" PetscInt_FMT " of level %" PetscInt_FMT,
+             what, level, gid, ctx->level[gid]);
+  for (int a = 0; a < 3; a++) {
+    const PetscReal len = ctx->blen * ctx->nb[a], lo = ctx->origin[a] + (PetscReal)(ijk[a] * N0) * ctx->h0;
+    PetscReal       xa = x[a];
+    if (ctx->periodic[a]) {
+      while (xa < ctx->origin[a]) xa += len;
+      while (xa >= ctx->origin[a] + len) xa -= len;
+    }
+    PetscCheck(xa >= lo && xa < lo + ctx->blen, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+               "%s: point %.17g on axis %d is not in block %" PetscInt_FMT " [%g, %g)", what, (double)xa, a, gid,
+               (double)lo, (double)(lo + ctx->blen));
+    /* on a cell face (to rounding) either side is right */
+    const PetscReal s = (xa - lo) / h, r = PetscFloorReal(s + 0.5);
+    const PetscInt  c = (PetscInt)PetscFloorReal(s);
+    PetscCheck(cell[a] == c || (PetscAbsReal(s - r) < 1e-9 && (cell[a] == (PetscInt)r || cell[a] == (PetscInt)r - 1)),
+               PETSC_COMM_SELF, PETSC_ERR_PLIB,
+               "%s: PffGridLocate gives cell %" PetscInt_FMT " on axis %d, expected %" PetscInt_FMT, what, cell[a], a,
+               c);
+    PetscCheck(cell[a] >= 0 && cell[a] < N0 >> level, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+               "%s: PffGridLocate gives cell %" PetscInt_FMT " outside the block", what, cell[a]);
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Locate over the whole raster (any rank can locate any point): random interior points, block
+   corners, and points outside the domain. */
+static PetscErrorCode TestLocate(const Ctx *ctx, const char cname[])
+{
+  char what[128];
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscSNPrintf(what, sizeof(what), "%s locate", cname));
+  for (PetscInt g = 0; g < ctx->nblocks; g++) {
+    const PetscInt ijk[3] = {g % ctx->nb[0], (g / ctx->nb[0]) % ctx->nb[1], g / (ctx->nb[0] * ctx->nb[1])};
+    PetscReal      lo[3], x[3];
+    for (int a = 0; a < 3; a++) lo[a] = ctx->origin[a] + (PetscReal)(ijk[a] * N0) * ctx->h0;
+    for (int q = 0; q < 8; q++) {
+      for (int a = 0; a < 3; a++) x[a] = lo[a] + Uniform01(Key(7, (uint64_t)g, (uint64_t)q, (uint64_t)a)) * ctx->blen;
+      PetscCall(CheckLocate(ctx, x, g, what));
+    }
+    PetscCall(CheckLocate(ctx, lo, g, what));
+    /* the same points one period away on each periodic axis */
+    for (int a = 0; a < 3; a++) {
+      if (!ctx->periodic[a]) continue;
+      for (int s = -1; s <= 1; s += 2) {
+        PetscReal y[3] = {lo[0], lo[1], lo[2]};
+        y[a] += s * ctx->blen * ctx->nb[a];
+        PetscCall(CheckLocate(ctx, y, g, what));
+      }
+    }
+  }
+  /* outside the domain on walled axes; the upper domain face belongs to no block */
+  for (int a = 0; a < 3; a++) {
+    if (ctx->periodic[a]) continue;
+    PetscReal x[3];
+    for (int b = 0; b < 3; b++) x[b] = ctx->origin[b] + 0.5 * ctx->h0;
+    x[a] = ctx->origin[a] - 0.25 * ctx->h0;
+    PetscCall(CheckLocate(ctx, x, -1, what));
+    x[a] = ctx->origin[a] + ctx->blen * ctx->nb[a];
+    PetscCall(CheckLocate(ctx, x, -1, what));
+  }
+  PetscCall(PetscPrintf(ctx->comm, "interp %s: locate ok\n", cname));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode TestInterpolate(const Ctx *ctx, const char cname[], PetscInt ch)
+{
+  PetscInt       ncomp, np = 0, attempts = 0;
+  PffChannelKind kind;
+  PetscReal     *x, *val;
+  char           what[128];
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetChannelInfo(ctx->grid, ch, NULL, &kind, &ncomp, NULL));
+  PetscCall(PetscSNPrintf(what, sizeof(what), "%s %s", cname, PffChannelKinds[kind]));
+  const PetscReal tol = 1e-5 * FieldScale(ctx, ncomp);
+  PetscCall(PetscMalloc2(3 * NPOINTS, &x, ncomp * NPOINTS, &val));
+
+  /* random points in local blocks, away from walls and inactive blocks */
+  while (ctx->nlocal > 0 && np < NPOINTS) {
+    const uint64_t key = Key((uint64_t)ctx->rank, (uint64_t)ch, (uint64_t)attempts++, 11);
+    const PetscInt lb  = (PetscInt)(key % (uint64_t)ctx->nlocal);
+    PffBlockInfo   info;
+    PetscReal     *p = &x[3 * np];
+    PetscCheck(attempts < 100 * NPOINTS, PETSC_COMM_SELF, PETSC_ERR_PLIB, "%s: too few points away from walls", what);
+    PetscCall(PffGridGetBlockInfo(ctx->grid, lb, &info));
+    for (int a = 0; a < 3; a++) p[a] = info.lo[a] + Uniform01(Key(key, (uint64_t)a, 0, 0)) * ctx->blen;
+    if (!FarFromHoles(ctx, info.gid, p, 4 * ctx->h0)) continue;
+    PetscCall(CheckLocate(ctx, p, info.gid, what));
+    for (int a = 0; a < 3; a++)
+      if (ctx->periodic[a])
+        p[a] += (PetscReal)((PetscInt)(Key(key, 5, (uint64_t)a, 0) % 3) - 1) * ctx->blen * ctx->nb[a];
+    np++;
+  }
+  PetscCall(PffGridInterpolate(ctx->grid, ch, np, x, val));
+  for (PetscInt p = 0; p < np; p++)
+    for (PetscInt comp = 0; comp < ncomp; comp++) {
+      const PetscReal f = Linear(ctx, comp, &x[3 * p]);
+      PetscCheck(PetscAbsReal(val[p * ncomp + comp] - f) <= tol, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+                 "%s: interpolated comp %" PetscInt_FMT " at (%.17g, %.17g, %.17g) is %.9g, the linear field is %.9g",
+                 what, comp, (double)x[3 * p], (double)x[3 * p + 1], (double)x[3 * p + 2],
+                 (double)val[p * ncomp + comp], (double)f);
+    }
+
+  /* at a sample position the interpolant is the sample, walls and inactive neighbours included */
+  for (PetscInt lb = 0; lb < ctx->nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(ctx->grid, lb, &info));
+    for (PetscInt comp = 0; comp < ncomp; comp++) {
+      float *data;
+      PetscCall(PffGridGetBlockData(ctx->grid, ch, lb, comp, &data));
+      for (PetscInt s = 0; s < 8; s++) {
+        PetscInt  c[3];
+        PetscReal p[3], v[3];
+        for (int a = 0; a < 3; a++) {
+          /* the first, the last, then random cells */
+          c[a] = s == 0
+                     ? 0
+                     : (s == 1 ? info.n - 1
+                               : (PetscInt)(Key((uint64_t)info.gid, (uint64_t)s, (uint64_t)a, 3) % (uint64_t)info.n));
+          p[a] = info.lo[a] + ((PetscReal)c[a] + (kind == PFF_CHANNEL_FACE && comp == a ? 0.0 : 0.5)) * info.h;
+        }
+        PetscCall(PffGridInterpolate(ctx->grid, ch, 1, p, v));
+        const float sample = data[c[0] + info.n * (c[1] + info.n * c[2])];
+        PetscCheck(v[comp] == (PetscReal)sample, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+                   "%s: at the sample position of cell (%" PetscInt_FMT ",%" PetscInt_FMT ",%" PetscInt_FMT
+                   ") of block %" PetscInt_FMT " comp %" PetscInt_FMT " the interpolant is %.9g, the sample %.9g",
+                   what, c[0], c[1], c[2], info.gid, comp, (double)v[comp], (double)sample);
+      }
+    }
+  }
+  PetscCall(PetscFree2(x, val));
+  PetscCall(PetscPrintf(ctx->comm, "interp %s: %d points per rank, linear exact, samples exact, ok\n", what, NPOINTS));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+int main(int argc, char **argv)
+{
+  const Case cases[] = {
+      {"5x4x3 walls", {5, 4, 3}, {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE}, 0, 31},
+      {"4x3x5 periodic x inactive", {4, 3, 5}, {PETSC_TRUE, PETSC_FALSE, PETSC_FALSE}, 12, 32},
+  };
+
+  PetscCall(PetscInitialize(&argc, &argv, NULL, help));
+  PetscCall(PffInitializePackage());
+  for (size_t c = 0; c < PETSC_STATIC_ARRAY_LENGTH(cases); c++) {
+    Ctx        ctx;
+    PetscInt   cch, fch;
+    PetscInt64 pl[PFF_GRID_MAX_LEVELS];
+    PetscCall(CreateGrid(PETSC_COMM_WORLD, &cases[c], &ctx));
+    PetscCall(PffGridGetCellCounts(ctx.grid, pl, NULL));
+    PetscCall(PetscPrintf(PETSC_COMM_WORLD,
+                          "raster %s: cells per level %" PetscInt64_FMT " %" PetscInt64_FMT " %" PetscInt64_FMT "\n",
+                          cases[c].name, pl[0], pl[1], pl[2]));
+    PetscCall(PffGridAddChannel(ctx.grid, "phi", PFF_CHANNEL_CELL, 1, &cch));
+    PetscCall(PffGridAddChannel(ctx.grid, "vel", PFF_CHANNEL_FACE, 1, &fch));
+    PetscCall(FillLinear(&ctx, cch));
+    PetscCall(FillLinear(&ctx, fch));
+    PetscCall(TestLocate(&ctx, cases[c].name));
+    PetscCall(TestInterpolate(&ctx, cases[c].name, cch));
+    PetscCall(TestInterpolate(&ctx, cases[c].name, fch));
+    PetscCall(PffGridDestroy(&ctx.grid));
+  }
+  PetscCall(PetscFinalize());
+  return 0;
+}
