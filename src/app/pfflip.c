@@ -31,17 +31,29 @@ static PetscBool PffIsInputError(PetscErrorCode n)
   }
 }
 
-/* Prints an input error once: options are the same on every rank, so every rank meets the same
-   error and world rank 0 speaks for all (PETSc's own option checks raise on PETSC_COMM_SELF).
-   Everything else goes to PETSc's traceback handler. */
+typedef struct {
+  PetscBool collective; /* every rank met the error, so finalizing cleanly cannot hang */
+} PffErrorState;
+
+/* Prints an input error as one line. An error raised on a communicator that spans every rank, or by
+   PETSc's own option parsing (options are the same on every rank), is met by all ranks, and world
+   rank 0 speaks for them. Any other input error is printed by the rank that met it, and main then
+   aborts, since the other ranks may be waiting in a collective. Other errors get PETSc's traceback. */
 static PetscErrorCode PffErrorHandler(MPI_Comm comm, int line, const char *fun, const char *file, PetscErrorCode n,
                                       PetscErrorType p, const char *mess, void *ctx)
 {
-  PetscMPIInt rank = 0;
+  PffErrorState *st = (PffErrorState *)ctx;
   if (!PffIsInputError(n)) return PetscTraceBackErrorHandler(comm, line, fun, file, n, p, mess, ctx);
   if (p == PETSC_ERROR_INITIAL) {
+    PetscMPIInt rank = 0, size = 1, wsize = 1;
     MPI_Comm_rank(MPI_COMM_WORLD, &rank);
-    if (rank == 0) fprintf(stderr, "pfflip: error: %s\n", mess ? mess : "input error");
+    MPI_Comm_size(MPI_COMM_WORLD, &wsize);
+    if (comm != MPI_COMM_NULL) MPI_Comm_size(comm, &size);
+    st->collective = (PetscBool)(size == wsize || n == PETSC_ERR_USER);
+    if (!st->collective)
+      fprintf(stderr, "pfflip: error on rank %d: %s\n", rank, mess ? mess : "input error");
+    else if (rank == 0)
+      fprintf(stderr, "pfflip: error: %s\n", mess ? mess : "input error");
   }
   return n;
 }
@@ -68,6 +80,7 @@ int main(int argc, char **argv)
   PffScene       scene = NULL;
   PetscBool      help  = PETSC_FALSE;
   PetscErrorCode ierr;
+  PffErrorState  errstate = {PETSC_TRUE};
 
   if (MPI_Init(&argc, &argv) != MPI_SUCCESS) return 1;
   if (PffCheckOptionFiles(argc, argv)) {
@@ -75,7 +88,7 @@ int main(int argc, char **argv)
     return 1;
   }
   PetscCall(PetscInitialize(&argc, &argv, NULL, usage));
-  PetscCall(PetscPushErrorHandler(PffErrorHandler, NULL));
+  PetscCall(PetscPushErrorHandler(PffErrorHandler, &errstate));
   PetscCall(PetscOptionsHasName(NULL, NULL, "-help", &help));
   ierr = PffSceneCreate(PETSC_COMM_WORLD, &scene);
   if (!ierr) ierr = PffSceneSetFromOptions(scene);
@@ -83,7 +96,7 @@ int main(int argc, char **argv)
   if (!ierr && !help) ierr = PffSceneRun(scene);
   if (ierr) {
     /* an input error found on every rank ends cleanly; anything else may have left ranks behind */
-    if (!PffIsInputError(ierr)) MPI_Abort(MPI_COMM_WORLD, 1);
+    if (!PffIsInputError(ierr) || !errstate.collective) MPI_Abort(MPI_COMM_WORLD, 1);
     (void)PffSceneDestroy(&scene);
     (void)PetscFinalize();
     MPI_Finalize();

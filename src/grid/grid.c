@@ -98,6 +98,7 @@ PetscErrorCode PffGridSetPeriodic(PffGrid g, const PetscBool periodic[3])
 PetscErrorCode PffGridSetPartitionType(PffGrid g, PffPartitionType type)
 {
   PetscFunctionBeginUser;
+  PetscCall(PffGridCheckNotSetUp(g));
   g->ptype = type;
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -9,33 +9,46 @@
    MAC component, whose ghost holds the boundary value. */
 #include "gridimpl.h"
 
-static inline PetscReal PffWrap(PetscReal x, PetscReal lo, PetscReal len)
+/* Position in finest-cell units along axis d, wrapped into [0, cells) on periodic axes. Wrapping in
+   index space avoids origin + fmod(...) rounding up to the upper boundary for a point a hair
+   below the lower one. */
+static inline PetscReal PffIndexCoord(PffGrid g, PetscReal x, int d)
 {
-  PetscReal r = PetscFmodReal(x - lo, len);
-  if (r < 0) r += len;
-  return lo + r;
+  const PetscReal n = (PetscReal)g->cells[d];
+  PetscReal       s = (x - g->origin[d]) / g->h0;
+  if (g->periodic[d]) {
+    s = PetscFmodReal(s, n);
+    if (s < 0) s += n;
+    if (s >= n) s = 0;
+  }
+  return s;
 }
 
-PetscErrorCode PffGridLocate(PffGrid g, const PetscReal x[3], PetscInt *gid, PetscInt *level, PetscInt cell[3])
+static void PffLocateIndex(PffGrid g, const PetscReal s[3], PetscInt *gid, PetscInt *level, PetscInt cell[3])
 {
   PetscInt fi[3], b[3];
 
-  PetscFunctionBeginUser;
   *gid = -1;
   for (int d = 0; d < 3; d++) {
-    PetscReal xd = x[d];
-    if (g->periodic[d]) xd = PffWrap(xd, g->origin[d], g->h0 * (PetscReal)g->cells[d]);
-    const PetscReal s = (xd - g->origin[d]) / g->h0;
-    if (!(s >= 0 && s < (PetscReal)g->cells[d])) PetscFunctionReturn(PETSC_SUCCESS);
-    fi[d] = (PetscInt)s;
+    if (!(s[d] >= 0 && s[d] < (PetscReal)g->cells[d])) return;
+    fi[d] = (PetscInt)s[d];
     b[d]  = fi[d] >> g->log2n0;
   }
   const PetscInt id = b[0] + g->nb[0] * (b[1] + g->nb[1] * b[2]);
-  if (g->level[id] < 0) PetscFunctionReturn(PETSC_SUCCESS);
+  if (g->level[id] < 0) return;
   *gid = id;
   if (level) *level = g->level[id];
   if (cell)
     for (int d = 0; d < 3; d++) cell[d] = (fi[d] & (g->n0 - 1)) >> g->level[id];
+}
+
+PetscErrorCode PffGridLocate(PffGrid g, const PetscReal x[3], PetscInt *gid, PetscInt *level, PetscInt cell[3])
+{
+  PetscReal s[3];
+
+  PetscFunctionBeginUser;
+  for (int d = 0; d < 3; d++) s[d] = PffIndexCoord(g, x[d], d);
+  PffLocateIndex(g, s, gid, level, cell);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -46,45 +59,54 @@ PetscErrorCode PffGridInterpolate(PffGrid g, PetscInt ch, PetscInt np, const Pet
   const PffChannel *c = g->ch[ch];
   PetscCall(PetscLogEventBegin(PFF_GridInterp, 0, 0, 0, 0));
   for (PetscInt p = 0; p < np; p++) {
-    PetscInt  gid, level, lb;
-    PetscReal xp[3];
-    for (int d = 0; d < 3; d++)
-      xp[d] = g->periodic[d] ? PffWrap(x[3 * p + d], g->origin[d], g->h0 * (PetscReal)g->cells[d]) : x[3 * p + d];
-    PetscCall(PffGridLocate(g, xp, &gid, &level, NULL));
+    PetscInt  gid, level = 0, lb;
+    PetscReal sp[3];
+    for (int d = 0; d < 3; d++) sp[d] = PffIndexCoord(g, x[3 * p + d], d);
+    PffLocateIndex(g, sp, &gid, &level, NULL);
     lb = gid >= 0 ? g->local[gid] : -1;
     PetscCheck(lb >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
-               "point (%g, %g, %g) is not in a block owned by this rank", (double)xp[0], (double)xp[1], (double)xp[2]);
+               "point (%g, %g, %g) is not in a block owned by this rank", (double)x[3 * p], (double)x[3 * p + 1],
+               (double)x[3 * p + 2]);
     const PetscInt n      = g->n0 >> level,
                    ijk[3] = {gid % g->nb[0], (gid / g->nb[0]) % g->nb[1], gid / (g->nb[0] * g->nb[1])};
-    const PetscReal h     = g->h0 * (PetscReal)((PetscInt)1 << level);
-    PetscBool       wall[3][2];
-    for (int a = 0; a < 3; a++)
-      for (int s = 0; s < 2; s++) {
-        PetscInt d[3]      = {0, 0, 0};
-        d[a]               = s ? 1 : -1;
-        const PetscInt nbr = PffRasterNeighbour(g->nb, g->periodic, ijk, d);
-        wall[a][s]         = (PetscBool)(nbr < 0 || g->level[nbr] < 0);
-      }
+    PetscBool hole[27]; /* neighbour regions across a wall or facing an inactive block */
+    for (PetscInt r = 0; r < 27; r++) {
+      const PetscInt d[3] = {r % 3 - 1, (r / 3) % 3 - 1, r / 9 - 1};
+      const PetscInt nbr  = PffRasterNeighbour(g->nb, g->periodic, ijk, d);
+      hole[r]             = (PetscBool)(r != 13 && (nbr < 0 || g->level[nbr] < 0));
+    }
     for (PetscInt comp = 0; comp < c->ncomp; comp++) {
       const PffView *views = &c->views[(lb * c->ncomp + comp) * 27];
-      PetscInt       i0[3], i1[3];
-      PetscReal      t[3];
+      PetscInt       i0[3], i1[3], side[3];
+      PetscReal      t[3], o[3];
+      PetscBool      clamp[3][2] = {{PETSC_FALSE, PETSC_FALSE}, {PETSC_FALSE, PETSC_FALSE}, {PETSC_FALSE, PETSC_FALSE}};
       for (int a = 0; a < 3; a++) {
-        const PetscReal o  = PffChannelOffset_Private(c->kind, comp, a);
-        const PetscReal lo = g->origin[a] + (PetscReal)(ijk[a] * g->n0) * g->h0;
-        const PetscReal s  = (xp[a] - lo) / h - o;
-        i0[a]              = (PetscInt)PetscFloorReal(s);
-        t[a]               = s - (PetscReal)i0[a];
-        i1[a]              = i0[a] + 1;
-        /* clamp across walls; a staggered component keeps its wall face (index n) */
-        if (i0[a] < 0 && wall[a][0]) {
+        o[a]              = PffChannelOffset_Private(c->kind, comp, a);
+        const PetscReal s = (sp[a] - (PetscReal)(ijk[a] * g->n0)) / (PetscReal)((PetscInt)1 << level) - o[a];
+        i0[a]             = (PetscInt)PetscFloorReal(s);
+        t[a]              = s - (PetscReal)i0[a];
+        i1[a]             = i0[a] + 1;
+        side[a]           = i0[a] < 0 ? -1 : (i1[a] >= n ? 1 : 0);
+      }
+      /* each hole region the stencil reaches clamps every axis it steps across (face, edge or corner) */
+      for (int q = 1; q < 8; q++) {
+        PetscInt r = 13;
+        for (int a = 0, m = 1; a < 3; a++, m *= 3)
+          if ((q >> a) & 1) r += side[a] * m;
+        if (r == 13 || !hole[r]) continue;
+        for (int a = 0; a < 3; a++)
+          if (((q >> a) & 1) && side[a]) clamp[a][side[a] > 0] = PETSC_TRUE;
+      }
+      for (int a = 0; a < 3; a++) {
+        /* constant extrapolation to the last cell; a staggered component keeps its wall face (index n) */
+        if (i0[a] < 0 && clamp[a][0]) {
           i0[a] = 0;
           t[a]  = 0;
         }
-        if (i1[a] >= n && wall[a][1] && !(o == 0.0 && i1[a] == n)) {
+        if (i1[a] >= n && clamp[a][1] && !(o[a] == 0.0 && i1[a] == n)) {
           i1[a] = n - 1;
-          t[a]  = i0[a] == i1[a] ? 0 : t[a];
           if (i0[a] > n - 1) i0[a] = n - 1;
+          if (i0[a] == i1[a]) t[a] = 0;
         }
       }
       PetscReal v = 0;

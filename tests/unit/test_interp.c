@@ -321,6 +321,68 @@ static PetscErrorCode TestInterpolate(const Ctx *ctx, const char cname[], PetscI
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Two regressions: (1) a point near an inactive diagonal (edge) neighbour whose face neighbours are
+   active must clamp instead of reading that region's zero ghosts: on f = 1 + x + y the value at
+   (7.75, 7.75, 4) beside the inactive block (1,1,0) is a clamped value (16) and never the 15.375
+   that mixing in a zero gives; (2) a point a hair below a periodic lower boundary wraps into block 0. */
+static PetscErrorCode TestRegressions(void)
+{
+  PffGrid   grid;
+  PetscInt  cells[3] = {16, 16, 8}, map[4] = {0, 0, 0, -1}, ch, nlocal, gid = -1;
+  PetscReal origin[3] = {0, 0, 0}, x[3] = {7.75, 7.75, 4}, v = 0, y[3] = {-1e-17, 0.5, 0.5};
+  PetscBool per[3] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridCreate(PETSC_COMM_WORLD, &grid));
+  PetscCall(PffGridSetCells(grid, cells));
+  PetscCall(PffGridSetBlockSize(grid, 8));
+  PetscCall(PffGridSetDomain(grid, origin, 1.0));
+  PetscCall(PffGridSetPeriodic(grid, per));
+  PetscCall(PffGridSetRefinementMap(grid, map));
+  PetscCall(PffGridAddChannel(grid, "f", PFF_CHANNEL_CELL, 1, &ch));
+  PetscCall(PffGridSetUp(grid));
+  PetscCall(PffGridGetLocalBlocks(grid, &nlocal));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo info;
+    float       *f;
+    PetscCall(PffGridGetBlockInfo(grid, lb, &info));
+    PetscCall(PffGridGetBlockData(grid, ch, lb, 0, &f));
+    for (PetscInt k = 0; k < info.n; k++)
+      for (PetscInt j = 0; j < info.n; j++)
+        for (PetscInt i = 0; i < info.n; i++)
+          f[i + info.n * (j + info.n * k)] =
+              (float)(1 + info.lo[0] + (i + 0.5) * info.h + info.lo[1] + (j + 0.5) * info.h);
+  }
+  PetscCall(PffGridHaloBegin(grid, ch));
+  PetscCall(PffGridHaloEnd(grid, ch));
+  PetscCall(PffGridLocate(grid, x, &gid, NULL, NULL));
+  PetscInt lb;
+  PetscCall(PffGridGetLocalIndex(grid, gid, &lb));
+  if (lb >= 0) {
+    PetscCall(PffGridInterpolate(grid, ch, 1, x, &v));
+    PetscCheck(PetscAbsReal(v - 16.0) < 1e-6, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+               "interpolation beside an inactive edge neighbour gave %g, expected the clamped 16", (double)v);
+  }
+  PetscCall(PffGridDestroy(&grid));
+
+  PetscInt c2[3] = {16, 16, 16};
+  per[0] = per[1] = per[2] = PETSC_TRUE;
+  PetscCall(PffGridCreate(PETSC_COMM_WORLD, &grid));
+  PetscCall(PffGridSetCells(grid, c2));
+  PetscCall(PffGridSetBlockSize(grid, 8));
+  PetscCall(PffGridSetDomain(grid, origin, 1.0 / 16));
+  PetscCall(PffGridSetPeriodic(grid, per));
+  PetscCall(PffGridSetUp(grid));
+  PetscCall(PffGridLocate(grid, y, &gid, NULL, NULL));
+  PetscCheck(gid == 0 + 2 * (1 + 2 * 1), PETSC_COMM_SELF, PETSC_ERR_PLIB,
+             "a point a hair below the periodic lower boundary was located in block %" PetscInt_FMT ", expected 6",
+             gid);
+  PetscCall(PffGridDestroy(&grid));
+  PetscCall(
+      PetscPrintf(PETSC_COMM_WORLD, "regressions: inactive edge neighbour clamps, periodic wrap below origin ok\n"));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 int main(int argc, char **argv)
 {
   const Case cases[] = {
@@ -348,6 +410,7 @@ int main(int argc, char **argv)
     PetscCall(TestInterpolate(&ctx, cases[c].name, fch));
     PetscCall(PffGridDestroy(&ctx.grid));
   }
+  PetscCall(TestRegressions());
   PetscCall(PetscFinalize());
   return 0;
 }
