@@ -67,6 +67,13 @@ static inline PetscInt PffRegionIndex(PetscInt i, PetscInt j, PetscInt k, PetscI
                  rz = k < 0 ? 0 : (k >= n ? 2 : 1);
   return rx + 3 * ry + 9 * rz;
 }
+/* Direction d in {-1, 0, 1}^3 of region r (the inverse of PffRegionIndex). */
+static inline void PffRegionDirection(PetscInt r, PetscInt d[3])
+{
+  d[0] = r % 3 - 1;
+  d[1] = (r / 3) % 3 - 1;
+  d[2] = r / 9 - 1;
+}
 /* Address of block-local cell (i, j, k), -width <= i,j,k < n + width, through the block's 27 views. */
 static inline float *PffViewsAt(const PffView *views, PetscInt i, PetscInt j, PetscInt k, PetscInt n)
 {

@@ -278,6 +278,7 @@ PetscErrorCode PffGridDestroy(PffGrid *grid)
   PetscCall(PetscFree(g->local));
   PetscCall(PetscFree(g->lgid));
   PetscCall(PetscFree(g->loff));
+  PetscCall(PetscFree(g->lholes));
   PetscCallMPI(MPI_Comm_free(&g->comm));
   PetscCall(PetscFree(g));
   *grid = NULL;
@@ -339,12 +340,10 @@ PetscErrorCode PffGridGetBlockInfo(PffGrid g, PetscInt lb, PffBlockInfo *info)
              "local block %" PetscInt_FMT " out of range [0, %" PetscInt_FMT ")", lb, g->nlocal);
   const PetscInt gid = g->lgid[lb];
   info->gid          = gid;
-  info->ijk[0]       = gid % g->nb[0];
-  info->ijk[1]       = (gid / g->nb[0]) % g->nb[1];
-  info->ijk[2]       = gid / (g->nb[0] * g->nb[1]);
-  info->level        = g->level[gid];
-  info->n            = g->n0 >> info->level;
-  info->h            = g->h0 * (PetscReal)((PetscInt)1 << info->level);
+  PffGridBlockIJK_Private(g, gid, info->ijk);
+  info->level = g->level[gid];
+  info->n     = g->n0 >> info->level;
+  info->h     = g->h0 * (PetscReal)((PetscInt)1 << info->level);
   for (int d = 0; d < 3; d++) info->lo[d] = g->origin[d] + (PetscReal)(info->ijk[d] * g->n0) * g->h0;
   PetscFunctionReturn(PETSC_SUCCESS);
 }

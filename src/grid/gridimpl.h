@@ -70,6 +70,7 @@ struct _n_PffGrid {
   /* owned blocks, Morton order */
   PetscInt    nlocal;
   PetscInt   *lgid;   /* [nlocal] */
+  PetscInt   *lholes; /* [nlocal] bit r set: region r lies across a wall or faces an inactive block */
   PetscInt64 *loff;   /* [nlocal + 1] cell offsets */
   PetscInt64  ncells; /* owned cells */
 
@@ -88,6 +89,23 @@ static inline PetscInt PffGridBlockN_Private(PffGrid g, PetscInt gid)
   return g->n0 >> g->level[gid];
 }
 
+static inline void PffGridBlockIJK_Private(PffGrid g, PetscInt gid, PetscInt ijk[3])
+{
+  ijk[0] = gid % g->nb[0];
+  ijk[1] = (gid / g->nb[0]) % g->nb[1];
+  ijk[2] = gid / (g->nb[0] * g->nb[1]);
+}
+
+/* Neighbour of block gid in the direction of region r, or -1 across a wall or towards an inactive block. */
+static inline PetscInt PffGridActiveNeighbour_Private(PffGrid g, PetscInt gid, PetscInt r)
+{
+  PetscInt ijk[3], d[3];
+  PffGridBlockIJK_Private(g, gid, ijk);
+  PffRegionDirection(r, d);
+  const PetscInt nbr = PffRasterNeighbour(g->nb, g->periodic, ijk, d);
+  return (nbr >= 0 && g->level[nbr] >= 0) ? nbr : -1;
+}
+
 PETSC_INTERN PetscErrorCode PffGridBuildRaster_Private(PffGrid);
 PETSC_INTERN PetscErrorCode PffGridPartition_Private(PffGrid);
 PETSC_INTERN PetscErrorCode PffGridAllocateChannel_Private(PffGrid, PffChannel *);
@@ -95,6 +113,8 @@ PETSC_INTERN PetscErrorCode PffGridDestroyChannel_Private(PffChannel **);
 PETSC_INTERN PetscErrorCode PffHaloPlanGet_Private(PffGrid, PffChannelKind, PetscInt, PffHaloPlan **);
 PETSC_INTERN PetscErrorCode PffHaloPlanDestroy_Private(PffHaloPlan **);
 PETSC_INTERN PetscErrorCode PffGridComputeQuality_Private(PffGrid);
+/* Channel ch of a set-up grid, or an error naming what is wrong. */
+PETSC_INTERN PetscErrorCode PffGridGetChannel_Private(PffGrid, PetscInt, PffChannel **);
 /* Lattice offset (0 or 1/2 cell) of component comp of a channel kind along axis d. */
 static inline PetscReal PffChannelOffset_Private(PffChannelKind kind, PetscInt comp, PetscInt d)
 {

@@ -70,15 +70,15 @@ static PetscErrorCode PffHaloPlanBuild(PffGrid g, PffHaloPlan *p)
   PetscCall(PetscMalloc1(cap, &p->xfer));
   for (PetscInt lb = 0; lb < g->nlocal; lb++) {
     const PetscInt gid = g->lgid[lb], n = PffGridBlockN_Private(g, gid);
-    const PetscInt ijk[3] = {gid % g->nb[0], (gid / g->nb[0]) % g->nb[1], gid / (g->nb[0] * g->nb[1])};
     for (PetscInt comp = 0; comp < nc; comp++) {
       for (PetscInt r = 0; r < 27; r++) {
-        const PetscInt d[3] = {r % 3 - 1, (r / 3) % 3 - 1, r / 9 - 1};
-        PetscInt64    *go   = &p->goff[(lb * nc + comp) * 27 + r];
-        *go                 = -1;
+        PetscInt    d[3];
+        PetscInt64 *go = &p->goff[(lb * nc + comp) * 27 + r];
+        *go            = -1;
         if (r == 13) continue;
-        const PetscInt  nbr    = PffRasterNeighbour(g->nb, g->periodic, ijk, d);
-        const PetscBool active = (PetscBool)(nbr >= 0 && g->level[nbr] >= 0);
+        PffRegionDirection(r, d);
+        const PetscInt  nbr    = PffGridActiveNeighbour_Private(g, gid, r);
+        const PetscBool active = (PetscBool)(nbr >= 0);
         if (active && g->level[nbr] == g->level[gid] && g->owner[nbr] == g->rank) continue;
         PffHaloXfer x  = {0};
         x.lb           = lb;
@@ -156,8 +156,9 @@ static PetscErrorCode PffHaloPlanBuild(PffGrid g, PffHaloPlan *p)
   for (PetscInt e = 0, l = 0; e < nxfer; e++) {
     const PffHaloXfer *x = &p->xfer[e];
     if (x->nbgid < 0) continue;
-    const PetscInt   n = PffGridBlockN_Private(g, g->lgid[x->lb]), nn = PffGridBlockN_Private(g, x->nbgid);
-    const PetscInt   d[3] = {x->region % 3 - 1, (x->region / 3) % 3 - 1, x->region / 9 - 1};
+    const PetscInt n = PffGridBlockN_Private(g, g->lgid[x->lb]), nn = PffGridBlockN_Private(g, x->nbgid);
+    PetscInt       d[3];
+    PffRegionDirection(x->region, d);
     const PetscInt64 base = nc * g->offset[x->nbgid] + (PetscInt64)x->comp * nn * nn * nn;
     const PetscInt  *lo = x->rel == 0 ? x->glo : x->slo, *ext = x->rel == 0 ? x->gn : x->sn;
     const PetscInt64 boff = x->rel == 0 ? x->goff : p->nghost + x->soff;
@@ -220,21 +221,12 @@ PetscErrorCode PffHaloPlanDestroy_Private(PffHaloPlan **p)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-static PetscErrorCode PffGridGetChannel(PffGrid g, PetscInt ch, PffChannel **c)
-{
-  PetscFunctionBeginUser;
-  PetscCheck(ch >= 0 && ch < g->nch, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "no channel %" PetscInt_FMT, ch);
-  PetscCheck(g->setupcalled, PETSC_COMM_SELF, PETSC_ERR_ORDER, "call PffGridSetUp() first");
-  *c = g->ch[ch];
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
 PetscErrorCode PffGridHaloBegin(PffGrid g, PetscInt ch)
 {
   PffChannel *c = NULL;
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridGetChannel(g, ch, &c));
+  PetscCall(PffGridGetChannel_Private(g, ch, &c));
   PetscCall(PetscLogEventBegin(PFF_HaloBegin, 0, 0, 0, 0));
   PetscCall(PetscSFBcastBegin(c->plan->sf, MPI_FLOAT, c->data, c->halo, MPI_REPLACE));
   PetscCall(PetscLogEventEnd(PFF_HaloBegin, 0, 0, 0, 0));
@@ -245,10 +237,11 @@ PetscErrorCode PffGridHaloBegin(PffGrid g, PetscInt ch)
 static void PffHaloFillCrossLevel(PffGrid g, const PffHaloPlan *p, const PffHaloXfer *x, float *halo)
 {
   const PetscInt n = PffGridBlockN_Private(g, g->lgid[x->lb]), nn = PffGridBlockN_Private(g, x->nbgid);
-  const PetscInt d[3] = {x->region % 3 - 1, (x->region / 3) % 3 - 1, x->region / 9 - 1};
-  const float   *src  = halo + p->nghost + x->soff;
-  float         *gh   = halo + x->goff;
-  PetscReal      o[3];
+  PetscInt       d[3];
+  PffRegionDirection(x->region, d);
+  const float *src = halo + p->nghost + x->soff;
+  float       *gh  = halo + x->goff;
+  PetscReal    o[3];
   for (int a = 0; a < 3; a++) o[a] = PffChannelOffset_Private(p->kind, x->comp, a);
 #define SRC(i, j, k) src[((i)-x->slo[0]) + x->sn[0] * (((j)-x->slo[1]) + x->sn[1] * ((k)-x->slo[2]))]
   for (PetscInt k = 0; k < x->gn[2]; k++)
@@ -283,10 +276,11 @@ static void PffHaloFillCrossLevel(PffGrid g, const PffHaloPlan *p, const PffHalo
 static void PffHaloSpreadCrossLevel(PffGrid g, const PffHaloPlan *p, const PffHaloXfer *x, float *halo)
 {
   const PetscInt n = PffGridBlockN_Private(g, g->lgid[x->lb]), nn = PffGridBlockN_Private(g, x->nbgid);
-  const PetscInt d[3] = {x->region % 3 - 1, (x->region / 3) % 3 - 1, x->region / 9 - 1};
-  float         *src  = halo + p->nghost + x->soff;
-  const float   *gh   = halo + x->goff;
-  PetscReal      o[3];
+  PetscInt       d[3];
+  PffRegionDirection(x->region, d);
+  float       *src = halo + p->nghost + x->soff;
+  const float *gh  = halo + x->goff;
+  PetscReal    o[3];
   for (int a = 0; a < 3; a++) o[a] = PffChannelOffset_Private(p->kind, x->comp, a);
   PetscArrayzero(src, x->sn[0] * x->sn[1] * x->sn[2]);
   for (PetscInt k = 0; k < x->gn[2]; k++)
@@ -320,7 +314,7 @@ PetscErrorCode PffGridHaloEnd(PffGrid g, PetscInt ch)
   PffChannel *c = NULL;
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridGetChannel(g, ch, &c));
+  PetscCall(PffGridGetChannel_Private(g, ch, &c));
   PetscCall(PetscLogEventBegin(PFF_HaloEnd, 0, 0, 0, 0));
   PetscCall(PetscSFBcastEnd(c->plan->sf, MPI_FLOAT, c->data, c->halo, MPI_REPLACE));
   const PffHaloPlan *p = c->plan;
@@ -336,7 +330,7 @@ PetscErrorCode PffGridHaloReverseBegin(PffGrid g, PetscInt ch)
   PffChannel *c = NULL;
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridGetChannel(g, ch, &c));
+  PetscCall(PffGridGetChannel_Private(g, ch, &c));
   PetscCall(PetscLogEventBegin(PFF_HaloRevBegin, 0, 0, 0, 0));
   const PffHaloPlan *p = c->plan;
 #pragma omp parallel for schedule(dynamic, 16)
@@ -352,7 +346,7 @@ PetscErrorCode PffGridHaloReverseEnd(PffGrid g, PetscInt ch)
   PffChannel *c = NULL;
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridGetChannel(g, ch, &c));
+  PetscCall(PffGridGetChannel_Private(g, ch, &c));
   PetscCall(PetscLogEventBegin(PFF_HaloRevEnd, 0, 0, 0, 0));
   PetscCall(PetscSFReduceEnd(c->plan->sf, MPI_FLOAT, c->halo, c->data, MPI_SUM));
   PetscCall(PetscArrayzero(c->halo, c->plan->nhalo));

@@ -95,10 +95,12 @@ static void PffLaplacianBlock(const PffView *restrict in, float *restrict out, P
 
 PetscErrorCode PffGridApplyLaplacian(PffGrid g, PetscInt src, PetscInt dst)
 {
+  PffChannel *in = NULL, *out = NULL;
+
   PetscFunctionBeginUser;
-  PetscCheck(src >= 0 && src < g->nch && dst >= 0 && dst < g->nch && src != dst, PETSC_COMM_SELF,
-             PETSC_ERR_ARG_OUTOFRANGE, "need two different channels");
-  const PffChannel *in = g->ch[src], *out = g->ch[dst];
+  PetscCall(PffGridGetChannel_Private(g, src, &in));
+  PetscCall(PffGridGetChannel_Private(g, dst, &out));
+  PetscCheck(src != dst, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "the Laplacian needs two different channels");
   PetscCheck(in->kind == PFF_CHANNEL_CELL && out->kind == PFF_CHANNEL_CELL, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
              "the Laplacian works on cell channels");
   PetscCall(PetscLogEventBegin(PFF_GridLaplacian, 0, 0, 0, 0));

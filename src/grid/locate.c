@@ -54,9 +54,10 @@ PetscErrorCode PffGridLocate(PffGrid g, const PetscReal x[3], PetscInt *gid, Pet
 
 PetscErrorCode PffGridInterpolate(PffGrid g, PetscInt ch, PetscInt np, const PetscReal x[], PetscReal val[])
 {
+  PffChannel *c = NULL;
+
   PetscFunctionBeginUser;
-  PetscCheck(ch >= 0 && ch < g->nch, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "no channel %" PetscInt_FMT, ch);
-  const PffChannel *c = g->ch[ch];
+  PetscCall(PffGridGetChannel_Private(g, ch, &c));
   PetscCall(PetscLogEventBegin(PFF_GridInterp, 0, 0, 0, 0));
   for (PetscInt p = 0; p < np; p++) {
     PetscInt  gid, level = 0, lb;
@@ -67,14 +68,9 @@ PetscErrorCode PffGridInterpolate(PffGrid g, PetscInt ch, PetscInt np, const Pet
     PetscCheck(lb >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
                "point (%g, %g, %g) is not in a block owned by this rank", (double)x[3 * p], (double)x[3 * p + 1],
                (double)x[3 * p + 2]);
-    const PetscInt n      = g->n0 >> level,
-                   ijk[3] = {gid % g->nb[0], (gid / g->nb[0]) % g->nb[1], gid / (g->nb[0] * g->nb[1])};
-    PetscBool hole[27]; /* neighbour regions across a wall or facing an inactive block */
-    for (PetscInt r = 0; r < 27; r++) {
-      const PetscInt d[3] = {r % 3 - 1, (r / 3) % 3 - 1, r / 9 - 1};
-      const PetscInt nbr  = PffRasterNeighbour(g->nb, g->periodic, ijk, d);
-      hole[r]             = (PetscBool)(r != 13 && (nbr < 0 || g->level[nbr] < 0));
-    }
+    const PetscInt n = g->n0 >> level, holes = g->lholes[lb]; /* bit r: region r is a wall or inactive */
+    PetscInt       ijk[3];
+    PffGridBlockIJK_Private(g, gid, ijk);
     for (PetscInt comp = 0; comp < c->ncomp; comp++) {
       const PffView *views = &c->views[(lb * c->ncomp + comp) * 27];
       PetscInt       i0[3], i1[3], side[3];
@@ -93,7 +89,7 @@ PetscErrorCode PffGridInterpolate(PffGrid g, PetscInt ch, PetscInt np, const Pet
         PetscInt r = 13;
         for (int a = 0, m = 1; a < 3; a++, m *= 3)
           if ((q >> a) & 1) r += side[a] * m;
-        if (r == 13 || !hole[r]) continue;
+        if (r == 13 || !((holes >> r) & 1)) continue;
         for (int a = 0; a < 3; a++)
           if (((q >> a) & 1) && side[a]) clamp[a][side[a] > 0] = PETSC_TRUE;
       }

@@ -55,10 +55,11 @@ static PetscErrorCode PffPartitionMetis(PffGrid g)
                            g->nactive, &mpart));
     xadj[0] = 0;
     for (PetscInt a = 0; a < g->nactive; a++) {
-      const PetscInt gid    = g->order[a],
-                     ijk[3] = {gid % g->nb[0], (gid / g->nb[0]) % g->nb[1], gid / (g->nb[0] * g->nb[1])};
-      const idx_t first     = (idx_t)nedge;
-      vwgt[a]               = (idx_t)PffBlockWork(g, gid);
+      const PetscInt gid = g->order[a];
+      PetscInt       ijk[3];
+      PffGridBlockIJK_Private(g, gid, ijk);
+      const idx_t first = (idx_t)nedge;
+      vwgt[a]           = (idx_t)PffBlockWork(g, gid);
       for (int f = 0; f < 6; f++) {
         PetscInt d[3]      = {0, 0, 0};
         d[f / 2]           = (f % 2) ? 1 : -1;
@@ -123,7 +124,9 @@ PetscErrorCode PffGridPartition_Private(PffGrid g)
   PetscCall(PetscFree(next));
   PetscCall(PetscFree(g->lgid));
   PetscCall(PetscFree(g->loff));
+  PetscCall(PetscFree(g->lholes));
   PetscCall(PetscMalloc1(g->nlocal, &g->lgid));
+  PetscCall(PetscCalloc1(g->nlocal, &g->lholes));
   PetscCall(PetscMalloc1(g->nlocal + 1, &g->loff));
   for (PetscInt a = 0, lb = 0; a < g->nactive; a++) {
     const PetscInt gid = g->order[a];
@@ -133,6 +136,10 @@ PetscErrorCode PffGridPartition_Private(PffGrid g)
     g->loff[lb++] = g->offset[gid];
   }
   g->loff[g->nlocal] = g->ncells;
+  /* interpolation and boundary handling ask this per point; the raster answers it once per block */
+  for (PetscInt lb = 0; lb < g->nlocal; lb++)
+    for (PetscInt r = 0; r < 27; r++)
+      if (r != 13 && PffGridActiveNeighbour_Private(g, g->lgid[lb], r) < 0) g->lholes[lb] |= (PetscInt)1 << r;
   PetscCall(PetscLogEventEnd(PFF_GridPartition, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -147,8 +154,9 @@ PetscErrorCode PffGridComputeQuality_Private(PffGrid g)
   PetscFunctionBeginUser;
   PetscCall(PetscCalloc1(g->size, &work));
   for (PetscInt a = 0; a < g->nactive; a++) {
-    const PetscInt gid    = g->order[a],
-                   ijk[3] = {gid % g->nb[0], (gid / g->nb[0]) % g->nb[1], gid / (g->nb[0] * g->nb[1])};
+    const PetscInt gid = g->order[a];
+    PetscInt       ijk[3];
+    PffGridBlockIJK_Private(g, gid, ijk);
     work[g->owner[gid]] += PffBlockWork(g, gid);
     for (int d = 0; d < 3; d++) { /* each face counted once, from its lower block */
       PetscInt dd[3]     = {0, 0, 0};

@@ -44,15 +44,15 @@ PetscErrorCode PffGridAllocateChannel_Private(PffGrid g, PffChannel *c)
   PetscCall(PetscMalloc1(g->nlocal * c->ncomp * 27, &c->views));
   for (PetscInt lb = 0; lb < g->nlocal; lb++) {
     const PetscInt gid = g->lgid[lb], n = PffGridBlockN_Private(g, gid);
-    const PetscInt ijk[3] = {gid % g->nb[0], (gid / g->nb[0]) % g->nb[1], gid / (g->nb[0] * g->nb[1])};
     for (PetscInt comp = 0; comp < c->ncomp; comp++) {
       for (PetscInt r = 0; r < 27; r++) {
-        PffView         *v    = &c->views[(lb * c->ncomp + comp) * 27 + r];
-        const PetscInt   d[3] = {r % 3 - 1, (r / 3) % 3 - 1, r / 9 - 1};
-        const PetscInt64 go   = c->plan->goff[(lb * c->ncomp + comp) * 27 + r];
+        PffView         *v  = &c->views[(lb * c->ncomp + comp) * 27 + r];
+        const PetscInt64 go = c->plan->goff[(lb * c->ncomp + comp) * 27 + r];
+        PetscInt         d[3];
+        PffRegionDirection(r, d);
         if (r == 13 || go < 0) {
           /* own storage, or a same-level neighbour on this rank read in place */
-          const PetscInt src = r == 13 ? gid : PffRasterNeighbour(g->nb, g->periodic, ijk, d);
+          const PetscInt src = r == 13 ? gid : PffGridActiveNeighbour_Private(g, gid, r);
           v->ptr             = c->data + c->ncomp * g->offset[src] + comp * n * n * n;
           v->off             = -(ptrdiff_t)(d[0] * n + d[1] * n * n + d[2] * n * n * n);
           v->sx              = 1;
@@ -87,11 +87,12 @@ PetscErrorCode PffGridDestroyChannel_Private(PffChannel **c)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-static PetscErrorCode PffGridCheckChannel(PffGrid g, PetscInt ch)
+PetscErrorCode PffGridGetChannel_Private(PffGrid g, PetscInt ch, PffChannel **c)
 {
   PetscFunctionBeginUser;
   PetscCheck(ch >= 0 && ch < g->nch, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "no channel %" PetscInt_FMT, ch);
   PetscCheck(g->setupcalled, PETSC_COMM_SELF, PETSC_ERR_ORDER, "call PffGridSetUp() first");
+  *c = g->ch[ch];
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -117,8 +118,8 @@ PetscErrorCode PffGridGetChannelInfo(PffGrid g, PetscInt ch, const char **name, 
 PetscErrorCode PffGridGetBlockData(PffGrid g, PetscInt ch, PetscInt lb, PetscInt comp, float **data)
 {
   PetscFunctionBeginUser;
-  PetscCall(PffGridCheckChannel(g, ch));
-  const PffChannel *c = g->ch[ch];
+  PffChannel *c = NULL;
+  PetscCall(PffGridGetChannel_Private(g, ch, &c));
   PetscCheck(lb >= 0 && lb < g->nlocal && comp >= 0 && comp < c->ncomp, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
              "block %" PetscInt_FMT " component %" PetscInt_FMT " out of range", lb, comp);
   const PetscInt n = PffGridBlockN_Private(g, g->lgid[lb]);
@@ -129,8 +130,8 @@ PetscErrorCode PffGridGetBlockData(PffGrid g, PetscInt ch, PetscInt lb, PetscInt
 PetscErrorCode PffGridGetBlockViews(PffGrid g, PetscInt ch, PetscInt lb, PetscInt comp, const PffView **views)
 {
   PetscFunctionBeginUser;
-  PetscCall(PffGridCheckChannel(g, ch));
-  const PffChannel *c = g->ch[ch];
+  PffChannel *c = NULL;
+  PetscCall(PffGridGetChannel_Private(g, ch, &c));
   PetscCheck(lb >= 0 && lb < g->nlocal && comp >= 0 && comp < c->ncomp, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
              "block %" PetscInt_FMT " component %" PetscInt_FMT " out of range", lb, comp);
   *views = &c->views[(lb * c->ncomp + comp) * 27];
