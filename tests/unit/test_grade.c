@@ -13,22 +13,14 @@
 
    Sample run:  ./test_grade
    Prints:      grade ok: <n> rasters, <b> blocks, <l> lowered */
-#include <pff.h>
+#include "pfftest.h"
 
 static const char help[] = "2:1 grading of random block rasters.\n";
-
-static uint64_t Hash64(uint64_t i)
-{
-  uint64_t z = i + 0x9e3779b97f4a7c15ULL;
-  z          = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z          = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
 
 /* Uniform integer in [0, m) from the key (seed, purpose, index). */
 static PetscInt Draw(uint64_t seed, uint64_t purpose, uint64_t index, PetscInt m)
 {
-  return (PetscInt)(Hash64(Hash64(seed * 1000003ULL + purpose) ^ index) % (uint64_t)m);
+  return (PetscInt)(PffTestHash64(PffTestHash64(seed * 1000003ULL + purpose) ^ index) % (uint64_t)m);
 }
 
 static void BlockIJK(const PetscInt nb[3], PetscInt b, PetscInt ijk[3])

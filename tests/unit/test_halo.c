@@ -22,26 +22,13 @@
 
    Sample run:  mpiexec -n 4 ./test_halo
    Prints (the same on any number of ranks) one line per raster and channel with global ghost counts. */
-#include <pff.h>
+#include "pfftest.h"
 
 static const char help[] = "Forward and reverse halo exchange across ranks and levels.\n";
 
 #define N0 8
 #define NLEVELS 3
 #define MARKER (-7.0f)
-
-static uint64_t Hash64(uint64_t i)
-{
-  uint64_t z = i + 0x9e3779b97f4a7c15ULL;
-  z          = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z          = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
-
-static uint64_t Key(uint64_t a, uint64_t b, uint64_t c, uint64_t d)
-{
-  return Hash64(Hash64(Hash64(Hash64(a) ^ b) ^ c) ^ d);
-}
 
 /* A float in [1, 2) with all 23 mantissa bits from the hash, exactly representable. */
 static float HashValue(uint64_t h)
@@ -58,16 +45,7 @@ typedef struct {
   uint64_t    seed;
 } Case;
 
-typedef struct {
-  PffGrid            grid;
-  MPI_Comm           comm;
-  PetscMPIInt        rank;
-  PetscInt           nb[3], nblocks, nlocal;
-  const PetscInt    *level;
-  const PetscMPIInt *owner;
-  PetscBool          periodic[3];
-  PetscReal          origin[3], h0;
-} Ctx;
+typedef PffTestCtx Ctx;
 
 typedef enum {
   REGION_WALL, /* across a wall or facing an inactive block */
@@ -79,41 +57,11 @@ typedef enum {
 
 static PetscErrorCode CreateGrid(MPI_Comm comm, const Case *c, Ctx *ctx)
 {
-  const PetscInt  cells[3]  = {N0 * c->nb[0], N0 * c->nb[1], N0 * c->nb[2]};
   const PetscReal origin[3] = {-0.5, 0.25, 0.125};
-  const PetscInt  nblocks   = c->nb[0] * c->nb[1] * c->nb[2];
-  PetscInt       *request;
 
   PetscFunctionBeginUser;
-  /* levels grow with the distance from a random block, with random jumps, so every level and every
-     kind of level step (0-1, 1-2) occurs; grading then fixes the jumps */
-  PetscCall(PetscMalloc1(nblocks, &request));
-  for (PetscInt b = 0; b < nblocks; b++) {
-    const uint64_t h  = Key(c->seed, 1, (uint64_t)b, 0);
-    PetscReal      d2 = 0;
-    for (int a = 0; a < 3; a++) {
-      const PetscInt ia = a == 0 ? b % c->nb[0] : (a == 1 ? (b / c->nb[0]) % c->nb[1] : b / (c->nb[0] * c->nb[1]));
-      d2 += PetscSqr((PetscReal)(ia - (PetscInt)(Key(c->seed, 2, (uint64_t)a, 0) % (uint64_t)c->nb[a])));
-    }
-    const PetscInt l = (PetscInt)(PetscSqrtReal(d2) / 1.5) + (PetscInt)(h % 3) - 1;
-    request[b]       = c->uniform >= 0 ? c->uniform : PetscMax(0, PetscMin(NLEVELS - 1, l));
-    if ((PetscInt)((h >> 32) % 100) < c->inactive) request[b] = -1;
-  }
-  PetscCall(PffGridCreate(comm, &ctx->grid));
-  PetscCall(PffGridSetCells(ctx->grid, cells));
-  PetscCall(PffGridSetBlockSize(ctx->grid, N0));
-  PetscCall(PffGridSetLevels(ctx->grid, c->uniform >= 0 ? c->uniform + 1 : NLEVELS));
-  PetscCall(PffGridSetDomain(ctx->grid, origin, 1.0 / 32));
-  PetscCall(PffGridSetPeriodic(ctx->grid, c->periodic));
-  PetscCall(PffGridSetRefinementMap(ctx->grid, request));
-  PetscCall(PffGridSetUp(ctx->grid));
-  PetscCall(PetscFree(request));
-  ctx->comm = comm;
-  PetscCallMPI(MPI_Comm_rank(comm, &ctx->rank));
-  PetscCall(PffGridGetRaster(ctx->grid, ctx->nb, &ctx->level, &ctx->owner));
-  PetscCall(PffGridGetSizes(ctx->grid, NULL, NULL, ctx->origin, &ctx->h0, ctx->periodic));
-  PetscCall(PffGridGetLocalBlocks(ctx->grid, &ctx->nlocal));
-  ctx->nblocks = ctx->nb[0] * ctx->nb[1] * ctx->nb[2];
+  PetscCall(PffTestCreateGrid(comm, c->nb, c->periodic, origin, 1.0 / 32, N0, NLEVELS, c->uniform, c->inactive, c->seed,
+                              ctx));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -140,24 +88,6 @@ static RegionKind Classify(const Ctx *ctx, const PffBlockInfo *info, PetscInt r,
 static PetscBool IsDirect(const Ctx *ctx, RegionKind kind, PetscInt nbr)
 {
   return (PetscBool)(kind == REGION_SAME && ctx->owner[nbr] == ctx->rank);
-}
-
-/* World position of the sample of component comp at block-local cell (i, j, k). */
-static void SamplePosition(const PffBlockInfo *info, PffChannelKind kind, PetscInt comp, const PetscInt c[3],
-                           PetscReal x[3])
-{
-  for (int a = 0; a < 3; a++)
-    x[a] = info->lo[a] + ((PetscReal)c[a] + (kind == PFF_CHANNEL_FACE && comp == a ? 0.0 : 0.5)) * info->h;
-}
-
-/* The linear test field of component comp; slopes vanish along periodic axes. */
-static PetscReal Linear(const Ctx *ctx, PetscInt comp, const PetscReal x[3])
-{
-  const PetscReal slope[3] = {0.3, -0.7, 0.45};
-  PetscReal       f        = 1.0 + 0.5 * (PetscReal)comp;
-  for (int a = 0; a < 3; a++)
-    if (!ctx->periodic[a]) f += slope[(a + comp) % 3] * x[a];
-  return f;
 }
 
 /* Checks, for one block component, that each direct region's address is the neighbour's cell. */
@@ -245,8 +175,8 @@ static PetscErrorCode FillLinear(const Ctx *ctx, PetscInt ch, PetscInt shift, co
           for (PetscInt i = 0; i < info.n; i++) {
             const PetscInt c[3] = {i, j, k};
             PetscReal      x[3];
-            SamplePosition(&info, kind, comp, c, x);
-            data[i + info.n * (j + info.n * k)] = (float)Linear(ctx, comp + shift, x);
+            PffTestSamplePosition(&info, kind, comp, c, x);
+            data[i + info.n * (j + info.n * k)] = (float)PffTestLinear(ctx, comp + shift, x);
           }
       for (PetscInt r = 0; r < 27; r++) {
         PetscInt nbr, lo[3], hi[3];
@@ -275,18 +205,10 @@ static PetscErrorCode CheckForward(const Ctx *ctx, PetscInt ch, PetscInt shift, 
 {
   PetscInt       ncomp, w;
   PffChannelKind kind;
-  PetscReal      scale = 0;
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetChannelInfo(ctx->grid, ch, NULL, &kind, &ncomp, &w));
-  /* field scale: the largest |f| over the domain (at its corners) */
-  for (PetscInt comp = 0; comp < ncomp; comp++)
-    for (int c = 0; c < 8; c++) {
-      PetscReal x[3];
-      for (int a = 0; a < 3; a++) x[a] = ctx->origin[a] + ((c >> a) & 1 ? ctx->h0 * N0 * ctx->nb[a] : 0.0);
-      scale = PetscMax(scale, PetscAbsReal(Linear(ctx, comp + shift, x)));
-    }
-  const PetscReal tol = 1e-5 * scale;
+  const PetscReal tol = 1e-5 * PffTestFieldScale(ctx, ncomp, shift);
   for (PetscInt lb = 0; lb < ctx->nlocal; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(ctx->grid, lb, &info));
@@ -300,8 +222,8 @@ static PetscErrorCode CheckForward(const Ctx *ctx, PetscInt ch, PetscInt shift, 
           for (PetscInt i = 0; i < info.n; i++) {
             const PetscInt c[3] = {i, j, k};
             PetscReal      x[3];
-            SamplePosition(&info, kind, comp, c, x);
-            PetscCheck(data[i + info.n * (j + info.n * k)] == (float)Linear(ctx, comp + shift, x) &&
+            PffTestSamplePosition(&info, kind, comp, c, x);
+            PetscCheck(data[i + info.n * (j + info.n * k)] == (float)PffTestLinear(ctx, comp + shift, x) &&
                            PffViewsAt(views, i, j, k, info.n) == &data[i + info.n * (j + info.n * k)],
                        PETSC_COMM_SELF, PETSC_ERR_PLIB, "%s: owned value or view of block %" PetscInt_FMT " changed",
                        what, info.gid);
@@ -318,8 +240,8 @@ static PetscErrorCode CheckForward(const Ctx *ctx, PetscInt ch, PetscInt shift, 
               const PetscInt c[3] = {i, j, k};
               const float    v    = *PffViewsAt(views, i, j, k, info.n);
               PetscReal      x[3];
-              SamplePosition(&info, kind, comp, c, x);
-              const PetscReal f = Linear(ctx, comp + shift, x);
+              PffTestSamplePosition(&info, kind, comp, c, x);
+              const PetscReal f = PffTestLinear(ctx, comp + shift, x);
               if (rk == REGION_WALL) {
                 PetscCheck(v == MARKER, PETSC_COMM_SELF, PETSC_ERR_PLIB,
                            "%s: the exchange overwrote ghost (%" PetscInt_FMT ",%" PetscInt_FMT ",%" PetscInt_FMT
@@ -385,8 +307,8 @@ static PetscErrorCode WriteGhosts(const Ctx *ctx, PetscInt ch, uint64_t salt, do
                 *g = MARKER;
                 continue;
               }
-              const uint64_t h = Key((uint64_t)info.gid, (uint64_t)(comp * 27 + r),
-                                     (uint64_t)((i + w) + 64 * ((j + w) + 64 * (k + w))), salt);
+              const uint64_t h = PffTestKey((uint64_t)info.gid, (uint64_t)(comp * 27 + r),
+                                            (uint64_t)((i + w) + 64 * ((j + w) + 64 * (k + w))), salt);
               const float    v = (float)(1.0 + 0.01 * (double)(h >> 40) / 16777216.0);
               *g += v;
               expect[nbr * ncomp + comp] += (double)v;
@@ -538,7 +460,7 @@ static PetscErrorCode TestUniform(Ctx *ctx, const char cname[], PffChannelKind k
             const PetscInt c[3] = {i, j, k};
             PetscInt64     idx  = -1;
             (void)UniformIndex(ctx, &info, c, &idx);
-            data[i + n * (j + n * k)] = HashValue(Key((uint64_t)idx, (uint64_t)comp, 3, 0));
+            data[i + n * (j + n * k)] = HashValue(PffTestKey((uint64_t)idx, (uint64_t)comp, 3, 0));
           }
     }
   }
@@ -567,7 +489,7 @@ static PetscErrorCode TestUniform(Ctx *ctx, const char cname[], PffChannelKind k
               const PetscBool inside = UniformIndex(ctx, &info, c, &idx);
               PetscCheck(inside == (rk == REGION_SAME), PETSC_COMM_SELF, PETSC_ERR_PLIB,
                          "%s: region %" PetscInt_FMT " of block %" PetscInt_FMT " misclassified", what, r, info.gid);
-              const float expect = inside ? HashValue(Key((uint64_t)idx, (uint64_t)comp, 3, 0)) : 0.0f;
+              const float expect = inside ? HashValue(PffTestKey((uint64_t)idx, (uint64_t)comp, 3, 0)) : 0.0f;
               PetscCheck(v == expect, PETSC_COMM_SELF, PETSC_ERR_PLIB,
                          "%s: ghost (%" PetscInt_FMT ",%" PetscInt_FMT ",%" PetscInt_FMT ") of block %" PetscInt_FMT
                          " comp %" PetscInt_FMT " region %" PetscInt_FMT
@@ -608,8 +530,8 @@ static PetscErrorCode TestUniform(Ctx *ctx, const char cname[], PffChannelKind k
               const PetscInt c[3] = {i, j, k};
               PetscInt64     idx;
               if (!UniformIndex(ctx, &info, c, &idx)) continue;
-              const float v = HashValue(Key((uint64_t)info.gid, (uint64_t)(comp * 27 + r), (uint64_t)(i + w),
-                                            (uint64_t)((j + w) + 64 * (k + w))));
+              const float v = HashValue(PffTestKey((uint64_t)info.gid, (uint64_t)(comp * 27 + r), (uint64_t)(i + w),
+                                                   (uint64_t)((j + w) + 64 * (k + w))));
               *PffViewsAt(views, i, j, k, n) += v;
               expect[comp * ncells + idx] += (double)v;
             }

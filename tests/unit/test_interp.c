@@ -14,26 +14,13 @@
 
    Sample run:  mpiexec -n 4 ./test_interp
    Prints (the same on any number of ranks) one "ok" line per raster and channel. */
-#include <pff.h>
+#include "pfftest.h"
 
 static const char help[] = "Point location and trilinear interpolation on multi-level grids.\n";
 
 #define N0 8
 #define NLEVELS 3
 #define NPOINTS 2000
-
-static uint64_t Hash64(uint64_t i)
-{
-  uint64_t z = i + 0x9e3779b97f4a7c15ULL;
-  z          = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z          = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
-
-static uint64_t Key(uint64_t a, uint64_t b, uint64_t c, uint64_t d)
-{
-  return Hash64(Hash64(Hash64(Hash64(a) ^ b) ^ c) ^ d);
-}
 
 /* Uniform in [0, 1) with 53 random bits. */
 static PetscReal Uniform01(uint64_t h)
@@ -49,76 +36,15 @@ typedef struct {
   uint64_t    seed;
 } Case;
 
-typedef struct {
-  PffGrid            grid;
-  MPI_Comm           comm;
-  PetscMPIInt        rank;
-  PetscInt           nb[3], nblocks, nlocal;
-  const PetscInt    *level;
-  const PetscMPIInt *owner;
-  PetscBool          periodic[3];
-  PetscReal          origin[3], h0, blen;
-} Ctx;
+typedef PffTestCtx Ctx;
 
 static PetscErrorCode CreateGrid(MPI_Comm comm, const Case *c, Ctx *ctx)
 {
-  const PetscInt  cells[3]  = {N0 * c->nb[0], N0 * c->nb[1], N0 * c->nb[2]};
   const PetscReal origin[3] = {0.375, -1.25, 0.5};
-  const PetscInt  nblocks   = c->nb[0] * c->nb[1] * c->nb[2];
-  PetscInt       *request;
 
   PetscFunctionBeginUser;
-  /* levels grow with the distance from a random block, with random jumps that grading fixes */
-  PetscCall(PetscMalloc1(nblocks, &request));
-  for (PetscInt b = 0; b < nblocks; b++) {
-    const uint64_t h  = Key(c->seed, 1, (uint64_t)b, 0);
-    PetscReal      d2 = 0;
-    for (int a = 0; a < 3; a++) {
-      const PetscInt ia = a == 0 ? b % c->nb[0] : (a == 1 ? (b / c->nb[0]) % c->nb[1] : b / (c->nb[0] * c->nb[1]));
-      d2 += PetscSqr((PetscReal)(ia - (PetscInt)(Key(c->seed, 2, (uint64_t)a, 0) % (uint64_t)c->nb[a])));
-    }
-    request[b] = PetscMax(0, PetscMin(NLEVELS - 1, (PetscInt)(PetscSqrtReal(d2) / 1.5) + (PetscInt)(h % 3) - 1));
-    if ((PetscInt)((h >> 32) % 100) < c->inactive) request[b] = -1;
-  }
-  PetscCall(PffGridCreate(comm, &ctx->grid));
-  PetscCall(PffGridSetCells(ctx->grid, cells));
-  PetscCall(PffGridSetBlockSize(ctx->grid, N0));
-  PetscCall(PffGridSetLevels(ctx->grid, NLEVELS));
-  PetscCall(PffGridSetDomain(ctx->grid, origin, 1.0 / 16));
-  PetscCall(PffGridSetPeriodic(ctx->grid, c->periodic));
-  PetscCall(PffGridSetRefinementMap(ctx->grid, request));
-  PetscCall(PffGridSetUp(ctx->grid));
-  PetscCall(PetscFree(request));
-  ctx->comm = comm;
-  PetscCallMPI(MPI_Comm_rank(comm, &ctx->rank));
-  PetscCall(PffGridGetRaster(ctx->grid, ctx->nb, &ctx->level, &ctx->owner));
-  PetscCall(PffGridGetSizes(ctx->grid, NULL, NULL, ctx->origin, &ctx->h0, ctx->periodic));
-  PetscCall(PffGridGetLocalBlocks(ctx->grid, &ctx->nlocal));
-  ctx->nblocks = ctx->nb[0] * ctx->nb[1] * ctx->nb[2];
-  ctx->blen    = N0 * ctx->h0;
+  PetscCall(PffTestCreateGrid(comm, c->nb, c->periodic, origin, 1.0 / 16, N0, NLEVELS, -1, c->inactive, c->seed, ctx));
   PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-/* Linear function of component comp; no slope along periodic axes. */
-static PetscReal Linear(const Ctx *ctx, PetscInt comp, const PetscReal x[3])
-{
-  const PetscReal slope[3] = {0.3, -0.7, 0.45};
-  PetscReal       f        = 1.0 + 0.5 * (PetscReal)comp;
-  for (int a = 0; a < 3; a++)
-    if (!ctx->periodic[a]) f += slope[(a + comp) % 3] * x[a];
-  return f;
-}
-
-static PetscReal FieldScale(const Ctx *ctx, PetscInt ncomp)
-{
-  PetscReal scale = 0;
-  for (PetscInt comp = 0; comp < ncomp; comp++)
-    for (int c = 0; c < 8; c++) {
-      PetscReal x[3];
-      for (int a = 0; a < 3; a++) x[a] = ctx->origin[a] + ((c >> a) & 1 ? ctx->blen * ctx->nb[a] : 0.0);
-      scale = PetscMax(scale, PetscAbsReal(Linear(ctx, comp, x)));
-    }
-  return scale;
 }
 
 static PetscErrorCode FillLinear(const Ctx *ctx, PetscInt ch)
@@ -139,9 +65,8 @@ static PetscErrorCode FillLinear(const Ctx *ctx, PetscInt ch)
           for (PetscInt i = 0; i < info.n; i++) {
             const PetscInt c[3] = {i, j, k};
             PetscReal      x[3];
-            for (int a = 0; a < 3; a++)
-              x[a] = info.lo[a] + ((PetscReal)c[a] + (kind == PFF_CHANNEL_FACE && comp == a ? 0.0 : 0.5)) * info.h;
-            data[i + info.n * (j + info.n * k)] = (float)Linear(ctx, comp, x);
+            PffTestSamplePosition(&info, kind, comp, c, x);
+            data[i + info.n * (j + info.n * k)] = (float)PffTestLinear(ctx, comp, x);
           }
     }
   }
@@ -222,7 +147,8 @@ static PetscErrorCode TestLocate(const Ctx *ctx, const char cname[])
     PetscReal      lo[3], x[3];
     for (int a = 0; a < 3; a++) lo[a] = ctx->origin[a] + (PetscReal)(ijk[a] * N0) * ctx->h0;
     for (int q = 0; q < 8; q++) {
-      for (int a = 0; a < 3; a++) x[a] = lo[a] + Uniform01(Key(7, (uint64_t)g, (uint64_t)q, (uint64_t)a)) * ctx->blen;
+      for (int a = 0; a < 3; a++)
+        x[a] = lo[a] + Uniform01(PffTestKey(7, (uint64_t)g, (uint64_t)q, (uint64_t)a)) * ctx->blen;
       PetscCall(CheckLocate(ctx, x, g, what));
     }
     PetscCall(CheckLocate(ctx, lo, g, what));
@@ -260,29 +186,29 @@ static PetscErrorCode TestInterpolate(const Ctx *ctx, const char cname[], PetscI
   PetscFunctionBeginUser;
   PetscCall(PffGridGetChannelInfo(ctx->grid, ch, NULL, &kind, &ncomp, NULL));
   PetscCall(PetscSNPrintf(what, sizeof(what), "%s %s", cname, PffChannelKinds[kind]));
-  const PetscReal tol = 1e-5 * FieldScale(ctx, ncomp);
+  const PetscReal tol = 1e-5 * PffTestFieldScale(ctx, ncomp, 0);
   PetscCall(PetscMalloc2(3 * NPOINTS, &x, ncomp * NPOINTS, &val));
 
   /* random points in local blocks, away from walls and inactive blocks */
   while (ctx->nlocal > 0 && np < NPOINTS) {
-    const uint64_t key = Key((uint64_t)ctx->rank, (uint64_t)ch, (uint64_t)attempts++, 11);
+    const uint64_t key = PffTestKey((uint64_t)ctx->rank, (uint64_t)ch, (uint64_t)attempts++, 11);
     const PetscInt lb  = (PetscInt)(key % (uint64_t)ctx->nlocal);
     PffBlockInfo   info;
     PetscReal     *p = &x[3 * np];
     PetscCheck(attempts < 100 * NPOINTS, PETSC_COMM_SELF, PETSC_ERR_PLIB, "%s: too few points away from walls", what);
     PetscCall(PffGridGetBlockInfo(ctx->grid, lb, &info));
-    for (int a = 0; a < 3; a++) p[a] = info.lo[a] + Uniform01(Key(key, (uint64_t)a, 0, 0)) * ctx->blen;
+    for (int a = 0; a < 3; a++) p[a] = info.lo[a] + Uniform01(PffTestKey(key, (uint64_t)a, 0, 0)) * ctx->blen;
     if (!FarFromHoles(ctx, info.gid, p, 4 * ctx->h0)) continue;
     PetscCall(CheckLocate(ctx, p, info.gid, what));
     for (int a = 0; a < 3; a++)
       if (ctx->periodic[a])
-        p[a] += (PetscReal)((PetscInt)(Key(key, 5, (uint64_t)a, 0) % 3) - 1) * ctx->blen * ctx->nb[a];
+        p[a] += (PetscReal)((PetscInt)(PffTestKey(key, 5, (uint64_t)a, 0) % 3) - 1) * ctx->blen * ctx->nb[a];
     np++;
   }
   PetscCall(PffGridInterpolate(ctx->grid, ch, np, x, val));
   for (PetscInt p = 0; p < np; p++)
     for (PetscInt comp = 0; comp < ncomp; comp++) {
-      const PetscReal f = Linear(ctx, comp, &x[3 * p]);
+      const PetscReal f = PffTestLinear(ctx, comp, &x[3 * p]);
       PetscCheck(PetscAbsReal(val[p * ncomp + comp] - f) <= tol, PETSC_COMM_SELF, PETSC_ERR_PLIB,
                  "%s: interpolated comp %" PetscInt_FMT " at (%.17g, %.17g, %.17g) is %.9g, the linear field is %.9g",
                  what, comp, (double)x[3 * p], (double)x[3 * p + 1], (double)x[3 * p + 2],
@@ -301,10 +227,10 @@ static PetscErrorCode TestInterpolate(const Ctx *ctx, const char cname[], PetscI
         PetscReal p[3], v[3];
         for (int a = 0; a < 3; a++) {
           /* the first, the last, then random cells */
-          c[a] = s == 0
-                     ? 0
-                     : (s == 1 ? info.n - 1
-                               : (PetscInt)(Key((uint64_t)info.gid, (uint64_t)s, (uint64_t)a, 3) % (uint64_t)info.n));
+          c[a] = s == 0 ? 0
+                        : (s == 1 ? info.n - 1
+                                  : (PetscInt)(PffTestKey((uint64_t)info.gid, (uint64_t)s, (uint64_t)a, 3) %
+                                               (uint64_t)info.n));
           p[a] = info.lo[a] + ((PetscReal)c[a] + (kind == PFF_CHANNEL_FACE && comp == a ? 0.0 : 0.5)) * info.h;
         }
         PetscCall(PffGridInterpolate(ctx->grid, ch, 1, p, v));

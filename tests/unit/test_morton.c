@@ -8,21 +8,13 @@
 
    Sample run:  ./test_morton
    Prints:      morton ok: <n> round trips, <m> keys */
-#include <pff.h>
+#include "pfftest.h"
 
 static const char help[] = "Morton key round trips and Z-order.\n";
 
 #define MORTON_MAX ((uint32_t)((1u << 21) - 1))
 
 /* splitmix64: a counter-based generator, so the sequence does not depend on anything but i. */
-static uint64_t Hash64(uint64_t i)
-{
-  uint64_t z = i + 0x9e3779b97f4a7c15ULL;
-  z          = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z          = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
-
 static PetscErrorCode CheckRoundTrip(uint32_t x, uint32_t y, uint32_t z)
 {
   uint32_t       a, b, c;
@@ -62,7 +54,7 @@ int main(int argc, char **argv)
 
   /* pseudo-random triples over the full 21-bit range */
   for (uint64_t n = 0; n < 200000; n++, ntrips++) {
-    const uint64_t r = Hash64(n);
+    const uint64_t r = PffTestHash64(n);
     PetscCall(CheckRoundTrip((uint32_t)(r & MORTON_MAX), (uint32_t)((r >> 21) & MORTON_MAX),
                              (uint32_t)((r >> 42) & MORTON_MAX)));
   }
@@ -75,7 +67,7 @@ int main(int argc, char **argv)
                (unsigned long long)key, (unsigned long long)PffMortonEncode(x, y, z));
   }
   for (uint64_t n = 0; n < 100000; n++, nkeys++) {
-    const uint64_t key = Hash64(n + 0x5eed) >> 1;
+    const uint64_t key = PffTestHash64(n + 0x5eed) >> 1;
     uint32_t       x, y, z;
     PffMortonDecode(key, &x, &y, &z);
     PetscCheck(x <= MORTON_MAX && y <= MORTON_MAX && z <= MORTON_MAX && PffMortonEncode(x, y, z) == key,
@@ -108,7 +100,7 @@ int main(int argc, char **argv)
         }
   }
   for (uint64_t n = 0; n < 10000; n++) {
-    const uint64_t r = Hash64(n + 0xc0ffee);
+    const uint64_t r = PffTestHash64(n + 0xc0ffee);
     const uint32_t x = (uint32_t)(r & MORTON_MAX), y = (uint32_t)((r >> 21) & MORTON_MAX),
                    z = (uint32_t)((r >> 42) & MORTON_MAX);
     PetscCheck(PffMortonEncode(x, y, z) >> 3 == PffMortonEncode(x >> 1, y >> 1, z >> 1), PETSC_COMM_SELF,

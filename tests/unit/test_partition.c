@@ -17,21 +17,13 @@
 
    Sample run:  mpiexec -n 4 ./test_partition
    Prints (the same on any number of ranks) one "ok" line per map and partitioner. */
-#include <pff.h>
+#include "pfftest.h"
 
 static const char help[] = "Partition of the block raster: ownership, determinism, quality.\n";
 
-static uint64_t Hash64(uint64_t i)
-{
-  uint64_t z = i + 0x9e3779b97f4a7c15ULL;
-  z          = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z          = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
-
 static PetscInt Draw(uint64_t seed, uint64_t index, PetscInt m)
 {
-  return (PetscInt)(Hash64(Hash64(seed) ^ index) % (uint64_t)m);
+  return (PetscInt)(PffTestHash64(PffTestHash64(seed) ^ index) % (uint64_t)m);
 }
 
 typedef struct {

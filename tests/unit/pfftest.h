@@ -1,0 +1,106 @@
+/* Helpers shared by the grid unit tests: counter-based hashing (the same values on every rank),
+   pseudo-random graded multi-level grids, sample positions and linear test fields. */
+#pragma once
+
+#include <pff.h>
+
+static inline uint64_t PffTestHash64(uint64_t i)
+{
+  uint64_t z = i + 0x9e3779b97f4a7c15ULL;
+  z          = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z          = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+static inline uint64_t PffTestKey(uint64_t a, uint64_t b, uint64_t c, uint64_t d)
+{
+  return PffTestHash64(PffTestHash64(PffTestHash64(PffTestHash64(a) ^ b) ^ c) ^ d);
+}
+
+/* A set-up grid and what the tests read from it. */
+typedef struct {
+  PffGrid            grid;
+  MPI_Comm           comm;
+  PetscMPIInt        rank;
+  PetscInt           nb[3], nblocks, nlocal;
+  const PetscInt    *level;
+  const PetscMPIInt *owner;
+  PetscBool          periodic[3];
+  PetscReal          origin[3], h0, blen;
+} PffTestCtx;
+
+/* A grid of nb blocks of n0 cells. With uniform >= 0 every block has that level; otherwise levels grow
+   with the distance from a random block, with random jumps, so every level and every kind of level
+   step occurs and grading has work to do. inactive: percentage of blocks requested inactive. */
+static inline PetscErrorCode PffTestCreateGrid(MPI_Comm comm, const PetscInt nb[3], const PetscBool periodic[3],
+                                               const PetscReal origin[3], PetscReal h0, PetscInt n0, PetscInt nlevels,
+                                               PetscInt uniform, PetscInt inactive, uint64_t seed, PffTestCtx *ctx)
+{
+  const PetscInt cells[3] = {n0 * nb[0], n0 * nb[1], n0 * nb[2]};
+  const PetscInt nblocks  = nb[0] * nb[1] * nb[2];
+  PetscInt      *request;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc1(nblocks, &request));
+  for (PetscInt b = 0; b < nblocks; b++) {
+    const uint64_t h  = PffTestKey(seed, 1, (uint64_t)b, 0);
+    PetscReal      d2 = 0;
+    for (int a = 0; a < 3; a++) {
+      const PetscInt ia = a == 0 ? b % nb[0] : (a == 1 ? (b / nb[0]) % nb[1] : b / (nb[0] * nb[1]));
+      d2 += PetscSqr((PetscReal)(ia - (PetscInt)(PffTestKey(seed, 2, (uint64_t)a, 0) % (uint64_t)nb[a])));
+    }
+    const PetscInt l = (PetscInt)(PetscSqrtReal(d2) / 1.5) + (PetscInt)(h % 3) - 1;
+    request[b]       = uniform >= 0 ? uniform : PetscMax(0, PetscMin(nlevels - 1, l));
+    if ((PetscInt)((h >> 32) % 100) < inactive) request[b] = -1;
+  }
+  PetscCall(PffGridCreate(comm, &ctx->grid));
+  PetscCall(PffGridSetCells(ctx->grid, cells));
+  PetscCall(PffGridSetBlockSize(ctx->grid, n0));
+  PetscCall(PffGridSetLevels(ctx->grid, uniform >= 0 ? uniform + 1 : nlevels));
+  PetscCall(PffGridSetDomain(ctx->grid, origin, h0));
+  PetscCall(PffGridSetPeriodic(ctx->grid, periodic));
+  PetscCall(PffGridSetRefinementMap(ctx->grid, request));
+  PetscCall(PffGridSetUp(ctx->grid));
+  PetscCall(PetscFree(request));
+  ctx->comm = comm;
+  PetscCallMPI(MPI_Comm_rank(comm, &ctx->rank));
+  PetscCall(PffGridGetRaster(ctx->grid, ctx->nb, &ctx->level, &ctx->owner));
+  PetscCall(PffGridGetSizes(ctx->grid, NULL, NULL, ctx->origin, &ctx->h0, ctx->periodic));
+  PetscCall(PffGridGetLocalBlocks(ctx->grid, &ctx->nlocal));
+  ctx->nblocks = nblocks;
+  ctx->blen    = (PetscReal)n0 * ctx->h0;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* World position of the sample of component comp at block-local cell c: the cell centre, or the lower
+   comp-face for a face channel. */
+static inline void PffTestSamplePosition(const PffBlockInfo *info, PffChannelKind kind, PetscInt comp,
+                                         const PetscInt c[3], PetscReal x[3])
+{
+  for (int a = 0; a < 3; a++)
+    x[a] = info->lo[a] + ((PetscReal)c[a] + (kind == PFF_CHANNEL_FACE && comp == a ? 0.0 : 0.5)) * info->h;
+}
+
+/* The linear test field of component comp; no slope along periodic axes, so it is periodic. */
+static inline PetscReal PffTestLinear(const PffTestCtx *ctx, PetscInt comp, const PetscReal x[3])
+{
+  const PetscReal slope[3] = {0.3, -0.7, 0.45};
+  PetscReal       f        = 1.0 + 0.5 * (PetscReal)comp;
+  for (int a = 0; a < 3; a++)
+    if (!ctx->periodic[a]) f += slope[(a + comp) % 3] * x[a];
+  return f;
+}
+
+/* Largest |PffTestLinear| of components shift..shift+ncomp-1 over the domain (attained at a corner):
+   the scale that float tolerances are relative to. */
+static inline PetscReal PffTestFieldScale(const PffTestCtx *ctx, PetscInt ncomp, PetscInt shift)
+{
+  PetscReal scale = 0;
+  for (PetscInt comp = 0; comp < ncomp; comp++)
+    for (int c = 0; c < 8; c++) {
+      PetscReal x[3];
+      for (int a = 0; a < 3; a++) x[a] = ctx->origin[a] + ((c >> a) & 1 ? ctx->blen * (PetscReal)ctx->nb[a] : 0.0);
+      scale = PetscMax(scale, PetscAbsReal(PffTestLinear(ctx, comp + shift, x)));
+    }
+  return scale;
+}
