@@ -167,6 +167,11 @@ PETSC_EXTERN PetscErrorCode PffGridLocate(PffGrid grid, const PetscReal x[3], Pe
 PETSC_EXTERN PetscErrorCode PffGridInterpolate(PffGrid grid, PetscInt ch, PetscInt np, const PetscReal x[],
                                                PetscReal val[]);
 
+/* Sets every owned value of channel ch to fn at its sample position x (the cell centre, or the lower
+   comp-face of a face channel). Not collective; ghosts are not touched. */
+typedef PetscReal (*PffFieldFn)(const PetscReal x[3], PetscInt comp, void *ctx);
+PETSC_EXTERN PetscErrorCode PffGridFillChannel(PffGrid grid, PetscInt ch, PffFieldFn fn, void *ctx);
+
 /* 7-point Laplacian dst = lap(src) on cell channels, using src's ghosts (exchanged by the caller). */
 PETSC_EXTERN PetscErrorCode PffGridApplyLaplacian(PffGrid grid, PetscInt src, PetscInt dst);
 

@@ -104,3 +104,15 @@ static inline PetscReal PffTestFieldScale(const PffTestCtx *ctx, PetscInt ncomp,
     }
   return scale;
 }
+
+/* PffTestLinear as a PffFieldFn for PffGridFillChannel: component comp gets field comp + shift. */
+typedef struct {
+  const PffTestCtx *ctx;
+  PetscInt          shift;
+} PffTestLinearFill;
+
+static inline PetscReal PffTestLinearValue(const PetscReal x[3], PetscInt comp, void *fill)
+{
+  const PffTestLinearFill *f = (const PffTestLinearFill *)fill;
+  return PffTestLinear(f->ctx, comp + f->shift, x);
+}

@@ -160,24 +160,17 @@ static PetscErrorCode FillLinear(const Ctx *ctx, PetscInt ch, PetscInt shift, co
   PetscInt       ncomp, w;
   PffChannelKind kind;
 
+  PffTestLinearFill fill = {ctx, shift};
+
   PetscFunctionBeginUser;
+  PetscCall(PffGridFillChannel(ctx->grid, ch, PffTestLinearValue, &fill));
   PetscCall(PffGridGetChannelInfo(ctx->grid, ch, NULL, &kind, &ncomp, &w));
   for (PetscInt lb = 0; lb < ctx->nlocal; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(ctx->grid, lb, &info));
     for (PetscInt comp = 0; comp < ncomp; comp++) {
-      float         *data;
       const PffView *views;
-      PetscCall(PffGridGetBlockData(ctx->grid, ch, lb, comp, &data));
       PetscCall(PffGridGetBlockViews(ctx->grid, ch, lb, comp, &views));
-      for (PetscInt k = 0; k < info.n; k++)
-        for (PetscInt j = 0; j < info.n; j++)
-          for (PetscInt i = 0; i < info.n; i++) {
-            const PetscInt c[3] = {i, j, k};
-            PetscReal      x[3];
-            PffTestSamplePosition(&info, kind, comp, c, x);
-            data[i + info.n * (j + info.n * k)] = (float)PffTestLinear(ctx, comp + shift, x);
-          }
       for (PetscInt r = 0; r < 27; r++) {
         PetscInt nbr, lo[3], hi[3];
         if (r == 13 || Classify(ctx, &info, r, &nbr) != REGION_WALL) continue;

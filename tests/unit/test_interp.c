@@ -49,27 +49,10 @@ static PetscErrorCode CreateGrid(MPI_Comm comm, const Case *c, Ctx *ctx)
 
 static PetscErrorCode FillLinear(const Ctx *ctx, PetscInt ch)
 {
-  PetscInt       ncomp;
-  PffChannelKind kind;
+  PffTestLinearFill fill = {ctx, 0};
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridGetChannelInfo(ctx->grid, ch, NULL, &kind, &ncomp, NULL));
-  for (PetscInt lb = 0; lb < ctx->nlocal; lb++) {
-    PffBlockInfo info;
-    PetscCall(PffGridGetBlockInfo(ctx->grid, lb, &info));
-    for (PetscInt comp = 0; comp < ncomp; comp++) {
-      float *data;
-      PetscCall(PffGridGetBlockData(ctx->grid, ch, lb, comp, &data));
-      for (PetscInt k = 0; k < info.n; k++)
-        for (PetscInt j = 0; j < info.n; j++)
-          for (PetscInt i = 0; i < info.n; i++) {
-            const PetscInt c[3] = {i, j, k};
-            PetscReal      x[3];
-            PffTestSamplePosition(&info, kind, comp, c, x);
-            data[i + info.n * (j + info.n * k)] = (float)PffTestLinear(ctx, comp, x);
-          }
-    }
-  }
+  PetscCall(PffGridFillChannel(ctx->grid, ch, PffTestLinearValue, &fill));
   PetscCall(PffGridHaloBegin(ctx->grid, ch));
   PetscCall(PffGridHaloEnd(ctx->grid, ch));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -247,6 +230,11 @@ static PetscErrorCode TestInterpolate(const Ctx *ctx, const char cname[], PetscI
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+static PetscReal OnePlusXPlusY(const PetscReal x[3], PetscInt comp, void *ctx)
+{
+  return 1 + x[0] + x[1];
+}
+
 /* Two regressions: (1) a point near an inactive diagonal (edge) neighbour whose face neighbours are
    active must clamp instead of reading that region's zero ghosts: on f = 1 + x + y the value at
    (7.75, 7.75, 4) beside the inactive block (1,1,0) is a clamped value (16) and never the 15.375
@@ -268,17 +256,7 @@ static PetscErrorCode TestRegressions(void)
   PetscCall(PffGridAddChannel(grid, "f", PFF_CHANNEL_CELL, 1, &ch));
   PetscCall(PffGridSetUp(grid));
   PetscCall(PffGridGetLocalBlocks(grid, &nlocal));
-  for (PetscInt lb = 0; lb < nlocal; lb++) {
-    PffBlockInfo info;
-    float       *f;
-    PetscCall(PffGridGetBlockInfo(grid, lb, &info));
-    PetscCall(PffGridGetBlockData(grid, ch, lb, 0, &f));
-    for (PetscInt k = 0; k < info.n; k++)
-      for (PetscInt j = 0; j < info.n; j++)
-        for (PetscInt i = 0; i < info.n; i++)
-          f[i + info.n * (j + info.n * k)] =
-              (float)(1 + info.lo[0] + (i + 0.5) * info.h + info.lo[1] + (j + 0.5) * info.h);
-  }
+  PetscCall(PffGridFillChannel(grid, ch, OnePlusXPlusY, NULL));
   PetscCall(PffGridHaloBegin(grid, ch));
   PetscCall(PffGridHaloEnd(grid, ch));
   PetscCall(PffGridLocate(grid, x, &gid, NULL, NULL));

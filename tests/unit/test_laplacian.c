@@ -3,6 +3,11 @@
    periodic and walled axes, block sizes 8 and 16. Runs at 1, 2 and 4 ranks. */
 #include <pff.h>
 
+static PetscReal SmoothField(const PetscReal x[3], PetscInt comp, void *ctx)
+{
+  return PetscSinReal(3 * x[0] + 1) * PetscCosReal(2 * x[1]) + 0.5 * x[2] * x[2];
+}
+
 static PetscErrorCode CheckCase(PetscInt n0, PetscInt levels, PetscBool periodic, PetscInt seed)
 {
   PffGrid   grid;
@@ -26,19 +31,7 @@ static PetscErrorCode CheckCase(PetscInt n0, PetscInt levels, PetscBool periodic
   PetscCall(PffGridAddChannel(grid, "lap", PFF_CHANNEL_CELL, 1, &lap));
   PetscCall(PffGridSetUp(grid));
   PetscCall(PffGridGetLocalBlocks(grid, &nlocal));
-  for (PetscInt lb = 0; lb < nlocal; lb++) {
-    PffBlockInfo info;
-    float       *v;
-    PetscCall(PffGridGetBlockInfo(grid, lb, &info));
-    PetscCall(PffGridGetBlockData(grid, u, lb, 0, &v));
-    for (PetscInt k = 0; k < info.n; k++)
-      for (PetscInt j = 0; j < info.n; j++)
-        for (PetscInt i = 0; i < info.n; i++) {
-          const PetscReal x = info.lo[0] + (i + 0.5) * info.h, y = info.lo[1] + (j + 0.5) * info.h,
-                          z                = info.lo[2] + (k + 0.5) * info.h;
-          v[i + info.n * (j + info.n * k)] = (float)(PetscSinReal(3 * x + 1) * PetscCosReal(2 * y) + 0.5 * z * z);
-        }
-  }
+  PetscCall(PffGridFillChannel(grid, u, SmoothField, NULL));
   PetscCall(PffGridHaloBegin(grid, u));
   PetscCall(PffGridHaloEnd(grid, u));
   PetscCall(PffGridApplyLaplacian(grid, u, lap));
