@@ -28,25 +28,21 @@ PetscErrorCode PffSceneCreate(MPI_Comm comm, PffScene *scene)
 
 PetscErrorCode PffSceneSetFromOptions(PffScene s)
 {
-  const size_t nscenes = PETSC_STATIC_ARRAY_LENGTH(PffScenes);
-  const char  *names[8];
-  PetscInt     pick = 0;
-  PetscBool    set;
+  const size_t nscenes    = PETSC_STATIC_ARRAY_LENGTH(PffScenes);
+  PetscInt     pick       = -1;
   char         known[256] = "";
 
   PetscFunctionBeginUser;
   for (size_t i = 0; i < nscenes; i++) {
-    names[i] = PffScenes[i].name;
     PetscCall(PetscStrlcat(known, i ? ", " : "", sizeof(known)));
-    PetscCall(PetscStrlcat(known, names[i], sizeof(known)));
+    PetscCall(PetscStrlcat(known, PffScenes[i].name, sizeof(known)));
   }
   PetscOptionsBegin(s->comm, NULL, "Scene", "PffScene");
   char name[64];
   PetscCall(PetscStrncpy(name, s->name, sizeof(name)));
-  PetscCall(PetscOptionsString("-scene", "Scene to run", "PffSceneCreate", name, name, sizeof(name), &set));
-  pick = -1;
+  PetscCall(PetscOptionsString("-scene", "Scene to run", "PffSceneCreate", name, name, sizeof(name), NULL));
   for (size_t i = 0; i < nscenes; i++)
-    if (!strcmp(name, names[i])) pick = (PetscInt)i;
+    if (!strcmp(name, PffScenes[i].name)) pick = (PetscInt)i;
   PetscCheck(pick >= 0, s->comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "-scene %s is unknown; known scenes: %s", name, known);
   PetscCall(PetscStrncpy(s->name, name, sizeof(s->name)));
   PetscCall(PetscSNPrintf(s->outdir, sizeof(s->outdir), "output/%s", s->name));
@@ -58,7 +54,8 @@ PetscErrorCode PffSceneSetFromOptions(PffScene s)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode PffSceneMakeOutputDir_Private(PffScene s)
+/* Creates the output directory (rank 0) and checks it is writable; errors name -output_dir. */
+static PetscErrorCode PffSceneMakeOutputDir(PffScene s)
 {
   PetscMPIInt rank;
   int         err = 0;
@@ -86,7 +83,7 @@ PetscErrorCode PffSceneMakeOutputDir_Private(PffScene s)
 PetscErrorCode PffSceneRun(PffScene s)
 {
   PetscFunctionBeginUser;
-  PetscCall(PffSceneMakeOutputDir_Private(s));
+  PetscCall(PffSceneMakeOutputDir(s));
   PetscCall(s->ops.run(s));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -18,5 +18,3 @@ struct _n_PffScene {
 };
 
 PETSC_INTERN PetscErrorCode PffSceneCreate_GridDemo(PffScene);
-/* Creates the output directory (rank 0) and checks it is writable; errors name -output_dir. */
-PETSC_INTERN PetscErrorCode PffSceneMakeOutputDir_Private(PffScene);

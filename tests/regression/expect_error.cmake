@@ -16,23 +16,13 @@ endforeach()
 if(NOT DEFINED FORBID)
   set(FORBID "PETSC ERROR|MPI_ABORT")
 endif()
-separate_arguments(flags UNIX_COMMAND "${FLAGS}")
-separate_arguments(args UNIX_COMMAND "${ARGS}")
 if(NO_OUTPUT)
   file(REMOVE_RECURSE "${NO_OUTPUT}")
 endif()
 
-set(ENV{OMPI_ALLOW_RUN_AS_ROOT} 1)
-set(ENV{OMPI_ALLOW_RUN_AS_ROOT_CONFIRM} 1)
-set(ENV{OMPI_MCA_rmaps_base_oversubscribe} 1)
-set(ENV{OMP_NUM_THREADS} 1)
-if(NOT DEFINED ENV{ASAN_OPTIONS})
-  set(ENV{ASAN_OPTIONS} detect_leaks=0) # MPI and PETSc keep allocations until exit
-endif()
-execute_process(COMMAND ${MPIEXEC} ${NPFLAG} ${NP} ${flags} ${EXE} ${args}
-                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 120)
+set(RUN_TIMEOUT 120)
+include(${CMAKE_CURRENT_LIST_DIR}/run_pfflip.cmake)
 set(text "${out}\n${err}")
-message("---- output of: ${NP} ranks, ${EXE} ${ARGS}\n${text}\n---- exit status: ${rc}")
 
 # one list element per line; semicolons and brackets would change how CMake splits the list
 string(REPLACE ";" "," text "${text}")

@@ -9,20 +9,10 @@ foreach(var MPIEXEC NP EXE ARGS OUTPUT_DIR FILES)
     message(FATAL_ERROR "expect_run.cmake: ${var} is not set")
   endif()
 endforeach()
-separate_arguments(flags UNIX_COMMAND "${FLAGS}")
-separate_arguments(args UNIX_COMMAND "${ARGS}")
 file(REMOVE_RECURSE "${OUTPUT_DIR}")
 
-set(ENV{OMPI_ALLOW_RUN_AS_ROOT} 1)
-set(ENV{OMPI_ALLOW_RUN_AS_ROOT_CONFIRM} 1)
-set(ENV{OMPI_MCA_rmaps_base_oversubscribe} 1)
-set(ENV{OMP_NUM_THREADS} 1)
-if(NOT DEFINED ENV{ASAN_OPTIONS})
-  set(ENV{ASAN_OPTIONS} detect_leaks=0) # MPI and PETSc keep allocations until exit
-endif()
-execute_process(COMMAND ${MPIEXEC} ${NPFLAG} ${NP} ${flags} ${EXE} ${args}
-                RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 240)
-message("---- output of: ${NP} ranks, ${EXE} ${ARGS}\n${out}\n${err}\n---- exit status: ${rc}")
+set(RUN_TIMEOUT 240)
+include(${CMAKE_CURRENT_LIST_DIR}/run_pfflip.cmake)
 
 set(problems "")
 if(NOT rc STREQUAL "0")
