@@ -9,5 +9,7 @@
 
 #include <pff/core.h>
 #include <pff/grid.h>
+#include <pff/particles.h>
+#include <pff/pressure.h>
 #include <pff/io.h>
 #include <pff/scene.h>

@@ -131,6 +131,12 @@ PETSC_EXTERN PetscErrorCode PffGridGetPartitionQuality(PffGrid grid, PffPartitio
 PETSC_EXTERN PetscErrorCode PffGridGetCellCounts(PffGrid grid, PetscInt64 perLevel[PFF_GRID_MAX_LEVELS],
                                                  PetscInt64 *total);
 
+/* Global cell numbering: ranks in order, each rank's owned blocks in Morton order, cells x fastest
+   at the block's level. *first = global number of cell 0 of active block gid (on any rank), *nowned =
+   cells owned by this rank, *rstart = global number of its first cell, *ntotal = all active cells.
+   Any output pointer may be NULL. Not collective. */
+PETSC_EXTERN PetscErrorCode PffGridGetCellNumbering(PffGrid grid, PetscInt gid, PetscInt64 *first, PetscInt64 *nowned,
+                                                    PetscInt64 *rstart, PetscInt64 *ntotal);
 /* Channels. AddChannel may be called before or after SetUp; the data is zeroed. width is the halo
    width in cells of the block's own level, 1..PFF_GRID_MAX_WIDTH and at most the cells per axis
    of the coarsest block. *ch receives the channel index (required). Not collective, but every rank must
@@ -167,6 +173,11 @@ PETSC_EXTERN PetscErrorCode PffGridLocate(PffGrid grid, const PetscReal x[3], Pe
 PETSC_EXTERN PetscErrorCode PffGridInterpolate(PffGrid grid, PetscInt ch, PetscInt np, const PetscReal x[],
                                                PetscReal val[]);
 
+/* As PffGridInterpolate, but point p is interpolated on the lattice of local block lb[p] and may lie
+   outside it, as far as the channel's halo width minus one cell (periodic images are unwrapped
+   towards the block). For particles that left their block during one advection step. Not collective. */
+PETSC_EXTERN PetscErrorCode PffGridInterpolateFrom(PffGrid grid, PetscInt ch, PetscInt np, const PetscReal x[],
+                                                   const PetscInt lb[], PetscReal val[]);
 /* Sets every owned value of channel ch to fn at its sample position x (the cell centre, or the lower
    comp-face of a face channel). Not collective; ghosts are not touched. */
 typedef PetscReal (*PffFieldFn)(const PetscReal x[3], PetscInt comp, void *ctx);

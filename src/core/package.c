@@ -4,7 +4,9 @@
 
 PetscClassId  PFF_CLASSID;
 PetscLogEvent PFF_GridSetUp, PFF_GridRefine, PFF_GridPartition, PFF_HaloSetUp, PFF_HaloBegin, PFF_HaloEnd,
-    PFF_HaloRevBegin, PFF_HaloRevEnd, PFF_GridInterp, PFF_GridLaplacian, PFF_IOWrite, PFF_IORead;
+    PFF_HaloRevBegin, PFF_HaloRevEnd, PFF_GridInterp, PFF_GridLaplacian, PFF_IOWrite, PFF_IORead, PFF_PartSeed,
+    PFF_PartBin, PFF_PartMigrate, PFF_P2G, PFF_G2P, PFF_Advect, PFF_PressSetUp, PFF_PressAssemble, PFF_PressSolve,
+    PFF_PhaseField, PFF_Forces, PFF_CkptWrite, PFF_CkptRead;
 
 static PetscBool PffPackageInitialized = PETSC_FALSE;
 
@@ -26,5 +28,18 @@ PetscErrorCode PffInitializePackage(void)
   PetscCall(PetscLogEventRegister("GridLaplacian", PFF_CLASSID, &PFF_GridLaplacian));
   PetscCall(PetscLogEventRegister("IOWrite", PFF_CLASSID, &PFF_IOWrite));
   PetscCall(PetscLogEventRegister("IORead", PFF_CLASSID, &PFF_IORead));
+  PetscCall(PetscLogEventRegister("PartSeed", PFF_CLASSID, &PFF_PartSeed));
+  PetscCall(PetscLogEventRegister("PartBin", PFF_CLASSID, &PFF_PartBin));
+  PetscCall(PetscLogEventRegister("PartMigrate", PFF_CLASSID, &PFF_PartMigrate));
+  PetscCall(PetscLogEventRegister("P2G", PFF_CLASSID, &PFF_P2G));
+  PetscCall(PetscLogEventRegister("G2P", PFF_CLASSID, &PFF_G2P));
+  PetscCall(PetscLogEventRegister("Advect", PFF_CLASSID, &PFF_Advect));
+  PetscCall(PetscLogEventRegister("PressSetUp", PFF_CLASSID, &PFF_PressSetUp));
+  PetscCall(PetscLogEventRegister("PressAssemble", PFF_CLASSID, &PFF_PressAssemble));
+  PetscCall(PetscLogEventRegister("PressSolve", PFF_CLASSID, &PFF_PressSolve));
+  PetscCall(PetscLogEventRegister("PhaseField", PFF_CLASSID, &PFF_PhaseField));
+  PetscCall(PetscLogEventRegister("Forces", PFF_CLASSID, &PFF_Forces));
+  PetscCall(PetscLogEventRegister("CkptWrite", PFF_CLASSID, &PFF_CkptWrite));
+  PetscCall(PetscLogEventRegister("CkptRead", PFF_CLASSID, &PFF_CkptRead));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -275,6 +275,7 @@ PetscErrorCode PffGridDestroy(PffGrid *grid)
   PetscCall(PetscFree(g->morton));
   PetscCall(PetscFree(g->order));
   PetscCall(PetscFree(g->offset));
+  PetscCall(PetscFree(g->rankCellStart));
   PetscCall(PetscFree(g->local));
   PetscCall(PetscFree(g->lgid));
   PetscCall(PetscFree(g->loff));
@@ -362,6 +363,22 @@ PetscErrorCode PffGridGetLocalIndex(PffGrid g, PetscInt gid, PetscInt *lb)
   PetscFunctionBeginUser;
   PetscCall(PffGridCheckSetUp(g));
   *lb = (gid >= 0 && gid < g->nblocks) ? g->local[gid] : -1;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffGridGetCellNumbering(PffGrid g, PetscInt gid, PetscInt64 *first, PetscInt64 *nowned,
+                                       PetscInt64 *rstart, PetscInt64 *ntotal)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffGridCheckSetUp(g));
+  if (first) {
+    PetscCheck(gid >= 0 && gid < g->nblocks && g->level[gid] >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+               "block %" PetscInt_FMT " is not an active block", gid);
+    *first = g->rankCellStart[g->owner[gid]] + g->offset[gid];
+  }
+  if (nowned) *nowned = g->ncells;
+  if (rstart) *rstart = g->rankCellStart[g->rank];
+  if (ntotal) *ntotal = g->rankCellStart[g->size];
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -60,12 +60,13 @@ struct _n_PffGrid {
 
   /* replicated raster */
   PetscInt     nb[3], nblocks, nactive;
-  PetscInt    *level;  /* [nblocks], -1 inactive */
-  PetscMPIInt *owner;  /* [nblocks], -1 inactive */
-  uint64_t    *morton; /* [nblocks] */
-  PetscInt    *order;  /* [nactive] active blocks by Morton key */
-  PetscInt64  *offset; /* [nblocks] cell offset of the block in its owner's storage */
-  PetscInt    *local;  /* [nblocks] local index on this rank or -1 */
+  PetscInt    *level;         /* [nblocks], -1 inactive */
+  PetscMPIInt *owner;         /* [nblocks], -1 inactive */
+  uint64_t    *morton;        /* [nblocks] */
+  PetscInt    *order;         /* [nactive] active blocks by Morton key */
+  PetscInt64  *offset;        /* [nblocks] cell offset of the block in its owner's storage */
+  PetscInt64  *rankCellStart; /* [size + 1] global number of the first cell of each rank */
+  PetscInt    *local;         /* [nblocks] local index on this rank or -1 */
 
   /* owned blocks, Morton order */
   PetscInt    nlocal;

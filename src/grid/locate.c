@@ -52,6 +52,58 @@ PetscErrorCode PffGridLocate(PffGrid g, const PetscReal x[3], PetscInt *gid, Pet
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Trilinear interpolation at block-index position sp (finest-cell units) on the lattice of local
+   block lb, whose 27 views reach width cells beyond it. */
+static PetscReal PffInterpolateInBlock(PffGrid g, const PffChannel *c, PetscInt lb, const PetscReal sp[3],
+                                       PetscInt comp)
+{
+  const PetscInt gid = g->lgid[lb], level = g->level[gid], n = g->n0 >> level;
+  const PetscInt holes = g->lholes[lb]; /* bit r: region r is a wall or inactive */
+  const PffView *views = &c->views[(lb * c->ncomp + comp) * 27];
+  PetscInt       ijk[3], i0[3], i1[3], side[3];
+  PetscReal      t[3], o[3];
+  PetscBool      clamp[3][2] = {{PETSC_FALSE, PETSC_FALSE}, {PETSC_FALSE, PETSC_FALSE}, {PETSC_FALSE, PETSC_FALSE}};
+
+  PffGridBlockIJK_Private(g, gid, ijk);
+  for (int a = 0; a < 3; a++) {
+    o[a]              = PffChannelOffset_Private(c->kind, comp, a);
+    const PetscReal s = (sp[a] - (PetscReal)(ijk[a] * g->n0)) / (PetscReal)((PetscInt)1 << level) - o[a];
+    i0[a]             = (PetscInt)PetscFloorReal(s);
+    t[a]              = s - (PetscReal)i0[a];
+    i1[a]             = i0[a] + 1;
+    side[a]           = i0[a] < 0 ? -1 : (i1[a] >= n ? 1 : 0);
+  }
+  /* each hole region the stencil reaches clamps every axis it steps across (face, edge or corner) */
+  for (int q = 1; q < 8; q++) {
+    PetscInt r = 13;
+    for (int a = 0, m = 1; a < 3; a++, m *= 3)
+      if ((q >> a) & 1) r += side[a] * m;
+    if (r == 13 || !((holes >> r) & 1)) continue;
+    for (int a = 0; a < 3; a++)
+      if (((q >> a) & 1) && side[a]) clamp[a][side[a] > 0] = PETSC_TRUE;
+  }
+  for (int a = 0; a < 3; a++) {
+    /* constant extrapolation to the last cell; a staggered component keeps its wall face (index n) */
+    if (i0[a] < 0 && clamp[a][0]) {
+      i0[a] = 0;
+      if (i1[a] < 0) i1[a] = 0;
+      t[a] = 0;
+    }
+    if (i1[a] >= n && clamp[a][1] && !(o[a] == 0.0 && i1[a] == n)) {
+      i1[a] = n - 1;
+      if (i0[a] > n - 1) i0[a] = n - 1;
+      if (i0[a] == i1[a]) t[a] = 0;
+    }
+  }
+  PetscReal v = 0;
+  for (int q = 0; q < 8; q++) {
+    const PetscInt  ii = (q & 1) ? i1[0] : i0[0], jj = (q & 2) ? i1[1] : i0[1], kk = (q & 4) ? i1[2] : i0[2];
+    const PetscReal w = ((q & 1) ? t[0] : 1 - t[0]) * ((q & 2) ? t[1] : 1 - t[1]) * ((q & 4) ? t[2] : 1 - t[2]);
+    if (w != 0) v += w * (PetscReal)*PffViewsAt(views, ii, jj, kk, n);
+  }
+  return v;
+}
+
 PetscErrorCode PffGridInterpolate(PffGrid g, PetscInt ch, PetscInt np, const PetscReal x[], PetscReal val[])
 {
   PffChannel *c = NULL;
@@ -60,59 +112,50 @@ PetscErrorCode PffGridInterpolate(PffGrid g, PetscInt ch, PetscInt np, const Pet
   PetscCall(PffGridGetChannel_Private(g, ch, &c));
   PetscCall(PetscLogEventBegin(PFF_GridInterp, 0, 0, 0, 0));
   for (PetscInt p = 0; p < np; p++) {
-    PetscInt  gid, level = 0, lb;
+    PetscInt  gid, lb;
     PetscReal sp[3];
     for (int d = 0; d < 3; d++) sp[d] = PffIndexCoord(g, x[3 * p + d], d);
-    PffLocateIndex(g, sp, &gid, &level, NULL);
+    PffLocateIndex(g, sp, &gid, NULL, NULL);
     lb = gid >= 0 ? g->local[gid] : -1;
     PetscCheck(lb >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
                "point (%g, %g, %g) is not in a block owned by this rank", (double)x[3 * p], (double)x[3 * p + 1],
                (double)x[3 * p + 2]);
-    const PetscInt n = g->n0 >> level, holes = g->lholes[lb]; /* bit r: region r is a wall or inactive */
+    for (PetscInt comp = 0; comp < c->ncomp; comp++)
+      val[p * c->ncomp + comp] = PffInterpolateInBlock(g, c, lb, sp, comp);
+  }
+  PetscCall(PetscLogEventEnd(PFF_GridInterp, 0, 0, 0, 0));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffGridInterpolateFrom(PffGrid g, PetscInt ch, PetscInt np, const PetscReal x[], const PetscInt lb[],
+                                      PetscReal val[])
+{
+  PffChannel *c = NULL;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetChannel_Private(g, ch, &c));
+  PetscCall(PetscLogEventBegin(PFF_GridInterp, 0, 0, 0, 0));
+  for (PetscInt p = 0; p < np; p++) {
+    PetscCheck(lb[p] >= 0 && lb[p] < g->nlocal, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+               "local block %" PetscInt_FMT " of point %" PetscInt_FMT " is not owned by this rank", lb[p], p);
+    const PetscInt gid = g->lgid[lb[p]], level = g->level[gid];
     PetscInt       ijk[3];
+    PetscReal      sp[3];
     PffGridBlockIJK_Private(g, gid, ijk);
-    for (PetscInt comp = 0; comp < c->ncomp; comp++) {
-      const PffView *views = &c->views[(lb * c->ncomp + comp) * 27];
-      PetscInt       i0[3], i1[3], side[3];
-      PetscReal      t[3], o[3];
-      PetscBool      clamp[3][2] = {{PETSC_FALSE, PETSC_FALSE}, {PETSC_FALSE, PETSC_FALSE}, {PETSC_FALSE, PETSC_FALSE}};
-      for (int a = 0; a < 3; a++) {
-        o[a]              = PffChannelOffset_Private(c->kind, comp, a);
-        const PetscReal s = (sp[a] - (PetscReal)(ijk[a] * g->n0)) / (PetscReal)((PetscInt)1 << level) - o[a];
-        i0[a]             = (PetscInt)PetscFloorReal(s);
-        t[a]              = s - (PetscReal)i0[a];
-        i1[a]             = i0[a] + 1;
-        side[a]           = i0[a] < 0 ? -1 : (i1[a] >= n ? 1 : 0);
+    for (int d = 0; d < 3; d++) {
+      sp[d] = (x[3 * p + d] - g->origin[d]) / g->h0;
+      if (g->periodic[d]) { /* the periodic image nearest to the block's centre */
+        const PetscReal L = (PetscReal)g->cells[d], centre = (PetscReal)(ijk[d] * g->n0) + 0.5 * (PetscReal)g->n0;
+        sp[d] -= L * PetscFloorReal((sp[d] - centre) / L + 0.5);
       }
-      /* each hole region the stencil reaches clamps every axis it steps across (face, edge or corner) */
-      for (int q = 1; q < 8; q++) {
-        PetscInt r = 13;
-        for (int a = 0, m = 1; a < 3; a++, m *= 3)
-          if ((q >> a) & 1) r += side[a] * m;
-        if (r == 13 || !((holes >> r) & 1)) continue;
-        for (int a = 0; a < 3; a++)
-          if (((q >> a) & 1) && side[a]) clamp[a][side[a] > 0] = PETSC_TRUE;
-      }
-      for (int a = 0; a < 3; a++) {
-        /* constant extrapolation to the last cell; a staggered component keeps its wall face (index n) */
-        if (i0[a] < 0 && clamp[a][0]) {
-          i0[a] = 0;
-          t[a]  = 0;
-        }
-        if (i1[a] >= n && clamp[a][1] && !(o[a] == 0.0 && i1[a] == n)) {
-          i1[a] = n - 1;
-          if (i0[a] > n - 1) i0[a] = n - 1;
-          if (i0[a] == i1[a]) t[a] = 0;
-        }
-      }
-      PetscReal v = 0;
-      for (int q = 0; q < 8; q++) {
-        const PetscInt  ii = (q & 1) ? i1[0] : i0[0], jj = (q & 2) ? i1[1] : i0[1], kk = (q & 4) ? i1[2] : i0[2];
-        const PetscReal w = ((q & 1) ? t[0] : 1 - t[0]) * ((q & 2) ? t[1] : 1 - t[1]) * ((q & 4) ? t[2] : 1 - t[2]);
-        if (w != 0) v += w * (PetscReal)*PffViewsAt(views, ii, jj, kk, n);
-      }
-      val[p * c->ncomp + comp] = v;
+      const PetscReal reach = (PetscReal)((c->width - 1) << level), lo = (PetscReal)(ijk[d] * g->n0);
+      PetscCheck(
+          sp[d] >= lo - reach && sp[d] <= lo + (PetscReal)g->n0 + reach, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+          "point %" PetscInt_FMT " lies %g cells outside its block, beyond the halo of channel %s", p,
+          (double)(PetscMax(lo - sp[d], sp[d] - lo - (PetscReal)g->n0) / (PetscReal)((PetscInt)1 << level)), c->name);
     }
+    for (PetscInt comp = 0; comp < c->ncomp; comp++)
+      val[p * c->ncomp + comp] = PffInterpolateInBlock(g, c, lb[p], sp, comp);
   }
   PetscCall(PetscLogEventEnd(PFF_GridInterp, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);

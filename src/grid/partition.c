@@ -121,6 +121,10 @@ PetscErrorCode PffGridPartition_Private(PffGrid g)
     if (g->owner[gid] == g->rank) g->nlocal++;
   }
   g->ncells = next[g->rank];
+  PetscCall(PetscFree(g->rankCellStart));
+  PetscCall(PetscMalloc1(g->size + 1, &g->rankCellStart));
+  g->rankCellStart[0] = 0;
+  for (PetscMPIInt r = 0; r < g->size; r++) g->rankCellStart[r + 1] = g->rankCellStart[r] + next[r];
   PetscCall(PetscFree(next));
   PetscCall(PetscFree(g->lgid));
   PetscCall(PetscFree(g->loff));

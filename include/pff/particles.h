@@ -1,0 +1,105 @@
+/* particles: the FLIP particle store (structure of arrays), seeding, binning by block, migration,
+   P2G splatting (PF-FLIP Eq. 3-6), G2P transfer (Eq. 11-12) and RK3 advection (Sec. 3.7).
+   Particles are owned by the rank that owns the block containing them. */
+#pragma once
+
+#include <pff/grid.h>
+
+typedef struct _n_PffParticles *PffParticles;
+
+/* Particle type, fixed for the life of a particle (it sets the mass, Eq. 5). */
+typedef enum { PFF_PARTICLE_LIQUID, PFF_PARTICLE_AIR, PFF_PARTICLE_NTYPES } PffParticleType;
+PETSC_EXTERN const char *const PffParticleTypes[];
+
+/* Flag bits of PffParticleArrays.flags. */
+#define PFF_PARTICLE_FLAG_DROPLET 0x1 /* liquid particle found in air (Sec. 3.4): droplet candidate */
+
+#define PFF_PARTICLES_PER_AXIS 2 /* 2 x 2 x 2 = 8 particles per cell at seeding */
+
+/* The arrays of the n particles on this rank; borrowed, valid until the next call that adds,
+   removes or moves particles (Seed, Migrate, Remove, Advect). After PffParticlesBin (and after
+   Seed and Migrate, which bin) the particles of local block lb are [start[lb], start[lb + 1]). */
+typedef struct {
+  PetscInt        n;
+  PetscReal      *x;     /* [3n] position */
+  PetscReal      *v;     /* [3n] velocity */
+  uint64_t       *id;    /* [n] unique, deterministic: the same scene gives the same ids on any rank count */
+  uint8_t        *type;  /* [n] PffParticleType */
+  int8_t         *level; /* [n] particle level l_p: radius r_p = h0 * 2^l_p, volume V_p = 8^l_p */
+  uint8_t        *flags; /* [n] PFF_PARTICLE_FLAG_* */
+  const PetscInt *start; /* [nlocal + 1] block bins */
+} PffParticleArrays;
+
+/* Seeding callback: type of the particle at x (PFF_PARTICLE_LIQUID, PFF_PARTICLE_AIR, or -1 for no
+   particle, e.g. inside a solid) and its initial velocity v. Must be deterministic. */
+typedef PetscErrorCode (*PffSeedFn)(const PetscReal x[3], PetscInt *type, PetscReal v[3], void *ctx);
+
+/* Signed distance to the solid boundary, negative inside a solid; grad receives its gradient. */
+typedef PetscReal (*PffSolidFn)(const PetscReal x[3], PetscReal grad[3], void *ctx);
+
+/* Counters of one PffParticlesMigrate/Advect call, summed over ranks. */
+typedef struct {
+  PetscInt64 sent;     /* particles that changed rank */
+  PetscInt64 wrapped;  /* particles moved across a periodic boundary */
+  PetscInt64 clamped;  /* particles pulled back inside a wall */
+  PetscInt64 pushed;   /* particles pushed out of a solid */
+  PetscInt   substeps; /* maximum RK3 sub-steps of any particle (Advect only) */
+} PffParticleStats;
+
+/* Life cycle. Create borrows grid (it must outlive the particles and be set up). SetFromOptions reads
+   -particles_jitter j   jitter of the seeding lattice as a fraction of the sub-cell spacing, [0, 1] (default 1)
+   -particles_seed s     key of the counter-based RNG (default 0)
+   -particles_substep_cfl c  cells a particle may move per RK3 sub-step (default 1) */
+PETSC_EXTERN PetscErrorCode PffParticlesCreate(PffGrid grid, PffParticles *p);
+PETSC_EXTERN PetscErrorCode PffParticlesSetFromOptions(PffParticles p);
+PETSC_EXTERN PetscErrorCode PffParticlesDestroy(PffParticles *p);
+
+/* Seeds 2 x 2 x 2 jittered particles per cell of every owned block at the block's level (particle
+   level = block level), asking fn for type and velocity. Ids come from the global cell and sub-cell
+   index, jitter from a counter-based RNG keyed by (seed, id): identical on any rank count. Collective. */
+PETSC_EXTERN PetscErrorCode PffParticlesSeed(PffParticles p, PffSeedFn fn, void *ctx);
+PETSC_EXTERN PetscErrorCode PffParticlesGetArrays(PffParticles p, PffParticleArrays *a);
+/* Counting sort of the local particles by owned block (every particle must lie in an owned block). */
+PETSC_EXTERN PetscErrorCode PffParticlesBin(PffParticles p);
+/* Wraps periodic axes, clamps into walled axes, sends every particle to the owner of its block, bins.
+   Nothing is lost: a particle in an inactive block is an error. Collective. */
+PETSC_EXTERN PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats);
+/* Removes the particles with remove[i] true (keeps the order of the others, rebins). Not collective. */
+PETSC_EXTERN PetscErrorCode PffParticlesRemove(PffParticles p, const PetscBool remove[]);
+/* Global count and mass per type (mass = density[type] * particle volume). Collective. */
+PETSC_EXTERN PetscErrorCode PffParticlesGetTotals(PffParticles p, const PetscReal density[PFF_PARTICLE_NTYPES],
+                                                  PetscInt64 count[PFF_PARTICLE_NTYPES],
+                                                  PetscReal  mass[PFF_PARTICLE_NTYPES]);
+
+/* rho~_0: the kernel-weight sum at a face for the perfectly uniform lattice of 8 particles per cell
+   of unit volume (Eq. 7), for a particle at the grid's level. Computed once, independent of h. */
+PETSC_EXTERN PetscErrorCode PffParticlesGetKernelSum(PffParticles p, PetscReal *rho0);
+
+/* P2G (Eq. 3-6): zeroes the face channels chMass and chMom and accumulates
+     chMass[f] = sum_p w_fp m_p / 8^l_f,   chMom[f] = sum_p w_fp m_p v_p,d / 8^l_f
+   with w the cubic-in-r^2 kernel (Eq. 6) of radius r_p = h of the block the particle lies in, m_p =
+   density[type] * V_p and l_f the level of the face's block, so that a uniform lattice of one type
+   gives chMass = density * rho~_0 at every level. Splatting is lock-free by 8-colour blocks (OpenMP);
+   contributions to ghost faces are summed into their owners by the reverse halo. Collective. */
+PETSC_EXTERN PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTICLE_NTYPES],
+                                            PetscInt chMass, PetscInt chMom);
+
+/* G2P (Eq. 12): v_p <- alpha (v_p + I(du, x_p)) + (1 - alpha) I(u, x_p) with
+   alpha = alpha[type * nlevels + level of the block containing p]. Ghosts of chU and chDU must be
+   current. Not collective. */
+PETSC_EXTERN PetscErrorCode PffParticlesG2P(PffParticles p, PetscInt chU, PetscInt chDU, const PetscReal alpha[]);
+
+/* Advection through the face velocity channel chU (ghosts current, halo width >= 2) over dt with
+   third-order Runge-Kutta, each particle taking its own sub-steps so that no stage moves it more than
+   -particles_substep_cfl cells; velocity samples may reach into the halo of the particle's block.
+   Afterwards particles inside a solid (solid != NULL) are pushed out along the distance gradient,
+   and the particles are migrated. Collective. */
+PETSC_EXTERN PetscErrorCode PffParticlesAdvect(PffParticles p, PetscInt chU, PetscReal dt, PffSolidFn solid,
+                                               void *solidctx, PffParticleStats *stats);
+
+/* Appends m particles (copied) anywhere in the domain, ids chosen by the caller; call
+   PffParticlesMigrate next to send them to their owners and bin them. For restart and tests.
+   Not collective. */
+PETSC_EXTERN PetscErrorCode PffParticlesAdd(PffParticles p, PetscInt m, const PetscReal x[], const PetscReal v[],
+                                            const uint64_t id[], const uint8_t type[], const int8_t level[],
+                                            const uint8_t flags[]);

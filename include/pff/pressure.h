@@ -1,0 +1,69 @@
+/* pressure: the two-phase pressure projection (PF-FLIP Eq. 8-10) on the multiresolution grid.
+
+   Discretisation. The unknowns are cell pressures, numbered globally rank by rank, owned blocks in
+   Morton order, cells x fastest. The face unknowns are the faces a face channel stores: component d
+   of a cell is its lower d-face. A face f has an area A_f, a centre distance d_f and one cell or a
+   set of cells with weights on each side:
+     same level       one cell each side, d_f = h, A_f = h^2;
+     fine above coarse the fine cell's lower face, lower side = the coarse cell, d_f = Delta_g 2h, A_f = h^2;
+     coarse above fine the coarse cell's lower face, lower side = the 4 fine cells (weight 1/4 each),
+                       d_f = Delta_g 2h_fine, A_f = (2h_fine)^2;  Delta_g = 3/4 (Losasso 2004, Fig. 9c).
+   The gradient is (G p)_f = (p_upper - p_lower) / d_f and the volume-weighted divergence is its
+   adjoint, V D u = -G^T M u with M_f = A_f d_f, so the operator
+     A = G^T diag(M_f beta_f open_f) G
+   is symmetric positive semi-definite (definite when some boundary is open or the null space is
+   removed) and equals the textbook 7-point stencil on a uniform grid. Faces with open_f = 0 (domain
+   walls, solids) carry no flux; periodic axes wrap.
+
+   The operator sits behind a small interface (apply, diagonal, face coefficients per level) so that
+   the custom multigrid (its own module, later) can replace the assembled matrix as a PCSHELL. */
+#pragma once
+
+#include <pff/grid.h>
+#include <petscksp.h>
+
+typedef struct _n_PffPressure *PffPressure;
+
+#define PFF_PRESSURE_DELTA_G 0.75
+
+/* Per-solve statistics. */
+typedef struct {
+  PetscInt           its;   /* Krylov iterations */
+  PetscReal          rnorm; /* final residual norm (relative to the rhs norm) */
+  KSPConvergedReason reason;
+  PetscReal          divBefore; /* max |div u| (1/s) before the projection */
+  PetscReal          divAfter;  /* max |div u| after it (should be at the solver tolerance) */
+  PetscLogDouble     setupTime, solveTime;
+} PffPressureStats;
+
+/* Life cycle. Create borrows grid (set up). SetFromOptions reads the KSP with options prefix
+   "pressure_": -pressure_ksp_type (default fcg), -pressure_ksp_rtol (default 1e-4), -pressure_pc_type
+   gamg|hypre|bjacobi|jacobi (default gamg), and every other PETSc KSP/PC option under that prefix. */
+PETSC_EXTERN PetscErrorCode PffPressureCreate(PffGrid grid, PffPressure *ps);
+PETSC_EXTERN PetscErrorCode PffPressureSetFromOptions(PffPressure ps);
+/* Builds the numbering, the face list and the gradient once per grid topology. Collective. */
+PETSC_EXTERN PetscErrorCode PffPressureSetUp(PffPressure ps);
+PETSC_EXTERN PetscErrorCode PffPressureDestroy(PffPressure *ps);
+
+/* Face coefficients from face channels: chBeta = 1/rho (Eq. 9), chOpen = 1 for a fluid face and 0
+   for a face in or on a solid (domain walls are closed regardless). Re-assembles the operator.
+   Collective. */
+PETSC_EXTERN PetscErrorCode PffPressureSetCoefficients(PffPressure ps, PetscInt chBeta, PetscInt chOpen);
+
+/* Projection (Eq. 8): solves  dt A p = -V (D u* + c_div)  and sets u <- u* - dt beta G p on
+   the open faces of face channel chU (closed faces are set to zero), p into cell channel chP.
+   chCdiv (cell channel, or -1) holds the volume-correction term c_div in 1/s. Where no boundary is
+   open the constant null space is removed. The previous p is the initial guess. Collective. */
+PETSC_EXTERN PetscErrorCode PffPressureProject(PffPressure ps, PetscInt chU, PetscReal dt, PetscInt chCdiv,
+                                               PetscInt chP, PffPressureStats *stats);
+
+/* Max |D u| over owned cells of face channel chU (1/s), for checks and the step log. Collective. */
+PETSC_EXTERN PetscErrorCode PffPressureMaxDivergence(PffPressure ps, PetscInt chU, PetscReal *maxdiv);
+
+/* The operator interface for preconditioners (borrowed objects, valid until the next
+   SetCoefficients): the assembled A (MATMPIAIJ, without the dt factor), its diagonal, and the face
+   coefficients M_f beta_f open_f / d_f of the owned faces as a Vec in face numbering (3 per cell). */
+PETSC_EXTERN PetscErrorCode PffPressureGetOperator(PffPressure ps, Mat *A);
+PETSC_EXTERN PetscErrorCode PffPressureGetDiagonal(PffPressure ps, Vec *diag);
+PETSC_EXTERN PetscErrorCode PffPressureGetFaceCoefficients(PffPressure ps, Vec *coef);
+PETSC_EXTERN PetscErrorCode PffPressureGetKSP(PffPressure ps, KSP *ksp);
