@@ -11,5 +11,6 @@
 #include <pff/grid.h>
 #include <pff/particles.h>
 #include <pff/pressure.h>
+#include <pff/flow.h>
 #include <pff/io.h>
 #include <pff/scene.h>

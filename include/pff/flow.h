@@ -1,0 +1,68 @@
+/* flow: the PF-FLIP time step (PF-FLIP paper Sec. 3): P2G, phase field, forces, two-phase pressure
+   projection, G2P with viscosity through the FLIP ratio, RK3 advection, escaped particles. It owns
+   the particles and the pressure solver of one grid and the grid channels it needs. */
+#pragma once
+
+#include <pff/particles.h>
+#include <pff/pressure.h>
+
+typedef struct _n_PffFlow *PffFlow;
+
+/* Defaults, named after their options. */
+#define PFF_FLOW_CFL_DEFAULT 1.0       /* -flow_cfl, at most 4 */
+#define PFF_FLOW_ALPHA_PHI_DEFAULT 1.0 /* -flow_alpha_phi (Eq. 7) */
+#define PFF_FLOW_DELTA_PHI_DEFAULT 0.2 /* -flow_delta_phi (Sec. 3.4) */
+#define PFF_FLOW_FLIP_DEFAULT 0.99     /* -flow_flip: FLIP ratio where no viscosity is given */
+#define PFF_FLOW_VOLCORR_DEFAULT 0.2   /* -flow_volume_correction kappa of c_div */
+
+/* Prescribed face velocity (e.g. the shear benchmark): component comp at x and time t. */
+typedef PetscReal (*PffVelocityFn)(const PetscReal x[3], PetscInt comp, PetscReal t, void *ctx);
+
+/* What one step did; the scene prints it in the progress line. */
+typedef struct {
+  PetscReal        dt, cfl; /* time step and the CFL number it realised (max |u| dt / h0) */
+  PetscReal        umax;    /* max particle speed at the start of the step */
+  PetscInt64       particles;
+  PetscInt64       bubblesDeleted, dropletCandidates; /* escaped particles this step (Sec. 3.4) */
+  PffPressureStats pressure;                          /* its = 0 when the solve is off */
+  PffParticleStats advect;
+  PetscLogDouble   stageTime[8]; /* wall seconds per stage, see PffFlowStageNames */
+} PffFlowStepStats;
+
+#define PFF_FLOW_NSTAGES 7
+PETSC_EXTERN const char *const PffFlowStageNames[]; /* P2G, PhaseField, Forces, Pressure, G2P, Advect, Escaped */
+
+/* Life cycle. Create borrows the grid; call before PffGridSetUp (the flow adds its channels in
+   SetFromOptions) or after it. SetFromOptions reads
+   -rho_liquid, -rho_gas (> 0), -nu_liquid, -nu_gas (>= 0; 0 = no physical viscosity: FLIP ratio -flow_flip),
+   -gravity gx,gy,gz, -flow_cfl (0, 4], -flow_dt_max, -flow_alpha_phi (> 0), -flow_delta_phi [0, 0.5),
+   -flow_flip [0, 1], -flow_pressure (bool, default true), -flow_volume_correction [0, 1],
+   -flow_delete_bubbles (bool, default true), and the particle and pressure options. */
+PETSC_EXTERN PetscErrorCode PffFlowCreate(PffGrid grid, PffFlow *flow);
+PETSC_EXTERN PetscErrorCode PffFlowSetFromOptions(PffFlow flow);
+/* Static solids (signed distance, negative inside); faces inside are closed. Before SetUp. */
+PETSC_EXTERN PetscErrorCode PffFlowSetSolid(PffFlow flow, PffSolidFn fn, void *ctx);
+/* A prescribed velocity field instead of P2G/forces/pressure/G2P: particles are only transported
+   (and the phase field is computed on demand). Before SetUp. */
+PETSC_EXTERN PetscErrorCode PffFlowSetPrescribedVelocity(PffFlow flow, PffVelocityFn fn, void *ctx);
+/* Allocates channels, particle store and pressure solver (the grid must be set up). Collective. */
+PETSC_EXTERN PetscErrorCode PffFlowSetUp(PffFlow flow);
+PETSC_EXTERN PetscErrorCode PffFlowDestroy(PffFlow *flow);
+
+/* Seeds the particles (see PffParticlesSeed) and computes the initial phase field. Collective. */
+PETSC_EXTERN PetscErrorCode PffFlowSeed(PffFlow flow, PffSeedFn fn, void *ctx);
+/* Advances one step of at most dtmax (the scene passes the time to its next output). Collective. */
+PETSC_EXTERN PetscErrorCode PffFlowStep(PffFlow flow, PetscReal dtmax, PffFlowStepStats *stats);
+/* Recomputes the phase field (cell and face), density and, with vorticity, the vorticity magnitude
+   from the current particles, e.g. before output or an error measurement. Collective. */
+PETSC_EXTERN PetscErrorCode PffFlowUpdateFields(PffFlow flow, PetscBool vorticity);
+
+PETSC_EXTERN PetscErrorCode PffFlowGetTime(PffFlow flow, PetscReal *t, PetscInt *step);
+PETSC_EXTERN PetscErrorCode PffFlowSetTime(PffFlow flow, PetscReal t, PetscInt step);
+PETSC_EXTERN PetscErrorCode PffFlowGetParticles(PffFlow flow, PffParticles *p);
+PETSC_EXTERN PetscErrorCode PffFlowGetGrid(PffFlow flow, PffGrid *grid);
+PETSC_EXTERN PetscErrorCode PffFlowGetDensities(PffFlow flow, PetscReal rho[PFF_PARTICLE_NTYPES]);
+/* Channel indices: phi (cell), p (cell), u (face), vort (cell vorticity magnitude). */
+PETSC_EXTERN PetscErrorCode PffFlowGetChannels(PffFlow flow, PetscInt *phi, PetscInt *p, PetscInt *u, PetscInt *vort);
+/* Max |u| over owned faces and the liquid volume sum(phi_cell V_cell). Collective. */
+PETSC_EXTERN PetscErrorCode PffFlowGetDiagnostics(PffFlow flow, PetscReal *umax, PetscReal *liquidVolume);

@@ -1,0 +1,224 @@
+/* Face-velocity fields of the step: u~* = P / m after P2G (Eq. 4), forces, the velocity change
+   du = u - u~* for FLIP (Eq. 11), open faces from walls and solids, the FLIP ratios per particle
+   type and level (Eq. 13, Sec. 5.3), escaped particles (Sec. 3.4) and vorticity for output. */
+#include "flowimpl.h"
+
+/* Position of the lower comp-face (or the centre, comp < 0) of cell (i, j, k) of a block. */
+static inline void PffFacePosition(const PffBlockInfo *info, PetscInt i, PetscInt j, PetscInt k, PetscInt comp,
+                                   PetscReal x[3])
+{
+  const PetscInt ijk[3] = {i, j, k};
+  for (int a = 0; a < 3; a++) x[a] = info->lo[a] + info->h * ((PetscReal)ijk[a] + (a == comp ? 0.0 : 0.5));
+}
+
+PetscErrorCode PffFlowOpenFaces_Private(PffFlow f)
+{
+  PetscInt  nlocal;
+  PetscBool periodic[3];
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetSizes(f->grid, NULL, NULL, NULL, NULL, periodic));
+  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+    const PetscInt n = info.n;
+    for (PetscInt d = 0; d < 3; d++) {
+      float *open;
+      PetscCall(PffGridGetBlockData(f->grid, f->chOpen, lb, d, &open));
+      for (PetscInt k = 0; k < n; k++)
+        for (PetscInt j = 0; j < n; j++)
+          for (PetscInt i = 0; i < n; i++) {
+            const PetscInt idx[3] = {i, j, k};
+            PetscReal      x[3], g[3];
+            PetscBool      isopen = PETSC_TRUE;
+            /* the lower domain wall; the upper one is a ghost across the wall, zero by construction */
+            if (!periodic[d] && info.ijk[d] == 0 && idx[d] == 0) isopen = PETSC_FALSE;
+            if (isopen && f->solid) {
+              PffFacePosition(&info, i, j, k, d, x);
+              isopen = f->solid(x, g, f->solidCtx) > 0 ? PETSC_TRUE : PETSC_FALSE;
+            }
+            open[i + n * (j + n * k)] = isopen ? 1.0f : 0.0f;
+          }
+    }
+  }
+  PetscCall(PffGridHaloBegin(f->grid, f->chOpen));
+  PetscCall(PffGridHaloEnd(f->grid, f->chOpen));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* u~* = P / m into chUt (in place) and u* = u~* + dt g into chU on open faces. */
+PetscErrorCode PffFlowFaceVelocity_Private(PffFlow f, PetscReal dt)
+{
+  PetscInt nlocal;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+    const PetscInt n3 = info.n * info.n * info.n;
+    for (PetscInt d = 0; d < 3; d++) {
+      float *m, *ut, *u, *open;
+      PetscCall(PffGridGetBlockData(f->grid, f->chMass, lb, d, &m));
+      PetscCall(PffGridGetBlockData(f->grid, f->chUt, lb, d, &ut));
+      PetscCall(PffGridGetBlockData(f->grid, f->chU, lb, d, &u));
+      PetscCall(PffGridGetBlockData(f->grid, f->chOpen, lb, d, &open));
+      const float gd = (float)(dt * f->gravity[d]);
+      for (PetscInt c = 0; c < n3; c++) {
+        ut[c] = m[c] > 0 ? ut[c] / m[c] : 0.0f;
+        u[c]  = open[c] > 0 ? ut[c] + gd : 0.0f;
+      }
+    }
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* du = u - u~* into chUt (in place). */
+PetscErrorCode PffFlowVelocityChange_Private(PffFlow f)
+{
+  PetscInt nlocal;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+    const PetscInt n3 = info.n * info.n * info.n;
+    for (PetscInt d = 0; d < 3; d++) {
+      float *ut, *u;
+      PetscCall(PffGridGetBlockData(f->grid, f->chUt, lb, d, &ut));
+      PetscCall(PffGridGetBlockData(f->grid, f->chU, lb, d, &u));
+      for (PetscInt c = 0; c < n3; c++) ut[c] = u[c] - ut[c];
+    }
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+typedef struct {
+  PffFlow   f;
+  PetscReal t;
+} PffPrescribeCtx;
+
+static PetscReal PffPrescribedValue(const PetscReal x[3], PetscInt comp, void *ctx)
+{
+  const PffPrescribeCtx *pc = (const PffPrescribeCtx *)ctx;
+  return pc->f->prescribed(x, comp, pc->t, pc->f->prescribedCtx);
+}
+
+PetscErrorCode PffFlowPrescribe_Private(PffFlow f, PetscReal t)
+{
+  PffPrescribeCtx pc = {f, t};
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridFillChannel(f->grid, f->chU, PffPrescribedValue, &pc));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Vorticity magnitude at cell centres from central differences of the cell-centred velocity
+   (mean of the two faces), using the halo of chU. */
+PetscErrorCode PffFlowVorticity_Private(PffFlow f)
+{
+  PetscInt nlocal;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo   info;
+    const PffView *vu[3];
+    float         *w;
+    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+    PetscCall(PffGridGetBlockData(f->grid, f->chVort, lb, 0, &w));
+    for (PetscInt d = 0; d < 3; d++) PetscCall(PffGridGetBlockViews(f->grid, f->chU, lb, d, &vu[d]));
+    const PetscInt  n   = info.n;
+    const PetscReal inv = 1.0 / (2 * info.h);
+    for (PetscInt k = 0; k < n; k++)
+      for (PetscInt j = 0; j < n; j++)
+        for (PetscInt i = 0; i < n; i++) {
+          PetscReal du[3][3]; /* du[c][a] = d u_c / d x_a */
+          for (PetscInt c = 0; c < 3; c++)
+            for (PetscInt a = 0; a < 3; a++) {
+              const PetscInt e[3] = {c == 0, c == 1, c == 2}, s[3] = {a == 0, a == 1, a == 2};
+              if (a == c) {
+                du[c][a] = 0;
+                continue;
+              }
+              const PetscReal up = 0.5 * (*PffViewsAt(vu[c], i + s[0], j + s[1], k + s[2], n) +
+                                          *PffViewsAt(vu[c], i + s[0] + e[0], j + s[1] + e[1], k + s[2] + e[2], n));
+              const PetscReal dn = 0.5 * (*PffViewsAt(vu[c], i - s[0], j - s[1], k - s[2], n) +
+                                          *PffViewsAt(vu[c], i - s[0] + e[0], j - s[1] + e[1], k - s[2] + e[2], n));
+              du[c][a]           = (up - dn) * inv;
+            }
+          const PetscReal ox = du[2][1] - du[1][2], oy = du[0][2] - du[2][0], oz = du[1][0] - du[0][1];
+          w[i + n * (j + n * k)] = (float)PetscSqrtReal(ox * ox + oy * oy + oz * oz);
+        }
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* FLIP ratio per type and level (Eq. 13): with a physical viscosity nu, alpha = 1 - 6 nu dt / h_l^2;
+   without one, the numerical viscosity of -flow_flip at the finest level is kept equal on every
+   level (Sec. 5.3): alpha_l = 1 - (1 - flip) / 4^l. Clamped to [0, 1]. */
+PetscErrorCode PffFlowFlipRatios_Private(PffFlow f, PetscReal dt, PetscReal alpha[])
+{
+  PetscInt  nlevels;
+  PetscReal h0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetSizes(f->grid, NULL, &nlevels, NULL, &h0, NULL));
+  for (PetscInt t = 0; t < PFF_PARTICLE_NTYPES; t++)
+    for (PetscInt l = 0; l < nlevels; l++) {
+      const PetscReal h      = h0 * (PetscReal)((PetscInt)1 << l);
+      PetscReal       a      = f->nu[t] > 0 ? 1 - 6 * f->nu[t] * dt / (h * h) : 1 - (1 - f->flip) / (h * h / (h0 * h0));
+      alpha[t * nlevels + l] = PetscMax(0, PetscMin(1, a));
+    }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Escaped particles (Sec. 3.4): air deep in liquid is deleted (bubbles), liquid deep in air is
+   flagged as a droplet candidate. Reads the cell phase field (ghosts current). */
+PetscErrorCode PffFlowEscaped_Private(PffFlow f, PetscInt64 *bubbles, PetscInt64 *droplets)
+{
+  PffParticleArrays a;
+  PetscInt64        cnt[2] = {0, 0};
+  PetscBool        *remove;
+  PetscReal        *phi;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffParticlesGetArrays(f->part, &a));
+  PetscCall(PetscMalloc2(a.n, &remove, a.n, &phi));
+  PetscCall(PffGridInterpolate(f->grid, f->chPhi, a.n, a.x, phi));
+  for (PetscInt i = 0; i < a.n; i++) {
+    remove[i] = PETSC_FALSE;
+    if (a.type[i] == PFF_PARTICLE_AIR && phi[i] > 0.5 + f->deltaPhi) {
+      remove[i] = f->deleteBubbles;
+      cnt[0]++;
+    } else if (a.type[i] == PFF_PARTICLE_LIQUID && phi[i] < 0.5 - f->deltaPhi) {
+      a.flags[i] |= PFF_PARTICLE_FLAG_DROPLET;
+      cnt[1]++;
+    } else
+      a.flags[i] &= (uint8_t)~PFF_PARTICLE_FLAG_DROPLET;
+  }
+  if (f->deleteBubbles && cnt[0]) PetscCall(PffParticlesRemove(f->part, remove));
+  PetscCall(PetscFree2(remove, phi));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, cnt, 2, MPIU_INT64, MPI_SUM, f->comm));
+  *bubbles  = cnt[0];
+  *droplets = cnt[1];
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowMaxParticleSpeed_Private(PffFlow f, PetscReal *umax)
+{
+  PffParticleArrays a;
+  PetscReal         m = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffParticlesGetArrays(f->part, &a));
+  for (PetscInt i = 0; i < a.n; i++) {
+    const PetscReal s = a.v[3 * i] * a.v[3 * i] + a.v[3 * i + 1] * a.v[3 * i + 1] + a.v[3 * i + 2] * a.v[3 * i + 2];
+    m                 = PetscMax(m, s);
+  }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &m, 1, MPIU_REAL, MPI_MAX, f->comm));
+  *umax = PetscSqrtReal(m);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}

@@ -1,0 +1,207 @@
+/* PffFlow life cycle and options. */
+#include "flowimpl.h"
+
+const char *const PffFlowStageNames[] = {"P2G", "PhaseField", "Forces", "Pressure", "G2P", "Advect", "Escaped", NULL};
+
+PetscErrorCode PffFlowCreate(PffGrid grid, PffFlow *flow)
+{
+  PffFlow f;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffInitializePackage());
+  PetscCall(PetscNew(&f));
+  PetscCall(PffGridGetComm(grid, &f->comm));
+  f->grid                     = grid;
+  f->rho[PFF_PARTICLE_LIQUID] = 1000;
+  f->rho[PFF_PARTICLE_AIR]    = 1;
+  f->gravity[1]               = -9.81;
+  f->cfl                      = PFF_FLOW_CFL_DEFAULT;
+  f->dtMax                    = PETSC_MAX_REAL;
+  f->alphaPhi                 = PFF_FLOW_ALPHA_PHI_DEFAULT;
+  f->deltaPhi                 = PFF_FLOW_DELTA_PHI_DEFAULT;
+  f->flip                     = PFF_FLOW_FLIP_DEFAULT;
+  f->volCorr                  = PFF_FLOW_VOLCORR_DEFAULT;
+  f->usePressure              = PETSC_TRUE;
+  f->deleteBubbles            = PETSC_TRUE;
+  f->chMass = f->chUt = f->chU = f->chPhiF = f->chBeta = f->chOpen = f->chPhi = f->chP = f->chCdiv = f->chVort = -1;
+  PetscCall(PffParticlesCreate(grid, &f->part));
+  PetscCall(PffPressureCreate(grid, &f->press));
+  *flow = f;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowSetFromOptions(PffFlow f)
+{
+  PetscInt  ng = 3;
+  PetscBool set;
+
+  PetscFunctionBeginUser;
+  PetscOptionsBegin(f->comm, NULL, "PF-FLIP flow", "PffFlow");
+  PetscCall(
+      PetscOptionsReal("-rho_liquid", "Liquid density rho_l", "PffFlowSetFromOptions", f->rho[0], &f->rho[0], NULL));
+  PetscCall(PetscOptionsReal("-rho_gas", "Gas density rho_g", "PffFlowSetFromOptions", f->rho[1], &f->rho[1], NULL));
+  PetscCall(PetscOptionsReal("-nu_liquid", "Liquid kinematic viscosity (0: none, FLIP ratio -flow_flip)",
+                             "PffFlowSetFromOptions", f->nu[0], &f->nu[0], NULL));
+  PetscCall(PetscOptionsReal("-nu_gas", "Gas kinematic viscosity (0: none)", "PffFlowSetFromOptions", f->nu[1],
+                             &f->nu[1], NULL));
+  PetscCall(
+      PetscOptionsRealArray("-gravity", "Gravity vector gx,gy,gz", "PffFlowSetFromOptions", f->gravity, &ng, &set));
+  PetscCheck(!set || ng == 3, f->comm, PETSC_ERR_ARG_SIZ, "-gravity takes 3 values gx,gy,gz; got %" PetscInt_FMT, ng);
+  PetscCall(PetscOptionsReal("-flow_cfl", "CFL number of the time step (0, 4]", "PffFlowSetFromOptions", f->cfl,
+                             &f->cfl, NULL));
+  PetscCall(PetscOptionsReal("-flow_dt_max", "Largest time step", "PffFlowSetFromOptions", f->dtMax, &f->dtMax, NULL));
+  PetscCall(PetscOptionsReal("-flow_alpha_phi", "Phase-field stiffness alpha_phi (Eq. 7)", "PffFlowSetFromOptions",
+                             f->alphaPhi, &f->alphaPhi, NULL));
+  PetscCall(PetscOptionsReal("-flow_delta_phi", "Escaped-particle margin delta_phi (Sec. 3.4)", "PffFlowSetFromOptions",
+                             f->deltaPhi, &f->deltaPhi, NULL));
+  PetscCall(PetscOptionsReal("-flow_flip", "FLIP ratio alpha where no viscosity is given", "PffFlowSetFromOptions",
+                             f->flip, &f->flip, NULL));
+  PetscCall(PetscOptionsBool("-flow_pressure", "Solve the pressure projection", "PffFlowSetFromOptions", f->usePressure,
+                             &f->usePressure, NULL));
+  PetscCall(PetscOptionsReal("-flow_volume_correction", "Volume-correction gain kappa of c_div",
+                             "PffFlowSetFromOptions", f->volCorr, &f->volCorr, NULL));
+  PetscCall(PetscOptionsBool("-flow_delete_bubbles", "Delete escaped air particles deep in liquid (Sec. 3.4)",
+                             "PffFlowSetFromOptions", f->deleteBubbles, &f->deleteBubbles, NULL));
+  PetscOptionsEnd();
+  for (int t = 0; t < PFF_PARTICLE_NTYPES; t++) {
+    const char *key = t == PFF_PARTICLE_LIQUID ? "liquid" : "gas";
+    PetscCheck(f->rho[t] > 0 && PetscIsNormalReal(f->rho[t]), f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+               "-rho_%s %g is invalid: must be positive", key, (double)f->rho[t]);
+    PetscCheck(f->nu[t] >= 0, f->comm, PETSC_ERR_ARG_OUTOFRANGE, "-nu_%s %g is invalid: must be >= 0", key,
+               (double)f->nu[t]);
+  }
+  PetscCheck(
+      f->rho[0] > f->rho[1], f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+      "-rho_liquid %g is invalid: must exceed -rho_gas %g (the phase field separates a heavy phase from a light one)",
+      (double)f->rho[0], (double)f->rho[1]);
+  PetscCheck(f->cfl > 0 && f->cfl <= 4, f->comm, PETSC_ERR_ARG_OUTOFRANGE, "-flow_cfl %g is invalid: must be in (0, 4]",
+             (double)f->cfl);
+  PetscCheck(f->dtMax > 0, f->comm, PETSC_ERR_ARG_OUTOFRANGE, "-flow_dt_max %g is invalid: must be positive",
+             (double)f->dtMax);
+  PetscCheck(f->alphaPhi > 0, f->comm, PETSC_ERR_ARG_OUTOFRANGE, "-flow_alpha_phi %g is invalid: must be positive",
+             (double)f->alphaPhi);
+  PetscCheck(f->deltaPhi >= 0 && f->deltaPhi < 0.5, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-flow_delta_phi %g is invalid: must be in [0, 0.5)", (double)f->deltaPhi);
+  PetscCheck(f->flip >= 0 && f->flip <= 1, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-flow_flip %g is invalid: must be in [0, 1]", (double)f->flip);
+  PetscCheck(f->volCorr >= 0 && f->volCorr <= 1, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-flow_volume_correction %g is invalid: must be in [0, 1]", (double)f->volCorr);
+  PetscCall(PffParticlesSetFromOptions(f->part));
+  PetscCall(PffPressureSetFromOptions(f->press));
+  /* the advection stages read velocity up to ceil(CFL) cells beyond a particle's block */
+  f->uWidth = PetscMin(PFF_GRID_MAX_WIDTH, PetscMax(2, (PetscInt)PetscCeilReal(f->cfl) + 1));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowSetSolid(PffFlow f, PffSolidFn fn, void *ctx)
+{
+  PetscFunctionBeginUser;
+  f->solid    = fn;
+  f->solidCtx = ctx;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowSetPrescribedVelocity(PffFlow f, PffVelocityFn fn, void *ctx)
+{
+  PetscFunctionBeginUser;
+  f->prescribed    = fn;
+  f->prescribedCtx = ctx;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowSetUp(PffFlow f)
+{
+  PetscInt n0, nlevels, width = f->uWidth;
+
+  PetscFunctionBeginUser;
+  if (f->setupcalled) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PffGridGetSizes(f->grid, &n0, &nlevels, NULL, NULL, NULL));
+  /* the halo may not exceed the coarsest block */
+  width = PetscMin(width, n0 >> (nlevels - 1));
+  PetscCheck(width >= 2, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-grid_levels %" PetscInt_FMT " is invalid with -grid_block_size %" PetscInt_FMT
+             " for the flow: the coarsest blocks need at least 2 cells per axis",
+             nlevels, n0);
+  f->uWidth = width;
+  PetscCall(PffGridAddChannel(f->grid, "mass", PFF_CHANNEL_FACE, 1, &f->chMass));
+  PetscCall(PffGridAddChannel(f->grid, "ut", PFF_CHANNEL_FACE, 1, &f->chUt));
+  PetscCall(PffGridAddChannel(f->grid, "velocity", PFF_CHANNEL_FACE, width, &f->chU));
+  PetscCall(PffGridAddChannel(f->grid, "phi_face", PFF_CHANNEL_FACE, 1, &f->chPhiF));
+  PetscCall(PffGridAddChannel(f->grid, "beta", PFF_CHANNEL_FACE, 1, &f->chBeta));
+  PetscCall(PffGridAddChannel(f->grid, "open", PFF_CHANNEL_FACE, 1, &f->chOpen));
+  PetscCall(PffGridAddChannel(f->grid, "phi", PFF_CHANNEL_CELL, 1, &f->chPhi));
+  PetscCall(PffGridAddChannel(f->grid, "p", PFF_CHANNEL_CELL, 1, &f->chP));
+  PetscCall(PffGridAddChannel(f->grid, "cdiv", PFF_CHANNEL_CELL, 1, &f->chCdiv));
+  PetscCall(PffGridAddChannel(f->grid, "vorticity", PFF_CHANNEL_CELL, 1, &f->chVort));
+  PetscCall(PffParticlesGetKernelSum(f->part, &f->rho0));
+  PetscCall(PffFlowOpenFaces_Private(f));
+  if (!f->prescribed && f->usePressure) PetscCall(PffPressureSetUp(f->press));
+  f->setupcalled = PETSC_TRUE;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowDestroy(PffFlow *flow)
+{
+  PetscFunctionBeginUser;
+  if (!flow || !*flow) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PffParticlesDestroy(&(*flow)->part));
+  PetscCall(PffPressureDestroy(&(*flow)->press));
+  PetscCall(PetscFree(*flow));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowSeed(PffFlow f, PffSeedFn fn, void *ctx)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(f->setupcalled, f->comm, PETSC_ERR_ORDER, "PffFlowSetUp() must come before PffFlowSeed()");
+  PetscCall(PffParticlesSeed(f->part, fn, ctx));
+  PetscCall(PffFlowUpdateFields(f, PETSC_FALSE));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowGetTime(PffFlow f, PetscReal *t, PetscInt *step)
+{
+  PetscFunctionBeginUser;
+  if (t) *t = f->t;
+  if (step) *step = f->step;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowSetTime(PffFlow f, PetscReal t, PetscInt step)
+{
+  PetscFunctionBeginUser;
+  f->t    = t;
+  f->step = step;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowGetParticles(PffFlow f, PffParticles *p)
+{
+  PetscFunctionBeginUser;
+  *p = f->part;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowGetGrid(PffFlow f, PffGrid *grid)
+{
+  PetscFunctionBeginUser;
+  *grid = f->grid;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowGetDensities(PffFlow f, PetscReal rho[PFF_PARTICLE_NTYPES])
+{
+  PetscFunctionBeginUser;
+  for (int t = 0; t < PFF_PARTICLE_NTYPES; t++) rho[t] = f->rho[t];
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowGetChannels(PffFlow f, PetscInt *phi, PetscInt *p, PetscInt *u, PetscInt *vort)
+{
+  PetscFunctionBeginUser;
+  if (phi) *phi = f->chPhi;
+  if (p) *p = f->chP;
+  if (u) *u = f->chU;
+  if (vort) *vort = f->chVort;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}

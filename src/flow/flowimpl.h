@@ -1,0 +1,44 @@
+/* Private state of PffFlow; only src/flow/ includes this. */
+#pragma once
+
+#include <pff.h>
+#include <pff/flow.h>
+
+struct _n_PffFlow {
+  MPI_Comm     comm;
+  PffGrid      grid;
+  PffParticles part;
+  PffPressure  press;
+  PetscBool    setupcalled;
+
+  /* physics and numerics */
+  PetscReal rho[PFF_PARTICLE_NTYPES], nu[PFF_PARTICLE_NTYPES], gravity[3];
+  PetscReal cfl, dtMax, alphaPhi, deltaPhi, flip, volCorr;
+  PetscBool usePressure, deleteBubbles;
+  PetscReal rho0; /* kernel sum rho~_0 (Eq. 7) */
+
+  PffSolidFn    solid;
+  void         *solidCtx;
+  PffVelocityFn prescribed;
+  void         *prescribedCtx;
+
+  /* channels */
+  PetscInt chMass, chUt, chU, chPhiF, chBeta, chOpen, chPhi, chP, chCdiv, chVort;
+  PetscInt uWidth;
+
+  PetscReal t, dtPrev;
+  PetscInt  step;
+};
+
+/* phase.c */
+PETSC_INTERN PetscErrorCode PffFlowPhaseField_Private(PffFlow);
+PETSC_INTERN PetscErrorCode PffFlowVolumeCorrection_Private(PffFlow, PetscReal dt);
+/* fields.c */
+PETSC_INTERN PetscErrorCode PffFlowFaceVelocity_Private(PffFlow, PetscReal dt);
+PETSC_INTERN PetscErrorCode PffFlowOpenFaces_Private(PffFlow);
+PETSC_INTERN PetscErrorCode PffFlowPrescribe_Private(PffFlow, PetscReal t);
+PETSC_INTERN PetscErrorCode PffFlowVelocityChange_Private(PffFlow);
+PETSC_INTERN PetscErrorCode PffFlowVorticity_Private(PffFlow);
+PETSC_INTERN PetscErrorCode PffFlowFlipRatios_Private(PffFlow, PetscReal dt, PetscReal alpha[]);
+PETSC_INTERN PetscErrorCode PffFlowEscaped_Private(PffFlow, PetscInt64 *bubbles, PetscInt64 *droplets);
+PETSC_INTERN PetscErrorCode PffFlowMaxParticleSpeed_Private(PffFlow, PetscReal *umax);

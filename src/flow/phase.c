@@ -1,0 +1,145 @@
+/* Phase field (PF-FLIP Sec. 3.3, Eq. 7) from the raw face densities of P2G, cell tags, face
+   densities and coefficients (Eq. 9), and the volume-correction term c_div of Eq. 8.
+
+   chMass holds rho~ normalised so that a uniform lattice of liquid particles gives rho_l rho~_0
+   (see PffParticlesP2G); Eq. 7 is then applied literally with rho~_min = eta_phi rho_g rho~_0 and
+   eta_phi = log(rho_l / rho_g). A cell's phase value is the mean over its open faces; cells below
+   1/2 are air. Faces between two liquid cells get phi = 1, between two air cells phi = 0. */
+#include "flowimpl.h"
+
+static inline PetscReal PffPhi(PetscReal rt, PetscReal rtmin, PetscReal scale)
+{
+  if (rt < rtmin) return 0;
+  return PetscMin(PetscSqrtReal(PetscMax(rt - rtmin, 0) / scale), 1.0);
+}
+
+/* face phi from the raw density; then the cell mean over open faces */
+static PetscErrorCode PffFlowRawPhase(PffFlow f, PetscInt nlocal)
+{
+  const PetscReal eta = PetscLogReal(f->rho[0] / f->rho[1]), rtmin = eta * f->rho[1] * f->rho0,
+                  scale = f->alphaPhi * f->rho0 * f->rho[0];
+
+  PetscFunctionBeginUser;
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+    const PetscInt n3 = info.n * info.n * info.n;
+    for (PetscInt d = 0; d < 3; d++) {
+      float *m, *phi;
+      PetscCall(PffGridGetBlockData(f->grid, f->chMass, lb, d, &m));
+      PetscCall(PffGridGetBlockData(f->grid, f->chPhiF, lb, d, &phi));
+      for (PetscInt c = 0; c < n3; c++) phi[c] = (float)PffPhi(m[c], rtmin, scale);
+    }
+  }
+  PetscCall(PffGridHaloBegin(f->grid, f->chPhiF));
+  PetscCall(PffGridHaloEnd(f->grid, f->chPhiF));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo   info;
+    const PffView *vphi[3], *vopen[3];
+    float         *cell;
+    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+    PetscCall(PffGridGetBlockData(f->grid, f->chPhi, lb, 0, &cell));
+    for (PetscInt d = 0; d < 3; d++) {
+      PetscCall(PffGridGetBlockViews(f->grid, f->chPhiF, lb, d, &vphi[d]));
+      PetscCall(PffGridGetBlockViews(f->grid, f->chOpen, lb, d, &vopen[d]));
+    }
+    const PetscInt n = info.n;
+    for (PetscInt k = 0; k < n; k++)
+      for (PetscInt j = 0; j < n; j++)
+        for (PetscInt i = 0; i < n; i++) {
+          PetscReal sum = 0, w = 0, all = 0;
+          for (PetscInt d = 0; d < 3; d++) {
+            const PetscInt  e[3] = {d == 0, d == 1, d == 2};
+            const PetscReal lo   = *PffViewsAt(vphi[d], i, j, k, n),
+                            hi   = *PffViewsAt(vphi[d], i + e[0], j + e[1], k + e[2], n);
+            const PetscReal olo  = *PffViewsAt(vopen[d], i, j, k, n);
+            const PetscReal ohi  = *PffViewsAt(vopen[d], i + e[0], j + e[1], k + e[2], n);
+            sum += olo * lo + ohi * hi;
+            w += olo + ohi;
+            all += lo + hi;
+          }
+          /* a cell with every face closed (inside a solid) keeps the plain mean */
+          cell[i + n * (j + n * k)] = (float)(w > 0 ? sum / w : all / 6);
+        }
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowPhaseField_Private(PffFlow f)
+{
+  PetscInt nlocal;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscLogEventBegin(PFF_PhaseField, 0, 0, 0, 0));
+  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  PetscCall(PffFlowRawPhase(f, nlocal));
+  PetscCall(PffGridHaloBegin(f->grid, f->chPhi));
+  PetscCall(PffGridHaloEnd(f->grid, f->chPhi));
+  /* tags clean the face values away from the interface; density and beta follow (Eq. 9) */
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo   info;
+    const PffView *vcell;
+    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+    PetscCall(PffGridGetBlockViews(f->grid, f->chPhi, lb, 0, &vcell));
+    const PetscInt n = info.n;
+    for (PetscInt d = 0; d < 3; d++) {
+      float *phi, *beta, *open;
+      PetscCall(PffGridGetBlockData(f->grid, f->chPhiF, lb, d, &phi));
+      PetscCall(PffGridGetBlockData(f->grid, f->chBeta, lb, d, &beta));
+      PetscCall(PffGridGetBlockData(f->grid, f->chOpen, lb, d, &open));
+      for (PetscInt k = 0; k < n; k++)
+        for (PetscInt j = 0; j < n; j++)
+          for (PetscInt i = 0; i < n; i++) {
+            const PetscInt  c    = i + n * (j + n * k);
+            const PetscBool mine = *PffViewsAt(vcell, i, j, k, n) >= 0.5;
+            /* across a closed face (wall, solid) the other side is not fluid: use this cell's tag */
+            const PetscBool other =
+                open[c] > 0 ? *PffViewsAt(vcell, i - (d == 0), j - (d == 1), k - (d == 2), n) >= 0.5 : mine;
+            if (mine && other)
+              phi[c] = 1;
+            else if (!mine && !other)
+              phi[c] = 0;
+            beta[c] = (float)(1.0 / (f->rho[1] + (PetscReal)phi[c] * (f->rho[0] - f->rho[1])));
+          }
+    }
+  }
+  PetscCall(PetscLogEventEnd(PFF_PhaseField, 0, 0, 0, 0));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* c_div (Eq. 8, after Losasso et al. 2008): where a cell lies inside one phase (all its lower faces
+   have phi 1, or all 0), the raw density over its target rho rho~_0 measures how compressed the
+   particles are; c_div = -kappa max(ratio - 1, 0) / dt makes the projection spread them again. */
+PetscErrorCode PffFlowVolumeCorrection_Private(PffFlow f, PetscReal dt)
+{
+  PetscInt nlocal;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo info;
+    float       *cdiv, *m[3], *phi[3];
+    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+    PetscCall(PffGridGetBlockData(f->grid, f->chCdiv, lb, 0, &cdiv));
+    for (PetscInt d = 0; d < 3; d++) {
+      PetscCall(PffGridGetBlockData(f->grid, f->chMass, lb, d, &m[d]));
+      PetscCall(PffGridGetBlockData(f->grid, f->chPhiF, lb, d, &phi[d]));
+    }
+    const PetscInt n3 = info.n * info.n * info.n;
+    for (PetscInt c = 0; c < n3; c++) {
+      const PetscReal s = (PetscReal)(phi[0][c] + phi[1][c] + phi[2][c]);
+      PetscReal       target;
+      if (s == 3)
+        target = f->rho[0] * f->rho0;
+      else if (s == 0)
+        target = f->rho[1] * f->rho0;
+      else {
+        cdiv[c] = 0;
+        continue;
+      }
+      const PetscReal ratio = (PetscReal)(m[0][c] + m[1][c] + m[2][c]) / (3 * target);
+      cdiv[c]               = (float)(-f->volCorr * PetscMax(ratio - 1, 0) / dt);
+    }
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}

@@ -1,0 +1,196 @@
+/* One PF-FLIP time step (DESIGN.md §4): P2G, phase field, forces, pressure, G2P, escaped particles,
+   advection. Each stage is a PETSc log stage and is timed for the run summary. */
+#include "flowimpl.h"
+
+static PetscLogStage PffFlowStages[PFF_FLOW_NSTAGES];
+static PetscBool     PffFlowStagesRegistered = PETSC_FALSE;
+
+static PetscErrorCode PffFlowRegisterStages(void)
+{
+  PetscFunctionBeginUser;
+  if (PffFlowStagesRegistered) PetscFunctionReturn(PETSC_SUCCESS);
+  for (PetscInt s = 0; s < PFF_FLOW_NSTAGES; s++)
+    PetscCall(PetscLogStageRegister(PffFlowStageNames[s], &PffFlowStages[s]));
+  PffFlowStagesRegistered = PETSC_TRUE;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+enum {
+  PFF_STAGE_P2G,
+  PFF_STAGE_PHASE,
+  PFF_STAGE_FORCES,
+  PFF_STAGE_PRESSURE,
+  PFF_STAGE_G2P,
+  PFF_STAGE_ADVECT,
+  PFF_STAGE_ESCAPED
+};
+
+static PetscErrorCode PffStageBegin(PetscInt s, PetscLogDouble *t0)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscLogStagePush(PffFlowStages[s]));
+  PetscCall(PetscTime(t0));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffStageEnd(PffFlowStepStats *st, PetscInt s, PetscLogDouble t0)
+{
+  PetscLogDouble t1;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscTime(&t1));
+  st->stageTime[s] += t1 - t0;
+  PetscCall(PetscLogStagePop());
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The phase field and density from the particles: P2G of mass (and momentum) and Eq. 7. */
+static PetscErrorCode PffFlowTransfer(PffFlow f, PffFlowStepStats *st)
+{
+  PetscLogDouble t0 = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffStageBegin(PFF_STAGE_P2G, &t0));
+  PetscCall(PffParticlesP2G(f->part, f->rho, f->chMass, f->chUt));
+  PetscCall(PffStageEnd(st, PFF_STAGE_P2G, t0));
+  PetscCall(PffStageBegin(PFF_STAGE_PHASE, &t0));
+  PetscCall(PffFlowPhaseField_Private(f));
+  PetscCall(PffStageEnd(st, PFF_STAGE_PHASE, t0));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowUpdateFields(PffFlow f, PetscBool vorticity)
+{
+  PffFlowStepStats st;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffFlowRegisterStages());
+  PetscCall(PetscMemzero(&st, sizeof(st)));
+  PetscCall(PffFlowTransfer(f, &st));
+  if (vorticity) {
+    PetscCall(PffGridHaloBegin(f->grid, f->chU));
+    PetscCall(PffGridHaloEnd(f->grid, f->chU));
+    PetscCall(PffFlowVorticity_Private(f));
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* dt from the CFL number on the finest cells, the growth of velocity under gravity over one step,
+   and (with a physical viscosity) the explicit limit of Eq. 13 that keeps alpha >= 0 on the finest level. */
+static PetscErrorCode PffFlowChooseDt(PffFlow f, PetscReal umax, PetscReal dtmax, PetscReal *dt)
+{
+  PetscReal h0, g = 0, numax = PetscMax(f->nu[0], f->nu[1]), d = PETSC_MAX_REAL;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetSizes(f->grid, NULL, NULL, NULL, &h0, NULL));
+  for (int a = 0; a < 3; a++) g += f->gravity[a] * f->gravity[a];
+  g = PetscSqrtReal(g);
+  if (umax > 0) d = f->cfl * h0 / umax;
+  if (g > 0 && !f->prescribed) d = PetscMin(d, PetscSqrtReal(f->cfl * h0 / g));
+  if (numax > 0 && !f->prescribed) d = PetscMin(d, h0 * h0 / (6 * numax));
+  d = PetscMin(d, PetscMin(f->dtMax, dtmax));
+  PetscCheck(d > 0 && d < PETSC_MAX_REAL, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "no finite time step: the flow is at rest with no gravity; set -flow_dt_max");
+  *dt = d;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
+{
+  PetscLogDouble t0 = 0;
+  PetscReal      umax = 0, dt = 0, h0, alpha[PFF_PARTICLE_NTYPES * PFF_GRID_MAX_LEVELS];
+  PetscInt64     count[PFF_PARTICLE_NTYPES];
+  PetscReal      mass[PFF_PARTICLE_NTYPES];
+
+  PetscFunctionBeginUser;
+  PetscCheck(f->setupcalled, f->comm, PETSC_ERR_ORDER, "PffFlowSetUp() must come before PffFlowStep()");
+  PetscCall(PffFlowRegisterStages());
+  PetscCall(PetscMemzero(st, sizeof(*st)));
+  PetscCall(PffGridGetSizes(f->grid, NULL, NULL, NULL, &h0, NULL));
+  if (f->prescribed) {
+    PetscCall(PffFlowPrescribe_Private(f, f->t));
+    PetscCall(PffFlowGetDiagnostics(f, &umax, NULL));
+  } else
+    PetscCall(PffFlowMaxParticleSpeed_Private(f, &umax));
+  PetscCall(PffFlowChooseDt(f, umax, dtmax, &dt));
+  st->dt   = dt;
+  st->umax = umax;
+  st->cfl  = umax * dt / h0;
+
+  if (f->prescribed) {
+    /* the field at mid-step: second order in time for the time-reversing benchmarks */
+    PetscCall(PffStageBegin(PFF_STAGE_FORCES, &t0));
+    PetscCall(PffFlowPrescribe_Private(f, f->t + 0.5 * dt));
+    PetscCall(PffGridHaloBegin(f->grid, f->chU));
+    PetscCall(PffGridHaloEnd(f->grid, f->chU));
+    PetscCall(PffStageEnd(st, PFF_STAGE_FORCES, t0));
+  } else {
+    PetscCall(PffFlowTransfer(f, st));
+
+    PetscCall(PffStageBegin(PFF_STAGE_FORCES, &t0));
+    PetscCall(PffFlowFaceVelocity_Private(f, dt));
+    PetscCall(PffFlowVolumeCorrection_Private(f, dt));
+    PetscCall(PffStageEnd(st, PFF_STAGE_FORCES, t0));
+
+    PetscCall(PffStageBegin(PFF_STAGE_PRESSURE, &t0));
+    if (f->usePressure) {
+      PetscCall(PffPressureSetCoefficients(f->press, f->chBeta, f->chOpen));
+      PetscCall(PffPressureProject(f->press, f->chU, dt, f->volCorr > 0 ? f->chCdiv : -1, f->chP, &st->pressure));
+    }
+    PetscCall(PffGridHaloBegin(f->grid, f->chU));
+    PetscCall(PffGridHaloEnd(f->grid, f->chU));
+    PetscCall(PffStageEnd(st, PFF_STAGE_PRESSURE, t0));
+
+    PetscCall(PffStageBegin(PFF_STAGE_G2P, &t0));
+    PetscCall(PffFlowVelocityChange_Private(f));
+    PetscCall(PffGridHaloBegin(f->grid, f->chUt));
+    PetscCall(PffGridHaloEnd(f->grid, f->chUt));
+    PetscCall(PffFlowFlipRatios_Private(f, dt, alpha));
+    PetscCall(PffParticlesG2P(f->part, f->chU, f->chUt, alpha));
+    PetscCall(PffStageEnd(st, PFF_STAGE_G2P, t0));
+
+    PetscCall(PffStageBegin(PFF_STAGE_ESCAPED, &t0));
+    PetscCall(PffFlowEscaped_Private(f, &st->bubblesDeleted, &st->dropletCandidates));
+    PetscCall(PffStageEnd(st, PFF_STAGE_ESCAPED, t0));
+  }
+
+  PetscCall(PffStageBegin(PFF_STAGE_ADVECT, &t0));
+  PetscCall(PffParticlesAdvect(f->part, f->chU, dt, f->solid, f->solidCtx, &st->advect));
+  PetscCall(PffStageEnd(st, PFF_STAGE_ADVECT, t0));
+
+  f->t += dt;
+  f->step++;
+  f->dtPrev = dt;
+  PetscCall(PffParticlesGetTotals(f->part, f->rho, count, mass));
+  st->particles = count[0] + count[1];
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowGetDiagnostics(PffFlow f, PetscReal *umax, PetscReal *liquidVolume)
+{
+  PetscInt  nlocal;
+  PetscReal loc[2] = {0, 0};
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo info;
+    float       *phi;
+    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+    const PetscInt n3 = info.n * info.n * info.n;
+    for (PetscInt d = 0; d < 3; d++) {
+      float *u;
+      PetscCall(PffGridGetBlockData(f->grid, f->chU, lb, d, &u));
+      for (PetscInt c = 0; c < n3; c++) loc[0] = PetscMax(loc[0], PetscAbsReal((PetscReal)u[c]));
+    }
+    PetscCall(PffGridGetBlockData(f->grid, f->chPhi, lb, 0, &phi));
+    PetscReal s = 0;
+    for (PetscInt c = 0; c < n3; c++) s += phi[c];
+    loc[1] += s * info.h * info.h * info.h;
+  }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &loc[0], 1, MPIU_REAL, MPI_MAX, f->comm));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &loc[1], 1, MPIU_REAL, MPI_SUM, f->comm));
+  if (umax) *umax = loc[0];
+  if (liquidVolume) *liquidVolume = loc[1];
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
