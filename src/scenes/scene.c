@@ -10,7 +10,9 @@ typedef struct {
 } PffSceneEntry;
 
 static const PffSceneEntry PffScenes[] = {
-    {"grid_demo", PffSceneCreate_GridDemo},
+    {"grid_demo", PffSceneCreate_GridDemo},       {"rt3d", PffSceneCreate_RT3D},
+    {"rt_paper", PffSceneCreate_RTPaper},         {"still_water", PffSceneCreate_StillWater},
+    {"shear_sphere", PffSceneCreate_ShearSphere},
 };
 
 PetscErrorCode PffSceneCreate(MPI_Comm comm, PffScene *scene)

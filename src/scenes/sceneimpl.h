@@ -18,3 +18,7 @@ struct _n_PffScene {
 };
 
 PETSC_INTERN PetscErrorCode PffSceneCreate_GridDemo(PffScene);
+PETSC_INTERN PetscErrorCode PffSceneCreate_RT3D(PffScene);
+PETSC_INTERN PetscErrorCode PffSceneCreate_RTPaper(PffScene);
+PETSC_INTERN PetscErrorCode PffSceneCreate_StillWater(PffScene);
+PETSC_INTERN PetscErrorCode PffSceneCreate_ShearSphere(PffScene);

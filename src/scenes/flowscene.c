@@ -1,0 +1,206 @@
+/* The fluid-scene driver: -sim_* options, the time loop, diagnostics CSV, frames and the run
+   summary with each stage's share of the step time. */
+#include "flowscene.h"
+
+PetscErrorCode PffFlowSceneDefault(const char key[], const char value[])
+{
+  PetscBool set;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscOptionsHasName(NULL, NULL, key, &set));
+  if (!set) PetscCall(PetscOptionsSetValue(NULL, key, value));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowSceneDefaultReal(const char key[], PetscReal value)
+{
+  char buf[64];
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscSNPrintf(buf, sizeof(buf), "%.17g", (double)value));
+  PetscCall(PffFlowSceneDefault(key, buf));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowSceneDomain(PffFlowScene *fs, PetscReal lo[3], PetscReal hi[3])
+{
+  PetscInt  nb[3], n0;
+  PetscReal h0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetRaster(fs->grid, nb, NULL, NULL));
+  PetscCall(PffGridGetSizes(fs->grid, &n0, NULL, lo, &h0, NULL));
+  for (int a = 0; a < 3; a++) hi[a] = lo[a] + h0 * (PetscReal)(nb[a] * n0);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffFlowSceneSetFromOptions(PffScene s)
+{
+  PffFlowScene *fs = (PffFlowScene *)s->data;
+
+  PetscFunctionBeginUser;
+  if (fs->ops.setfromoptions) PetscCall(fs->ops.setfromoptions(fs));
+  PetscOptionsBegin(s->comm, NULL, "Simulation run", "PffScene");
+  PetscCall(PetscOptionsReal(
+      "-sim_t_end", "End time (in the scene time unit: t0 = sqrt(W/g) for rt3d and rt_paper, seconds otherwise)", NULL,
+      fs->tEnd, &fs->tEnd, NULL));
+  PetscCall(PetscOptionsReal("-sim_output_interval",
+                             "Time between frames, in the scene time unit (0: first and last only)", NULL,
+                             fs->outputInterval, &fs->outputInterval, NULL));
+  PetscCall(PetscOptionsInt("-sim_max_steps", "Stop after this many steps (0: no limit)", NULL, fs->maxSteps,
+                            &fs->maxSteps, NULL));
+  PetscCall(PetscOptionsBool("-sim_frames", "Write HDF5 frames", NULL, fs->frames, &fs->frames, NULL));
+  PetscOptionsEnd();
+  PetscCheck(fs->tEnd > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-sim_t_end %g is invalid: must be positive",
+             (double)fs->tEnd);
+  PetscCheck(fs->outputInterval >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-sim_output_interval %g is invalid: must be >= 0", (double)fs->outputInterval);
+  PetscCheck(fs->maxSteps >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-sim_max_steps %" PetscInt_FMT " is invalid: must be >= 0", fs->maxSteps);
+  /* grid, flow and scene set-up are validated here, before the driver checks unused options */
+  PetscCall(PffGridCreate(s->comm, &fs->grid));
+  PetscCall(PffGridSetFromOptions(fs->grid));
+  PetscCall(PffFlowCreate(fs->grid, &fs->flow));
+  PetscCall(PffFlowSetFromOptions(fs->flow));
+  PetscCall(PffGridSetUp(fs->grid));
+  if (fs->ops.setup) PetscCall(fs->ops.setup(fs));
+  PetscCall(PffFlowSetUp(fs->flow));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffFlowSceneWriteFrame(PffFlowScene *fs, PetscInt frame)
+{
+  char      path[PETSC_MAX_PATH_LEN];
+  PetscReal t;
+  PetscInt  step;
+
+  PetscFunctionBeginUser;
+  if (!fs->frames) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PffFlowGetTime(fs->flow, &t, &step));
+  PetscCall(PffFlowUpdateFields(fs->flow, PETSC_TRUE));
+  PetscCall(PetscSNPrintf(path, sizeof(path), "%s/frame_%04" PetscInt_FMT ".h5", fs->scene->outdir, frame));
+  PetscCall(PffIOWriteFrame(fs->grid, path, t, step, fs->scene->name));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffFlowSceneDiagRow(PffFlowScene *fs, PetscInt step, PetscReal t, const PffFlowStepStats *st,
+                                          PetscLogDouble wall)
+{
+  PetscReal umaxGrid, vol;
+  char      extra[512] = "";
+
+  PetscFunctionBeginUser;
+  PetscCall(PffFlowGetDiagnostics(fs->flow, &umaxGrid, &vol));
+  if (fs->ops.diagnose) PetscCall(fs->ops.diagnose(fs, t, extra, sizeof(extra)));
+  if (fs->diag) {
+    fprintf(fs->diag,
+            "%" PetscInt_FMT ",%.9e,%.9e,%.6e,%.6e,%" PetscInt64_FMT ",%" PetscInt_FMT
+            ",%.3e,%.6e,%.9e,%" PetscInt64_FMT ",%" PetscInt64_FMT ",%.4e%s\n",
+            step, (double)t, (double)(t / fs->timeUnit), (double)st->dt, (double)st->cfl, st->particles,
+            st->pressure.its, (double)st->pressure.rnorm, (double)umaxGrid, (double)vol, st->bubblesDeleted,
+            st->dropletCandidates, (double)wall, extra);
+    fflush(fs->diag);
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffFlowSceneRun(PffScene s)
+{
+  PffFlowScene    *fs = (PffFlowScene *)s->data;
+  PffProgress      prog;
+  PffFlowStepStats st;
+  PetscMPIInt      rank;
+  PetscReal        t, tEnd = fs->tEnd * fs->timeUnit, every = fs->outputInterval * fs->timeUnit, nextOut;
+  PetscInt         step, frame = 0;
+  PetscLogDouble   total[PFF_FLOW_NSTAGES] = {0}, stepTime = 0, tstart, tnow;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+  PetscCall(PffGridView(fs->grid, NULL));
+  PetscCall(PffFlowSeed(fs->flow, fs->ops.seed, fs->ctx));
+  if (rank == 0) {
+    char path[PETSC_MAX_PATH_LEN];
+    PetscCall(PetscSNPrintf(path, sizeof(path), "%s/%s_diag.csv", s->outdir, s->name));
+    fs->diag = fopen(path, "w");
+    PetscCheck(fs->diag, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "-output_dir: cannot write %s", path);
+    fprintf(fs->diag,
+            "step,t,t_over_t0,dt,cfl,particles,ksp_its,ksp_rnorm,umax_grid,liquid_volume,bubbles_deleted,"
+            "droplet_candidates,wall_s%s\n",
+            fs->ops.diagHeader ? fs->ops.diagHeader : "");
+  }
+  PetscCall(PffFlowGetTime(fs->flow, &t, &step));
+  PetscCall(PetscMemzero(&st, sizeof(st)));
+  PetscCall(PffFlowSceneDiagRow(fs, step, t, &st, 0));
+  PetscCall(PffFlowSceneWriteFrame(fs, frame++));
+  nextOut = every > 0 ? t + every : tEnd;
+  PetscCall(PffProgressStart(&prog, tEnd, fs->maxSteps));
+  PetscCall(PetscTime(&tstart));
+  while (t < tEnd * (1 - 1e-12) && (!fs->maxSteps || step < fs->maxSteps)) {
+    PetscLogDouble t0, t1;
+    char           extra[256];
+    PetscCall(PetscTime(&t0));
+    PetscCall(PffFlowStep(fs->flow, PetscMin(nextOut, tEnd) - t, &st));
+    PetscCall(PetscTime(&t1));
+    PetscCall(PffFlowGetTime(fs->flow, &t, &step));
+    for (PetscInt k = 0; k < PFF_FLOW_NSTAGES; k++) total[k] += st.stageTime[k];
+    stepTime += t1 - t0;
+    PetscCall(PffFlowSceneDiagRow(fs, step, t - st.dt, &st, t1 - t0));
+    PetscCall(PetscSNPrintf(extra, sizeof(extra),
+                            "dt %.3e  CFL %.2f  particles %" PetscInt64_FMT "  ksp %" PetscInt_FMT
+                            " %.1e  bubbles %" PetscInt64_FMT "  droplets %" PetscInt64_FMT,
+                            (double)st.dt, (double)st.cfl, st.particles, st.pressure.its, (double)st.pressure.rnorm,
+                            st.bubblesDeleted, st.dropletCandidates));
+    PetscCall(PffProgressPrint(s->comm, &prog, step, t, extra));
+    if (t >= nextOut * (1 - 1e-12) || t >= tEnd * (1 - 1e-12)) {
+      PetscCall(PffFlowSceneWriteFrame(fs, frame++));
+      nextOut = every > 0 ? nextOut + every : tEnd;
+    }
+  }
+  PetscCall(PetscTime(&tnow));
+  PetscCall(PffFlowUpdateFields(fs->flow, PETSC_FALSE));
+  if (fs->ops.finish) PetscCall(fs->ops.finish(fs));
+  PetscCall(PetscPrintf(s->comm, "summary: %" PetscInt_FMT " steps  t %.6e  wall %.2f s  (%.3f s/step)\n", step,
+                        (double)t, tnow - tstart, step ? stepTime / (double)step : 0.0));
+  PetscCall(PetscPrintf(s->comm, "summary: stage shares of the step time (rank 0):"));
+  for (PetscInt k = 0; k < PFF_FLOW_NSTAGES; k++)
+    PetscCall(
+        PetscPrintf(s->comm, "  %s %.1f%%", PffFlowStageNames[k], stepTime > 0 ? 100 * total[k] / stepTime : 0.0));
+  PetscCall(PetscPrintf(s->comm, "\n"));
+  if (fs->diag) {
+    fclose(fs->diag);
+    fs->diag = NULL;
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffFlowSceneDestroy(PffScene s)
+{
+  PffFlowScene *fs = (PffFlowScene *)s->data;
+
+  PetscFunctionBeginUser;
+  if (fs->ops.destroy) PetscCall(fs->ops.destroy(fs));
+  PetscCall(PffFlowDestroy(&fs->flow));
+  PetscCall(PffGridDestroy(&fs->grid));
+  if (fs->diag) fclose(fs->diag);
+  PetscCall(PetscFree(s->data));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowSceneCreate_Private(PffScene s, const PffFlowSceneOps *ops, void *ctx)
+{
+  PffFlowScene *fs;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscNew(&fs));
+  fs->scene             = s;
+  fs->ops               = *ops;
+  fs->ctx               = ctx;
+  fs->tEnd              = 1;
+  fs->timeUnit          = 1;
+  fs->frames            = PETSC_TRUE;
+  s->data               = fs;
+  s->ops.setfromoptions = PffFlowSceneSetFromOptions;
+  s->ops.run            = PffFlowSceneRun;
+  s->ops.destroy        = PffFlowSceneDestroy;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}

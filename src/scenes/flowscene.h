@@ -1,0 +1,42 @@
+/* The shared driver of the fluid scenes: grid and flow set-up, the time loop with progress line and
+   per-step CSV diagnostics, frames, checkpoints and the run summary. A scene fills the hooks. */
+#pragma once
+
+#include "sceneimpl.h"
+
+typedef struct _PffFlowScene PffFlowScene;
+
+typedef struct {
+  /* set defaults of grid/flow options in the database (only where the user set none) and read the
+     scene's own options; called before the grid and flow read theirs */
+  PetscErrorCode (*setfromoptions)(PffFlowScene *);
+  /* after the grid is set up: the seeding function and anything else (solids, prescribed velocity) */
+  PetscErrorCode (*setup)(PffFlowScene *);
+  PffSeedFn seed;
+  /* extra CSV columns: header names (comma separated, leading comma) and one row's values */
+  const char *diagHeader;
+  PetscErrorCode (*diagnose)(PffFlowScene *, PetscReal t, char row[], size_t len);
+  /* after the last step: final measurements printed to stdout */
+  PetscErrorCode (*finish)(PffFlowScene *);
+  PetscErrorCode (*destroy)(PffFlowScene *);
+} PffFlowSceneOps;
+
+struct _PffFlowScene {
+  PffScene        scene;
+  PffGrid         grid;
+  PffFlow         flow;
+  PffFlowSceneOps ops;
+  void           *ctx; /* the scene's own data */
+
+  PetscReal tEnd, outputInterval, timeUnit;
+  PetscInt  maxSteps;
+  PetscBool frames;
+  FILE     *diag;
+};
+
+/* Sets option key to value when the user has not set it (scene defaults derived from physics). */
+PETSC_INTERN PetscErrorCode PffFlowSceneDefault(const char key[], const char value[]);
+PETSC_INTERN PetscErrorCode PffFlowSceneDefaultReal(const char key[], PetscReal value);
+PETSC_INTERN PetscErrorCode PffFlowSceneCreate_Private(PffScene, const PffFlowSceneOps *, void *ctx);
+/* Domain box of the grid. */
+PETSC_INTERN PetscErrorCode PffFlowSceneDomain(PffFlowScene *, PetscReal lo[3], PetscReal hi[3]);
