@@ -12,7 +12,7 @@ typedef struct {
 static const PffSceneEntry PffScenes[] = {
     {"grid_demo", PffSceneCreate_GridDemo},       {"rt3d", PffSceneCreate_RT3D},
     {"rt_paper", PffSceneCreate_RTPaper},         {"still_water", PffSceneCreate_StillWater},
-    {"shear_sphere", PffSceneCreate_ShearSphere},
+    {"shear_sphere", PffSceneCreate_ShearSphere}, {"fluid", PffSceneCreate_Fluid},
 };
 
 PetscErrorCode PffSceneCreate(MPI_Comm comm, PffScene *scene)

@@ -22,3 +22,4 @@ PETSC_INTERN PetscErrorCode PffSceneCreate_RT3D(PffScene);
 PETSC_INTERN PetscErrorCode PffSceneCreate_RTPaper(PffScene);
 PETSC_INTERN PetscErrorCode PffSceneCreate_StillWater(PffScene);
 PETSC_INTERN PetscErrorCode PffSceneCreate_ShearSphere(PffScene);
+PETSC_INTERN PetscErrorCode PffSceneCreate_Fluid(PffScene);
