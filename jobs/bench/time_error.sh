@@ -1,0 +1,55 @@
+#!/usr/bin/env bash
+# Run time against error (issue 3): rt3d at W = 16, 32, 64 cells and shear_sphere at 48^3, 100^3,
+# 200^3 (50^3 is not possible with power-of-two blocks; 48^3 stands in), on 2 ranks x 1 thread by
+# default. One CSV row per run in output/bench/time_error.csv:
+#   scene,cells,ranks,threads,steps,wall_s,error,inside_band
+# rt3d error = max |y/W - reference| over t/t0 <= 3 (De Rosis & Enan 2021, Table IX) and whether
+# the curve stays inside the band of the eight published models; shear error = the relative phi
+# error after 2 periods. Plots: time_error.png and rt3d_spike.png in the same directory.
+#   bash jobs/bench/time_error.sh                 all runs (about 2 hours on 2 cores)
+#   PFF_RT_SIZES="16 32" PFF_SHEAR_SIZES="48" bash jobs/bench/time_error.sh    a subset
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/../setup.sh"
+out=${PFF_BENCH_DIR:-$PFF_ROOT/output/bench}
+mkdir -p "$out"
+csv=$out/time_error.csv
+ranks=${PFF_RANKS:-2}
+threads=${OMP_NUM_THREADS:-1}
+export OMP_NUM_THREADS=$threads
+[ -f "$csv" ] || echo "scene,cells,ranks,threads,steps,wall_s,error,inside_band" >"$csv"
+py=/usr/bin/python3
+pfflip=$PFF_BUILD_DIR/bin/pfflip
+rev=$(git -C "$PFF_ROOT" describe --always --dirty)
+
+run() { # <log> <pfflip args...>: runs, returns "steps wall" from the summary line
+  local log=$1
+  shift
+  "${PFF_MPIEXEC[@]}" -n "$ranks" "$pfflip" "$@" -sim_frames false >"$log" 2>&1 || {
+    tail -n 20 "$log"
+    return 1
+  }
+  sed -n 's/^summary: \([0-9]*\) steps .* wall \([0-9.]*\) s.*/\1 \2/p' "$log"
+}
+
+spikes=()
+for W in ${PFF_RT_SIZES:-16 32 64}; do
+  dir=$out/rt3d_W$W
+  mkdir -p "$dir"
+  read -r steps wall < <(run "$dir/log.txt" -options_file_yaml "$PFF_ROOT/config/rt3d.yaml" -rt_resolution "$W" -output_dir "$dir")
+  line=$($py "$PFF_ROOT/postproc/rt_spike.py" "$dir/rt3d_diag.csv" -o "$dir/spike.png")
+  err=$(sed -n 's/.*max_dev=\([^ ]*\).*/\1/p' <<<"$line")
+  band=$(sed -n 's/.*inside_band=\([^ ]*\).*/\1/p' <<<"$line")
+  echo "rt3d,${W}x$((4 * W))x$W,$ranks,$threads,$steps,$wall,$err,$band" | tee -a "$csv"
+  echo "# rt3d W=$W $rev: $line" >>"$out/time_error.log"
+  spikes+=("$dir/rt3d_diag.csv")
+done
+for N in ${PFF_SHEAR_SIZES:-48 100 200}; do
+  dir=$out/shear_$N
+  mkdir -p "$dir"
+  read -r steps wall < <(run "$dir/log.txt" -options_file_yaml "$PFF_ROOT/config/shear_sphere.yaml" -shear_resolution "$N" -output_dir "$dir")
+  err=$(sed -n 's/^shear_sphere: relative phi error \([0-9.eE+-]*\).*/\1/p' "$dir/log.txt")
+  echo "shear_sphere,${N}^3,$ranks,$threads,$steps,$wall,$err,-" | tee -a "$csv"
+done
+$py "$PFF_ROOT/postproc/time_error.py" "$csv" -o "$out/time_error.png"
+[ ${#spikes[@]} -gt 0 ] && $py "$PFF_ROOT/postproc/rt_spike.py" "${spikes[@]}" -o "$out/rt3d_spike.png" >/dev/null
+echo "pfflip: $csv, $out/time_error.png"
