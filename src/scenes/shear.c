@@ -7,7 +7,7 @@
 #include "flowscene.h"
 
 typedef struct {
-  PetscReal u0, periods;
+  PetscReal u0, periods, check;
   PetscInt  resolution, phi0;
   PetscBool captured;
 } PffShear;
@@ -132,6 +132,8 @@ static PetscErrorCode PffShearFinish(PffFlowScene *fs)
                         "^3 cells (published: 0.0490 "
                         "De Rosis & Enan 2021, 0.0500 Li et al. 2022, 0.0314 PF-FLIP)\n",
                         (double)e, (double)(t * sh->u0), sh->resolution));
+  PetscCheck(sh->check <= 0 || e <= sh->check, fs->scene->comm, PETSC_ERR_NOT_CONVERGED,
+             "shear_sphere: the phi error %.5f exceeds -shear_max_error %g", (double)e, (double)sh->check);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

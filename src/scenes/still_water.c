@@ -4,7 +4,7 @@
 #include "flowscene.h"
 
 typedef struct {
-  PetscReal level, ratio, height, v0, umaxRun;
+  PetscReal level, ratio, height, v0, umaxRun, check;
   PetscInt  resolution;
 } PffStill;
 
