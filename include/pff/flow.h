@@ -32,8 +32,8 @@ typedef struct {
 #define PFF_FLOW_NSTAGES 7
 PETSC_EXTERN const char *const PffFlowStageNames[]; /* P2G, PhaseField, Forces, Pressure, G2P, Advect, Escaped */
 
-/* Life cycle. Create borrows the grid; call before PffGridSetUp (the flow adds its channels in
-   SetFromOptions) or after it. SetFromOptions reads
+/* Life cycle. Create borrows the grid, which must be set up (the flow adds its channels in SetUp).
+   SetFromOptions reads
    -rho_liquid, -rho_gas (> 0), -nu_liquid, -nu_gas (>= 0; 0 = no physical viscosity: FLIP ratio -flow_flip),
    -gravity gx,gy,gz, -flow_cfl (0, 4], -flow_dt_max, -flow_alpha_phi (> 0), -flow_delta_phi [0, 0.5),
    -flow_flip [0, 1], -flow_pressure (bool, default true), -flow_volume_correction [0, 1],

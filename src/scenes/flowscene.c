@@ -60,9 +60,9 @@ static PetscErrorCode PffFlowSceneSetFromOptions(PffScene s)
   /* grid, flow and scene set-up are validated here, before the driver checks unused options */
   PetscCall(PffGridCreate(s->comm, &fs->grid));
   PetscCall(PffGridSetFromOptions(fs->grid));
+  PetscCall(PffGridSetUp(fs->grid));
   PetscCall(PffFlowCreate(fs->grid, &fs->flow));
   PetscCall(PffFlowSetFromOptions(fs->flow));
-  PetscCall(PffGridSetUp(fs->grid));
   if (fs->ops.setup) PetscCall(fs->ops.setup(fs));
   PetscCall(PffFlowSetUp(fs->flow));
   PetscFunctionReturn(PETSC_SUCCESS);
