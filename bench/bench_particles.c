@@ -1,6 +1,6 @@
 /* pff-bench-particles: particle throughput of P2G, G2P and RK3 advection at 1 and 2 OpenMP threads.
 
-   mpiexec -n 1 build/bin/pff-bench-particles [-bench_n 48] [-bench_reps 3]
+   mpiexec -n 1 build/bin/pff-bench-particles [-bench_n 64] [-bench_reps 3]
 
    A periodic bench_n^3 grid of 16^3 blocks, seeded with 8 jittered particles per cell; the velocity
    is a smooth periodic field (a Taylor-Green vortex) with a halo of width 2. Each kernel runs
@@ -34,7 +34,7 @@ int main(int argc, char **argv)
 {
   PffGrid      grid;
   PffParticles part;
-  PetscInt     n = 48, reps = 3, chMass, chMom, chU, chDU;
+  PetscInt     n = 64, reps = 3, chMass, chMom, chU, chDU;
   PetscMPIInt  size;
   PetscBool    periodic[3] = {PETSC_TRUE, PETSC_TRUE, PETSC_TRUE};
   PetscReal    origin[3] = {0, 0, 0}, density[2] = {1000, 1}, alpha[2 * PFF_GRID_MAX_LEVELS];
