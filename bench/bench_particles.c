@@ -1,0 +1,101 @@
+/* pff-bench-particles: particle throughput of P2G, G2P and RK3 advection at 1 and 2 OpenMP threads.
+
+   mpiexec -n 1 build/bin/pff-bench-particles [-bench_n 64] [-bench_reps 3]
+
+   A periodic bench_n^3 grid of 16^3 blocks, seeded with 8 jittered particles per cell; the velocity
+   is a smooth periodic field (a Taylor-Green vortex) with a halo of width 2. Each kernel runs
+   -bench_reps times per thread count (after one warm-up) and the best time counts. Advection moves
+   particles about half a cell per step and migrates them. Prints one line per kernel:
+     RESULT kernel=<p2g|g2p|advect> ranks=<r> particles=<n> mparts_s_1t=<x> mparts_s_2t=<y> */
+#include <pff.h>
+#include <omp.h>
+
+static const char help[] = "Particle P2G / G2P / advection throughput.\n";
+
+static PetscErrorCode Seed(const PetscReal x[3], PetscInt *type, PetscReal v[3], void *ctx)
+{
+  PetscFunctionBeginUser;
+  (void)ctx;
+  *type = x[2] < 0.5 ? PFF_PARTICLE_LIQUID : PFF_PARTICLE_AIR;
+  v[0] = v[1] = v[2] = 0;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscReal TaylorGreen(const PetscReal x[3], PetscInt comp, void *ctx)
+{
+  const PetscReal k = 2 * PETSC_PI;
+  (void)ctx;
+  if (comp == 0) return PetscSinReal(k * x[0]) * PetscCosReal(k * x[1]) * PetscCosReal(k * x[2]);
+  if (comp == 1) return -PetscCosReal(k * x[0]) * PetscSinReal(k * x[1]) * PetscCosReal(k * x[2]);
+  return 0;
+}
+
+int main(int argc, char **argv)
+{
+  PffGrid      grid;
+  PffParticles part;
+  PetscInt     n = 64, reps = 3, chMass, chMom, chU, chDU;
+  PetscMPIInt  size;
+  PetscBool    periodic[3] = {PETSC_TRUE, PETSC_TRUE, PETSC_TRUE};
+  PetscReal    origin[3] = {0, 0, 0}, density[2] = {1000, 1}, alpha[2 * PFF_GRID_MAX_LEVELS];
+  double       rate[3][2];
+  PetscInt64   count[2];
+
+  PetscCall(PetscInitialize(&argc, &argv, NULL, help));
+  PetscCall(PffInitializePackage());
+  PetscCall(PetscOptionsGetInt(NULL, NULL, "-bench_n", &n, NULL));
+  PetscCall(PetscOptionsGetInt(NULL, NULL, "-bench_reps", &reps, NULL));
+  PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
+  const PetscInt cells[3] = {n, n, n};
+  PetscCall(PffGridCreate(PETSC_COMM_WORLD, &grid));
+  PetscCall(PffGridSetCells(grid, cells));
+  PetscCall(PffGridSetBlockSize(grid, 16));
+  PetscCall(PffGridSetDomain(grid, origin, 1.0 / (PetscReal)n));
+  PetscCall(PffGridSetPeriodic(grid, periodic));
+  PetscCall(PffGridSetUp(grid));
+  PetscCall(PffGridAddChannel(grid, "mass", PFF_CHANNEL_FACE, 1, &chMass));
+  PetscCall(PffGridAddChannel(grid, "mom", PFF_CHANNEL_FACE, 1, &chMom));
+  PetscCall(PffGridAddChannel(grid, "u", PFF_CHANNEL_FACE, 2, &chU));
+  PetscCall(PffGridAddChannel(grid, "du", PFF_CHANNEL_FACE, 2, &chDU));
+  PetscCall(PffGridFillChannel(grid, chU, TaylorGreen, NULL));
+  PetscCall(PffGridFillChannel(grid, chDU, TaylorGreen, NULL));
+  PetscCall(PffGridHaloBegin(grid, chU));
+  PetscCall(PffGridHaloEnd(grid, chU));
+  PetscCall(PffGridHaloBegin(grid, chDU));
+  PetscCall(PffGridHaloEnd(grid, chDU));
+  PetscCall(PffParticlesCreate(grid, &part));
+  PetscCall(PffParticlesSetFromOptions(part));
+  PetscCall(PffParticlesSeed(part, Seed, NULL));
+  PetscCall(PffParticlesGetTotals(part, NULL, count, NULL));
+  for (PetscInt i = 0; i < 2 * PFF_GRID_MAX_LEVELS; i++) alpha[i] = 0.95;
+  const PetscReal dt = 0.5 / (PetscReal)n; /* |u| <= 1: at most half a cell per step */
+  const double    np = (double)(count[0] + count[1]);
+  for (int t = 0; t < 2; t++) {
+    omp_set_num_threads(t + 1);
+    for (int k = 0; k < 3; k++) {
+      double best = 1e30;
+      for (PetscInt r = 0; r <= reps; r++) {
+        PetscCallMPI(MPI_Barrier(PETSC_COMM_WORLD));
+        const double t0 = MPI_Wtime();
+        if (k == 0)
+          PetscCall(PffParticlesP2G(part, density, chMass, chMom));
+        else if (k == 1)
+          PetscCall(PffParticlesG2P(part, chU, chDU, alpha));
+        else
+          PetscCall(PffParticlesAdvect(part, chU, dt, NULL, NULL, NULL));
+        PetscCallMPI(MPI_Barrier(PETSC_COMM_WORLD));
+        if (r > 0) best = PetscMin(best, MPI_Wtime() - t0);
+      }
+      rate[k][t] = np / best / 1e6;
+    }
+  }
+  const char *names[3] = {"p2g", "g2p", "advect"};
+  for (int k = 0; k < 3; k++)
+    PetscCall(PetscPrintf(PETSC_COMM_WORLD,
+                          "RESULT kernel=%s ranks=%d particles=%.0f mparts_s_1t=%.2f mparts_s_2t=%.2f\n", names[k],
+                          (int)size, np, rate[k][0], rate[k][1]));
+  PetscCall(PffParticlesDestroy(&part));
+  PetscCall(PffGridDestroy(&grid));
+  PetscCall(PetscFinalize());
+  return 0;
+}

@@ -1,0 +1,255 @@
+/* Unit test of particle seeding, binning and migration at any rank count.
+
+   Seeding: a graded 2-level raster (n0 = 8, periodic in x, walls elsewhere). The seeding function
+   returns no particle inside a box aligned with level-1 cells, liquid below a plane y = y0 (aligned
+   with level-1 cells) and air above, and v = x. Expected per-type counts and the sum and xor of
+   hash(id) are computed from the raster alone (every cell holds 8 candidates at its block's level);
+   every particle must lie inside the sub-cell its id names, and in the block its bin names. The
+   checksum sum hash(id) * round(x / h0 * 2^20) (integer arithmetic, order independent) is printed
+   and must be the same on any number of ranks.
+
+   Migration: every particle is displaced by a random offset (keyed by id) of up to a block length per
+   axis, then migrated: count, mass per type and the id multiset are unchanged, every particle lies in
+   an owned block and in its bin, and the numbers wrapped and clamped (partition independent) match
+   a recount from the displaced positions.
+
+   Sample run:  mpiexec -n 4 ./test_particles
+   Prints the same lines on any number of ranks. */
+#include "pfftest.h"
+
+static const char help[] = "Particle seeding, binning and migration.\n";
+
+#define N0 8
+
+typedef struct {
+  PetscReal holeLo[3], holeHi[3], y0;
+} SeedCtx;
+
+static PetscErrorCode SeedFn(const PetscReal x[3], PetscInt *type, PetscReal v[3], void *ctx)
+{
+  const SeedCtx *s = (const SeedCtx *)ctx;
+
+  PetscFunctionBeginUser;
+  PetscBool in = PETSC_TRUE;
+  for (int a = 0; a < 3; a++) in = (PetscBool)(in && x[a] >= s->holeLo[a] && x[a] < s->holeHi[a]);
+  *type = in ? -1 : (x[1] < s->y0 ? PFF_PARTICLE_LIQUID : PFF_PARTICLE_AIR);
+  for (int a = 0; a < 3; a++) v[a] = x[a];
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+typedef struct {
+  PetscInt64 count[PFF_PARTICLE_NTYPES];
+  uint64_t   idsum, idxor, check;
+} Summary;
+
+static PetscErrorCode Summarise(PffParticles part, const PffTestCtx *ctx, Summary *s)
+{
+  PffParticleArrays a;
+  uint64_t          loc[2] = {0, 0}, chk = 0;
+  const PetscReal   q = 1048576.0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffParticlesGetArrays(part, &a));
+  PetscCall(PffParticlesGetTotals(part, NULL, s->count, NULL));
+  for (PetscInt i = 0; i < a.n; i++) {
+    const uint64_t h = PffTestHash64(a.id[i]);
+    loc[0] += h;
+    loc[1] ^= h;
+    for (int d = 0; d < 3; d++)
+      chk += PffTestHash64(a.id[i] + (uint64_t)d) *
+             (uint64_t)(int64_t)PetscFloorReal((a.x[3 * i + d] - ctx->origin[d]) / ctx->h0 * q + 0.5);
+  }
+  PetscCallMPI(MPI_Allreduce(&loc[0], &s->idsum, 1, MPI_UINT64_T, MPI_SUM, ctx->comm));
+  PetscCallMPI(MPI_Allreduce(&loc[1], &s->idxor, 1, MPI_UINT64_T, MPI_BXOR, ctx->comm));
+  PetscCallMPI(MPI_Allreduce(&chk, &s->check, 1, MPI_UINT64_T, MPI_SUM, ctx->comm));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Every particle lies in an owned block, the one its bin names. */
+static PetscErrorCode CheckBins(PffParticles part, const PffTestCtx *ctx)
+{
+  PffParticleArrays a;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffParticlesGetArrays(part, &a));
+  PetscCheck(a.start != NULL && a.start[0] == 0 && a.start[ctx->nlocal] == a.n, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+             "bins do not cover the %" PetscInt_FMT " particles", a.n);
+  for (PetscInt lb = 0; lb < ctx->nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(ctx->grid, lb, &info));
+    for (PetscInt i = a.start[lb]; i < a.start[lb + 1]; i++) {
+      PetscInt gid;
+      PetscCall(PffGridLocate(ctx->grid, &a.x[3 * i], &gid, NULL, NULL));
+      PetscCheck(gid == info.gid, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+                 "particle %" PetscInt64_FMT " at (%g, %g, %g) is in block %" PetscInt_FMT ", binned in %" PetscInt_FMT,
+                 (PetscInt64)a.id[i], (double)a.x[3 * i], (double)a.x[3 * i + 1], (double)a.x[3 * i + 2], gid,
+                 info.gid);
+    }
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode TestSeed(const PffTestCtx *ctx, const SeedCtx *sc, PffParticles part, Summary *got)
+{
+  PetscInt64 expect[PFF_PARTICLE_NTYPES] = {0, 0};
+  uint64_t   idsum = 0, idxor = 0;
+
+  PetscFunctionBeginUser;
+  /* the expectation from the raster alone: every cell centre decides for its 8 candidates */
+  for (PetscInt gid = 0; gid < ctx->nblocks; gid++) {
+    const PetscInt l = ctx->level[gid];
+    if (l < 0) continue;
+    const PetscInt n      = N0 >> l,
+                   ijk[3] = {gid % ctx->nb[0], (gid / ctx->nb[0]) % ctx->nb[1], gid / (ctx->nb[0] * ctx->nb[1])};
+    const PetscReal h     = ctx->h0 * (PetscReal)(1 << l);
+    for (PetscInt c = 0; c < n * n * n; c++) {
+      const PetscInt cc[3] = {c % n, (c / n) % n, c / (n * n)};
+      PetscReal      x[3], v[3];
+      PetscInt       type;
+      for (int a = 0; a < 3; a++)
+        x[a] = ctx->origin[a] + (PetscReal)(ijk[a] * N0) * ctx->h0 + ((PetscReal)cc[a] + 0.5) * h;
+      PetscCall(SeedFn(x, &type, v, (void *)sc));
+      if (type < 0) continue;
+      expect[type] += 8;
+      for (uint64_t s = 0; s < 8; s++) {
+        const uint64_t h64 = PffTestHash64(((uint64_t)gid * N0 * N0 * N0 + (uint64_t)c) * 8 + s);
+        idsum += h64;
+        idxor ^= h64;
+      }
+    }
+  }
+  PetscCall(PffParticlesSeed(part, SeedFn, (void *)sc));
+  PetscCall(Summarise(part, ctx, got));
+  PetscCheck(got->count[0] == expect[0] && got->count[1] == expect[1], ctx->comm, PETSC_ERR_PLIB,
+             "seeded %" PetscInt64_FMT " liquid and %" PetscInt64_FMT " air particles, expected %" PetscInt64_FMT
+             " and %" PetscInt64_FMT,
+             got->count[0], got->count[1], expect[0], expect[1]);
+  PetscCheck(got->idsum == idsum && got->idxor == idxor, ctx->comm, PETSC_ERR_PLIB,
+             "seeded ids differ from the raster's");
+  /* each particle inside the sub-cell its id names */
+  PffParticleArrays a;
+  PetscCall(PffParticlesGetArrays(part, &a));
+  for (PetscInt i = 0; i < a.n; i++) {
+    const uint64_t  sub = a.id[i] % 8, c = (a.id[i] / 8) % (N0 * N0 * N0);
+    const PetscInt  gid = (PetscInt)(a.id[i] / 8 / (N0 * N0 * N0)), l = ctx->level[gid], n = N0 >> l;
+    const PetscInt  ijk[3] = {gid % ctx->nb[0], (gid / ctx->nb[0]) % ctx->nb[1], gid / (ctx->nb[0] * ctx->nb[1])};
+    const PetscInt  cc[3]  = {(PetscInt)(c % (uint64_t)n), (PetscInt)((c / (uint64_t)n) % (uint64_t)n),
+                              (PetscInt)(c / (uint64_t)(n * n))};
+    const PetscReal h      = ctx->h0 * (PetscReal)(1 << l);
+    PetscCheck(a.level[i] == l, PETSC_COMM_SELF, PETSC_ERR_PLIB, "particle level %d, block level %" PetscInt_FMT,
+               (int)a.level[i], l);
+    for (int d = 0; d < 3; d++) {
+      const PetscReal lo = ctx->origin[d] + (PetscReal)(ijk[d] * N0) * ctx->h0 +
+                           ((PetscReal)cc[d] + 0.5 * (PetscReal)((sub >> d) & 1)) * h;
+      PetscCheck(a.x[3 * i + d] >= lo - 1e-12 && a.x[3 * i + d] <= lo + 0.5 * h + 1e-12, PETSC_COMM_SELF,
+                 PETSC_ERR_PLIB, "particle %" PetscInt64_FMT " lies outside its sub-cell along axis %d",
+                 (PetscInt64)a.id[i], d);
+      PetscCheck(a.v[3 * i + d] == a.x[3 * i + d], PETSC_COMM_SELF, PETSC_ERR_PLIB,
+                 "seeded velocity is not the callback's");
+    }
+  }
+  PetscCall(CheckBins(part, ctx));
+  PetscCall(PetscPrintf(ctx->comm,
+                        "seed: %" PetscInt64_FMT " liquid %" PetscInt64_FMT " air (as expected), ids ok, sub-cells ok, "
+                        "checksum %016" PRIx64 "\n",
+                        got->count[0], got->count[1], got->check));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode TestMigrate(const PffTestCtx *ctx, PffParticles part, const Summary *before)
+{
+  const PetscReal   density[2] = {1000, 1.25};
+  PetscReal         m0[2], m1[2];
+  PffParticleArrays a;
+  PffParticleStats  st;
+  PetscInt64        exp[2] = {0, 0}; /* wrapped, clamped */
+  Summary           after;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffParticlesGetTotals(part, density, NULL, m0));
+  PetscCall(PffParticlesGetArrays(part, &a));
+  for (PetscInt i = 0; i < a.n; i++) {
+    PetscBool w = PETSC_FALSE, c = PETSC_FALSE;
+    for (int d = 0; d < 3; d++) {
+      const uint64_t  h = PffTestKey(7, a.id[i], (uint64_t)d, 0);
+      const PetscReal u = (PetscReal)(h >> 11) / 9007199254740992.0;
+      a.x[3 * i + d] += (2 * u - 1) * ctx->blen;
+      const PetscReal L = ctx->blen * (PetscReal)ctx->nb[d], s = a.x[3 * i + d] - ctx->origin[d];
+      if (s < 0 || s >= L) {
+        if (ctx->periodic[d])
+          w = PETSC_TRUE;
+        else
+          c = PETSC_TRUE;
+      }
+    }
+    exp[0] += w;
+    exp[1] += c;
+  }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, exp, 2, MPIU_INT64, MPI_SUM, ctx->comm));
+  PetscCall(PffParticlesMigrate(part, &st));
+  PetscCall(PffParticlesGetTotals(part, density, NULL, m1));
+  PetscCall(Summarise(part, ctx, &after));
+  PetscCheck(after.count[0] == before->count[0] && after.count[1] == before->count[1], ctx->comm, PETSC_ERR_PLIB,
+             "migration changed the counts: %" PetscInt64_FMT " %" PetscInt64_FMT " -> %" PetscInt64_FMT
+             " %" PetscInt64_FMT,
+             before->count[0], before->count[1], after.count[0], after.count[1]);
+  PetscCheck(after.idsum == before->idsum && after.idxor == before->idxor, ctx->comm, PETSC_ERR_PLIB,
+             "migration changed the id multiset");
+  PetscCheck(m0[0] == m1[0] && m0[1] == m1[1], ctx->comm, PETSC_ERR_PLIB, "migration changed the mass");
+  PetscCheck(st.wrapped == exp[0] && st.clamped == exp[1], ctx->comm, PETSC_ERR_PLIB,
+             "migration wrapped %" PetscInt64_FMT " and clamped %" PetscInt64_FMT ", expected %" PetscInt64_FMT
+             " and %" PetscInt64_FMT,
+             st.wrapped, st.clamped, exp[0], exp[1]);
+  PetscCall(CheckBins(part, ctx));
+  PetscCall(PetscPrintf(ctx->comm,
+                        "migrate: counts, mass and ids kept, %" PetscInt64_FMT " wrapped, %" PetscInt64_FMT
+                        " clamped, all in owned bins\n",
+                        st.wrapped, st.clamped));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Bad options are rejected with the key in the message. */
+static PetscErrorCode TestOptions(const PffTestCtx *ctx)
+{
+  PffParticles   part;
+  PetscErrorCode ierr;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffParticlesCreate(ctx->grid, &part));
+  PetscCall(PetscOptionsSetValue(NULL, "-particles_jitter", "2"));
+  PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
+  ierr = PffParticlesSetFromOptions(part);
+  PetscCall(PetscPopErrorHandler());
+  PetscCall(PetscOptionsClearValue(NULL, "-particles_jitter"));
+  PetscCheck(ierr != 0, ctx->comm, PETSC_ERR_PLIB, "-particles_jitter 2 was accepted");
+  PetscCall(PffParticlesDestroy(&part));
+  PetscCall(PetscPrintf(ctx->comm, "options: -particles_jitter 2 rejected\n"));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+int main(int argc, char **argv)
+{
+  const PetscInt  nb[3]       = {3, 2, 2};
+  const PetscBool periodic[3] = {PETSC_TRUE, PETSC_FALSE, PETSC_FALSE};
+  const PetscReal origin[3]   = {0.375, -1.25, 0.5};
+  PffTestCtx      ctx;
+  PffParticles    part;
+  Summary         s;
+
+  PetscCall(PetscInitialize(&argc, &argv, NULL, help));
+  PetscCall(PffInitializePackage());
+  PetscCall(PffTestCreateGrid(PETSC_COMM_WORLD, nb, periodic, origin, 1.0 / 16, N0, 2, -1, 0, 11, &ctx));
+  /* aligned with level-1 cells (2 h0) */
+  SeedCtx sc = {{origin[0] + 4 * ctx.h0, origin[1] + 6 * ctx.h0, origin[2] + 2 * ctx.h0},
+                {origin[0] + 14 * ctx.h0, origin[1] + 12 * ctx.h0, origin[2] + 10 * ctx.h0},
+                origin[1] + 10 * ctx.h0};
+  PetscCall(TestOptions(&ctx));
+  PetscCall(PffParticlesCreate(ctx.grid, &part));
+  PetscCall(PffParticlesSetFromOptions(part));
+  PetscCall(TestSeed(&ctx, &sc, part, &s));
+  PetscCall(TestMigrate(&ctx, part, &s));
+  PetscCall(PffParticlesDestroy(&part));
+  PetscCall(PffGridDestroy(&ctx.grid));
+  PetscCall(PetscFinalize());
+  return 0;
+}

@@ -1,0 +1,361 @@
+/* Unit test of P2G, G2P and advection at any rank count.
+
+   Kernel sum: an unjittered lattice of one type (density rho) in a fully periodic domain gives
+   chMass = rho * rho~_0 on every face to 1e-5 relative, on a uniform grid and on a graded 2-level
+   grid at faces more than 2 cells from a level boundary (the maximum deviation at level boundaries
+   is printed, not asserted: the cross-level normalisation is approximate, see src/particles/p2g.c).
+   Constant velocity: v_p = (1, -2, 0.5), P2G, u = mom / mass, du = 0, G2P with alpha 0 and 1 gives
+   v_p = (1, -2, 0.5) to 1e-6, on the 2-level periodic grid and on a grid walled in z (the test owns
+   the wall ghost faces and sets them to the constant, as boundary conditions would).
+   Advection: a uniform field moving 2.5 cells per step in a periodic domain (velocity channel of
+   width 4) moves every particle by u t (mod period) to 1e-9 of the domain size after 4 steps; a rigid
+   rotation in a walled box keeps every particle inside and the count; zero velocity with a sphere
+   solid leaves no particle inside the sphere, and pushed equals the number that were inside.
+
+   Sample run:  mpiexec -n 4 ./test_particles_transfer
+   Prints the same lines on any number of ranks. */
+#include "pfftest.h"
+
+static const char help[] = "P2G kernel sum, P2G -> G2P, advection and solid push-out.\n";
+
+#define N0 8
+
+static const PetscReal V0[3] = {1.0, -2.0, 0.5};
+
+static PetscErrorCode SeedLiquid(const PetscReal x[3], PetscInt *type, PetscReal v[3], void *ctx)
+{
+  PetscFunctionBeginUser;
+  (void)ctx;
+  *type = PFF_PARTICLE_LIQUID;
+  for (int a = 0; a < 3; a++) v[a] = V0[a];
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* v = x: the seeding position travels with the particle */
+static PetscErrorCode SeedRemember(const PetscReal x[3], PetscInt *type, PetscReal v[3], void *ctx)
+{
+  PetscFunctionBeginUser;
+  (void)ctx;
+  *type = PFF_PARTICLE_LIQUID;
+  for (int a = 0; a < 3; a++) v[a] = x[a];
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode CreateParticles(PffTestCtx *ctx, const char jitter[], PffSeedFn fn, PffParticles *part)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscOptionsSetValue(NULL, "-particles_jitter", jitter));
+  PetscCall(PffParticlesCreate(ctx->grid, part));
+  PetscCall(PffParticlesSetFromOptions(*part));
+  PetscCall(PetscOptionsClearValue(NULL, "-particles_jitter"));
+  PetscCall(PffParticlesSeed(*part, fn, NULL));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Whether face (i, j, k) of block gid is more than 2 cells from every neighbour of another level. */
+static PetscBool AwayFromLevelJumps(const PffTestCtx *ctx, const PffBlockInfo *info, const PetscInt c[3])
+{
+  const PetscInt n = info->n;
+  for (PetscInt r = 0; r < 27; r++) {
+    PetscInt d[3], near = 1;
+    PffRegionDirection(r, d);
+    for (int a = 0; a < 3; a++)
+      if ((d[a] < 0 && c[a] > 2) || (d[a] > 0 && c[a] < n - 3)) near = 0;
+    if (r == 13 || !near) continue;
+    const PetscInt nbr = PffRasterNeighbour(ctx->nb, ctx->periodic, info->ijk, d);
+    if (nbr >= 0 && ctx->level[nbr] != info->level) return PETSC_FALSE;
+  }
+  return PETSC_TRUE;
+}
+
+static PetscErrorCode TestKernelSum(PetscInt nlevels, PetscInt uniform)
+{
+  const PetscInt  nb[3]       = {3, 2, 2};
+  const PetscBool periodic[3] = {PETSC_TRUE, PETSC_TRUE, PETSC_TRUE};
+  const PetscReal origin[3] = {0, 0, 0}, density[2] = {3.0, 0.5};
+  PffTestCtx      ctx;
+  PffParticles    part;
+  PetscInt        chMass, chMom;
+  PetscReal       rho0, err[2] = {0, 0}; /* away from, at level boundaries */
+
+  PetscFunctionBeginUser;
+  PetscCall(PffTestCreateGrid(PETSC_COMM_WORLD, nb, periodic, origin, 1.0 / 16, N0, nlevels, uniform, 0, 5, &ctx));
+  PetscCall(PffGridAddChannel(ctx.grid, "mass", PFF_CHANNEL_FACE, 1, &chMass));
+  PetscCall(PffGridAddChannel(ctx.grid, "mom", PFF_CHANNEL_FACE, 1, &chMom));
+  PetscCall(CreateParticles(&ctx, "0", SeedLiquid, &part));
+  PetscCall(PffParticlesGetKernelSum(part, &rho0));
+  PetscCall(PffParticlesP2G(part, density, chMass, chMom));
+  for (PetscInt lb = 0; lb < ctx.nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(ctx.grid, lb, &info));
+    const PetscInt n = info.n;
+    for (PetscInt comp = 0; comp < 3; comp++) {
+      float *m, *mom;
+      PetscCall(PffGridGetBlockData(ctx.grid, chMass, lb, comp, &m));
+      PetscCall(PffGridGetBlockData(ctx.grid, chMom, lb, comp, &mom));
+      for (PetscInt c = 0; c < n * n * n; c++) {
+        const PetscInt  cc[3] = {c % n, (c / n) % n, c / (n * n)};
+        const PetscReal e     = PetscAbsReal((PetscReal)m[c] / (density[0] * rho0) - 1);
+        const int       at    = AwayFromLevelJumps(&ctx, &info, cc) ? 0 : 1;
+        err[at]               = PetscMax(err[at], e);
+        PetscCheck(PetscAbsReal((PetscReal)mom[c] - V0[comp] * (PetscReal)m[c]) <= 1e-5 * PetscAbsReal((PetscReal)m[c]),
+                   PETSC_COMM_SELF, PETSC_ERR_PLIB, "momentum is not v * mass at a face");
+      }
+    }
+  }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, err, 2, MPIU_REAL, MPI_MAX, ctx.comm));
+  PetscCheck(err[0] <= 1e-5, ctx.comm, PETSC_ERR_PLIB,
+             "P2G mass deviates from density * rho0 by %g (relative) away from level boundaries", (double)err[0]);
+  PetscCall(PetscPrintf(ctx.comm,
+                        "kernel sum (%" PetscInt_FMT " level%s): rho0 %.6f, max rel. deviation %.1e away from level "
+                        "boundaries, %.3f at them\n",
+                        nlevels, nlevels > 1 ? "s" : "", (double)rho0, (double)err[0], (double)err[1]));
+  PetscCall(PffParticlesDestroy(&part));
+  PetscCall(PffGridDestroy(&ctx.grid));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscReal Constant(const PetscReal x[3], PetscInt comp, void *ctx)
+{
+  (void)x;
+  return ((const PetscReal *)ctx)[comp];
+}
+
+/* Sets every wall ghost region of a face channel to the constant vector val. */
+static PetscErrorCode FillWallGhosts(const PffTestCtx *ctx, PetscInt ch, const PetscReal val[3])
+{
+  PetscInt width;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetChannelInfo(ctx->grid, ch, NULL, NULL, NULL, &width));
+  for (PetscInt lb = 0; lb < ctx->nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(ctx->grid, lb, &info));
+    const PetscInt n = info.n;
+    for (PetscInt comp = 0; comp < 3; comp++) {
+      const PffView *views;
+      PetscCall(PffGridGetBlockViews(ctx->grid, ch, lb, comp, &views));
+      for (PetscInt k = -width; k < n + width; k++)
+        for (PetscInt j = -width; j < n + width; j++)
+          for (PetscInt i = -width; i < n + width; i++) {
+            const PetscInt r = PffRegionIndex(i, j, k, n);
+            PetscInt       d[3];
+            PffRegionDirection(r, d);
+            if (r != 13 && PffRasterNeighbour(ctx->nb, ctx->periodic, info.ijk, d) < 0)
+              *PffViewsAt(views, i, j, k, n) = (float)val[comp];
+          }
+    }
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode TestConstantVelocity(PetscInt nlevels, PetscBool wallz)
+{
+  const PetscInt  nb[3]       = {3, 2, 2};
+  const PetscBool periodic[3] = {PETSC_TRUE, PETSC_TRUE, (PetscBool)!wallz};
+  const PetscReal origin[3] = {-0.5, 0.25, 0}, density[2] = {1000.0, 1.0}, zero[3] = {0, 0, 0};
+  PetscReal       alpha[2 * PFF_GRID_MAX_LEVELS], err = 0;
+  PffTestCtx      ctx;
+  PffParticles    part;
+  PetscInt        chMass, chMom, chU, chDU;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffTestCreateGrid(PETSC_COMM_WORLD, nb, periodic, origin, 1.0 / 16, N0, nlevels, nlevels > 1 ? -1 : 0, 0, 9,
+                              &ctx));
+  PetscCall(PffGridAddChannel(ctx.grid, "mass", PFF_CHANNEL_FACE, 1, &chMass));
+  PetscCall(PffGridAddChannel(ctx.grid, "mom", PFF_CHANNEL_FACE, 1, &chMom));
+  PetscCall(PffGridAddChannel(ctx.grid, "u", PFF_CHANNEL_FACE, 2, &chU));
+  PetscCall(PffGridAddChannel(ctx.grid, "du", PFF_CHANNEL_FACE, 2, &chDU));
+  PetscCall(CreateParticles(&ctx, "1", SeedLiquid, &part));
+  PetscCall(PffParticlesP2G(part, density, chMass, chMom));
+  for (PetscInt lb = 0; lb < ctx.nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(ctx.grid, lb, &info));
+    for (PetscInt comp = 0; comp < 3; comp++) {
+      float *m, *mom, *u;
+      PetscCall(PffGridGetBlockData(ctx.grid, chMass, lb, comp, &m));
+      PetscCall(PffGridGetBlockData(ctx.grid, chMom, lb, comp, &mom));
+      PetscCall(PffGridGetBlockData(ctx.grid, chU, lb, comp, &u));
+      for (PetscInt c = 0; c < info.n * info.n * info.n; c++) {
+        PetscCheck(m[c] > 0, PETSC_COMM_SELF, PETSC_ERR_PLIB, "a face received no mass");
+        u[c] = mom[c] / m[c];
+      }
+    }
+  }
+  PetscCall(PffGridFillChannel(ctx.grid, chDU, Constant, (void *)zero));
+  PetscCall(PffGridHaloBegin(ctx.grid, chU));
+  PetscCall(PffGridHaloEnd(ctx.grid, chU));
+  PetscCall(PffGridHaloBegin(ctx.grid, chDU));
+  PetscCall(PffGridHaloEnd(ctx.grid, chDU));
+  if (wallz) PetscCall(FillWallGhosts(&ctx, chU, V0));
+  for (int pass = 0; pass < 2; pass++) {
+    for (PetscInt i = 0; i < 2 * PFF_GRID_MAX_LEVELS; i++) alpha[i] = pass;
+    PetscCall(PffParticlesG2P(part, chU, chDU, alpha));
+    PffParticleArrays a;
+    PetscCall(PffParticlesGetArrays(part, &a));
+    for (PetscInt i = 0; i < a.n; i++)
+      for (int d = 0; d < 3; d++) err = PetscMax(err, PetscAbsReal(a.v[3 * i + d] - V0[d]));
+  }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &err, 1, MPIU_REAL, MPI_MAX, ctx.comm));
+  PetscCheck(err <= 1e-6, ctx.comm, PETSC_ERR_PLIB, "constant velocity changed by %g in P2G -> G2P", (double)err);
+  PetscCall(PetscPrintf(ctx.comm, "P2G -> G2P constant velocity (%" PetscInt_FMT " level%s, %s): max error %.1e\n",
+                        nlevels, nlevels > 1 ? "s" : "", wallz ? "walls in z" : "periodic", (double)err));
+  PetscCall(PffParticlesDestroy(&part));
+  PetscCall(PffGridDestroy(&ctx.grid));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode TestUniformAdvection(void)
+{
+  const PetscInt   nb[3]       = {3, 2, 2};
+  const PetscBool  periodic[3] = {PETSC_TRUE, PETSC_TRUE, PETSC_TRUE};
+  const PetscReal  origin[3] = {0.125, -0.5, 0}, u[3] = {1.25, -0.625, 0.5};
+  const PetscInt   nsteps = 4;
+  PffTestCtx       ctx;
+  PffParticles     part;
+  PffParticleStats st;
+  PetscInt         chU;
+  PetscReal        err = 0;
+  PetscInt64       c0[2], c1[2];
+
+  PetscFunctionBeginUser;
+  PetscCall(PffTestCreateGrid(PETSC_COMM_WORLD, nb, periodic, origin, 1.0 / 16, N0, 1, 0, 0, 3, &ctx));
+  PetscCall(PffGridAddChannel(ctx.grid, "u", PFF_CHANNEL_FACE, 4, &chU));
+  PetscCall(PffGridFillChannel(ctx.grid, chU, Constant, (void *)u));
+  PetscCall(PffGridHaloBegin(ctx.grid, chU));
+  PetscCall(PffGridHaloEnd(ctx.grid, chU));
+  PetscCall(CreateParticles(&ctx, "1", SeedRemember, &part));
+  PetscCall(PffParticlesGetTotals(part, NULL, c0, NULL));
+  const PetscReal speed = PetscSqrtReal(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]), dt = 2.5 * ctx.h0 / speed;
+  for (PetscInt s = 0; s < nsteps; s++) PetscCall(PffParticlesAdvect(part, chU, dt, NULL, NULL, &st));
+  PetscCall(PffParticlesGetTotals(part, NULL, c1, NULL));
+  PffParticleArrays a;
+  PetscCall(PffParticlesGetArrays(part, &a));
+  for (PetscInt i = 0; i < a.n; i++)
+    for (int d = 0; d < 3; d++) {
+      const PetscReal L = ctx.blen * (PetscReal)ctx.nb[d];
+      PetscReal       e = a.x[3 * i + d] - (a.v[3 * i + d] + u[d] * dt * (PetscReal)nsteps);
+      e -= L * PetscFloorReal(e / L + 0.5);
+      err = PetscMax(err, PetscAbsReal(e) / L);
+    }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &err, 1, MPIU_REAL, MPI_MAX, ctx.comm));
+  PetscCheck(c0[0] == c1[0], ctx.comm, PETSC_ERR_PLIB, "advection changed the particle count");
+  PetscCheck(err <= 1e-9, ctx.comm, PETSC_ERR_PLIB, "uniform advection error %g (relative to the period)", (double)err);
+  PetscCall(PetscPrintf(ctx.comm,
+                        "advect uniform: %" PetscInt64_FMT " particles, %" PetscInt_FMT
+                        " sub-steps per step, max error %.1e of the period\n",
+                        c1[0], st.substeps, (double)err));
+  PetscCall(PffParticlesDestroy(&part));
+  PetscCall(PffGridDestroy(&ctx.grid));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+typedef struct {
+  PetscReal c[3], omega, r;
+} Rot;
+
+static PetscReal Rotation(const PetscReal x[3], PetscInt comp, void *ctx)
+{
+  const Rot *r = (const Rot *)ctx;
+  /* rotation about the z axis through c */
+  if (comp == 0) return -r->omega * (x[1] - r->c[1]);
+  if (comp == 1) return r->omega * (x[0] - r->c[0]);
+  return 0;
+}
+
+static PetscReal Sphere(const PetscReal x[3], PetscReal grad[3], void *ctx)
+{
+  const Rot *r  = (const Rot *)ctx;
+  PetscReal  d2 = 0;
+  for (int a = 0; a < 3; a++) d2 += PetscSqr(x[a] - r->c[a]);
+  const PetscReal d = PetscSqrtReal(d2);
+  for (int a = 0; a < 3; a++) grad[a] = d > 0 ? (x[a] - r->c[a]) / d : (a == 0 ? 1.0 : 0.0);
+  return d - r->r;
+}
+
+static PetscErrorCode TestWalledRotationAndSolid(void)
+{
+  const PetscInt   nb[3]       = {3, 3, 2};
+  const PetscBool  periodic[3] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
+  const PetscReal  origin[3] = {0, 0, 0}, zero[3] = {0, 0, 0};
+  PffTestCtx       ctx;
+  PffParticles     part;
+  PffParticleStats st;
+  PetscInt         chU, maxsub = 0;
+  PetscInt64       c0[2], c1[2], inside = 0, outside = 0, still = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffTestCreateGrid(PETSC_COMM_WORLD, nb, periodic, origin, 1.0 / 16, N0, 2, -1, 0, 21, &ctx));
+  Rot rot = {{1.5 * ctx.blen, 1.5 * ctx.blen, ctx.blen}, 0, 0.6 * ctx.blen};
+  /* the fastest point (a box corner) moves 1.5 finest cells per step */
+  rot.omega          = 1.0;
+  const PetscReal dt = 1.5 * ctx.h0 / (rot.omega * 1.5 * ctx.blen * PETSC_SQRT2);
+  PetscCall(PffGridAddChannel(ctx.grid, "u", PFF_CHANNEL_FACE, 2, &chU));
+  PetscCall(PffGridFillChannel(ctx.grid, chU, Rotation, &rot));
+  PetscCall(PffGridHaloBegin(ctx.grid, chU));
+  PetscCall(PffGridHaloEnd(ctx.grid, chU));
+  PetscCall(CreateParticles(&ctx, "1", SeedRemember, &part));
+  PetscCall(PffParticlesGetTotals(part, NULL, c0, NULL));
+  for (PetscInt s = 0; s < 6; s++) {
+    PetscCall(PffParticlesAdvect(part, chU, dt, NULL, NULL, &st));
+    maxsub = PetscMax(maxsub, st.substeps);
+  }
+  PetscCall(PffParticlesGetTotals(part, NULL, c1, NULL));
+  PffParticleArrays a;
+  PetscCall(PffParticlesGetArrays(part, &a));
+  for (PetscInt i = 0; i < a.n; i++)
+    for (int d = 0; d < 3; d++) {
+      const PetscReal s = a.x[3 * i + d] - ctx.origin[d];
+      if (!(s > 0 && s < ctx.blen * (PetscReal)ctx.nb[d])) outside++;
+    }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &outside, 1, MPIU_INT64, MPI_SUM, ctx.comm));
+  PetscCheck(c0[0] == c1[0], ctx.comm, PETSC_ERR_PLIB, "rotation changed the particle count");
+  PetscCheck(outside == 0, ctx.comm, PETSC_ERR_PLIB, "%" PetscInt64_FMT " particle coordinates left the box", outside);
+  PetscCall(PetscPrintf(ctx.comm,
+                        "advect rotation (walls, 2 levels): %" PetscInt64_FMT
+                        " particles kept inside, max %" PetscInt_FMT " sub-steps\n",
+                        c1[0], maxsub));
+
+  /* solid push-out with zero velocity */
+  PetscCall(PffGridFillChannel(ctx.grid, chU, Constant, (void *)zero));
+  PetscCall(PffGridHaloBegin(ctx.grid, chU));
+  PetscCall(PffGridHaloEnd(ctx.grid, chU));
+  PetscCall(PffParticlesGetArrays(part, &a));
+  for (PetscInt i = 0; i < a.n; i++) {
+    PetscReal g[3];
+    if (Sphere(&a.x[3 * i], g, &rot) < 0) inside++;
+  }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &inside, 1, MPIU_INT64, MPI_SUM, ctx.comm));
+  PetscCall(PffParticlesAdvect(part, chU, dt, Sphere, &rot, &st));
+  PetscCall(PffParticlesGetArrays(part, &a));
+  for (PetscInt i = 0; i < a.n; i++) {
+    PetscReal g[3];
+    if (Sphere(&a.x[3 * i], g, &rot) < 0) still++;
+  }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &still, 1, MPIU_INT64, MPI_SUM, ctx.comm));
+  PetscCall(PffParticlesGetTotals(part, NULL, c1, NULL));
+  PetscCheck(inside > 0, ctx.comm, PETSC_ERR_PLIB, "no particle started inside the sphere");
+  PetscCheck(still == 0 && st.pushed == inside && c1[0] == c0[0], ctx.comm, PETSC_ERR_PLIB,
+             "solid push-out: %" PetscInt64_FMT " of %" PetscInt64_FMT " particles still inside, %" PetscInt64_FMT
+             " pushed",
+             still, inside, st.pushed);
+  PetscCall(PetscPrintf(ctx.comm, "solid push-out: %" PetscInt64_FMT " particles pushed out of the sphere, none left\n",
+                        st.pushed));
+  PetscCall(PffParticlesDestroy(&part));
+  PetscCall(PffGridDestroy(&ctx.grid));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+int main(int argc, char **argv)
+{
+  PetscCall(PetscInitialize(&argc, &argv, NULL, help));
+  PetscCall(PffInitializePackage());
+  PetscCall(TestKernelSum(1, 0));
+  PetscCall(TestKernelSum(2, -1));
+  PetscCall(TestConstantVelocity(2, PETSC_FALSE));
+  PetscCall(TestConstantVelocity(1, PETSC_TRUE));
+  PetscCall(TestUniformAdvection());
+  PetscCall(TestWalledRotationAndSolid());
+  PetscCall(PetscFinalize());
+  return 0;
+}
