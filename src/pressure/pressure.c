@@ -33,6 +33,8 @@ PetscErrorCode PffPressureCreate(PffGrid grid, PffPressure *ps)
   PetscCall(KSPSetType(p->ksp, PFF_PRESSURE_KSP_TYPE_DEFAULT));
   PetscCall(KSPSetTolerances(p->ksp, PFF_PRESSURE_RTOL_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT));
   PetscCall(KSPSetInitialGuessNonzero(p->ksp, PETSC_TRUE));
+  /* rtol then bounds the true residual V (D u + c_div) / dt, whatever the PC */
+  PetscCall(KSPSetNormType(p->ksp, KSP_NORM_UNPRECONDITIONED));
   PetscCall(KSPGetPC(p->ksp, &pc));
   PetscCall(PCSetType(pc, PFF_PRESSURE_PC_TYPE_DEFAULT));
   *ps = p;
@@ -42,7 +44,7 @@ PetscErrorCode PffPressureCreate(PffGrid grid, PffPressure *ps)
 PetscErrorCode PffPressureSetFromOptions(PffPressure ps)
 {
   PetscFunctionBeginUser;
-  PetscOptionsBegin(ps->comm, "pressure_", "Pressure projection", "PffPressure");
+  PetscOptionsBegin(ps->comm, NULL, "Pressure projection", "PffPressure");
   PetscCall(PetscOptionsEnum("-pressure_assembly", "Assembly of A = G^T W G", "PffPressureSetCoefficients",
                              PffPressureAssemblyTypes, (PetscEnum)ps->assembly, (PetscEnum *)&ps->assembly, NULL));
   PetscOptionsEnd();
