@@ -15,6 +15,10 @@
    removed) and equals the textbook 7-point stencil on a uniform grid. Faces with open_f = 0 (domain
    walls, solids) carry no flux; periodic axes wrap.
 
+   Numbering (the Vecs and Mats below): cell rows are PffGridGetCellNumbering's global cell numbers;
+   face rows are 3 * (global cell) + d for the lower d-face of the cell, so 3 face rows per owned cell
+   (rows of wall and inactive-neighbour faces exist but are always closed). docs/pressure.md has more.
+
    The operator sits behind a small interface (apply, diagonal, face coefficients per level) so that
    the custom multigrid (its own module, later) can replace the assembled matrix as a PCSHELL. */
 #pragma once
@@ -32,13 +36,18 @@ typedef struct {
   PetscReal          rnorm; /* final residual norm (relative to the rhs norm) */
   KSPConvergedReason reason;
   PetscReal          divBefore; /* max |div u| (1/s) before the projection */
-  PetscReal          divAfter;  /* max |div u| after it (should be at the solver tolerance) */
-  PetscLogDouble     setupTime, solveTime;
+  PetscReal          divAfter;  /* max |div u| after it, of the double-precision u before it is stored in the
+                                   float channel (PffPressureMaxDivergence of the channel adds float rounding,
+                                   about 1e-7 |u| / h) */
+  PetscLogDouble setupTime;     /* KSP/PC set-up inside Project (non-zero after SetCoefficients) */
+  PetscLogDouble solveTime;     /* KSPSolve */
 } PffPressureStats;
 
 /* Life cycle. Create borrows grid (set up). SetFromOptions reads the KSP with options prefix
-   "pressure_": -pressure_ksp_type (default fcg), -pressure_ksp_rtol (default 1e-4), -pressure_pc_type
-   gamg|hypre|bjacobi|jacobi (default gamg), and every other PETSc KSP/PC option under that prefix. */
+   "pressure_": -pressure_ksp_type (default fcg), -pressure_ksp_rtol (default 1e-4, on the true residual:
+   the norm type defaults to unpreconditioned), -pressure_pc_type gamg|hypre|bjacobi|jacobi (default gamg;
+   bjacobi uses ICC(0) on its blocks unless -pressure_sub_pc_type is given), -pressure_assembly
+   ptap|direct (how A is assembled, default ptap), and every other PETSc KSP/PC option under that prefix. */
 PETSC_EXTERN PetscErrorCode PffPressureCreate(PffGrid grid, PffPressure *ps);
 PETSC_EXTERN PetscErrorCode PffPressureSetFromOptions(PffPressure ps);
 /* Builds the numbering, the face list and the gradient once per grid topology. Collective. */
@@ -46,14 +55,20 @@ PETSC_EXTERN PetscErrorCode PffPressureSetUp(PffPressure ps);
 PETSC_EXTERN PetscErrorCode PffPressureDestroy(PffPressure *ps);
 
 /* Face coefficients from face channels: chBeta = 1/rho (Eq. 9), chOpen = 1 for a fluid face and 0
-   for a face in or on a solid (domain walls are closed regardless). Re-assembles the operator.
-   Collective. */
+   for a face in or on a solid (domain walls and faces to inactive blocks are closed regardless;
+   chOpen = -1 means every other face is open). beta must be positive and finite on open faces.
+   Re-assembles the operator. Collective. */
 PETSC_EXTERN PetscErrorCode PffPressureSetCoefficients(PffPressure ps, PetscInt chBeta, PetscInt chOpen);
 
 /* Projection (Eq. 8): solves  dt A p = -V (D u* + c_div)  and sets u <- u* - dt beta G p on
    the open faces of face channel chU (closed faces are set to zero), p into cell channel chP.
    chCdiv (cell channel, or -1) holds the volume-correction term c_div in 1/s. Where no boundary is
    open the constant null space is removed. The previous p is the initial guess. Collective. */
+/* No boundary condition opens the domain in this version (walls, solids and periodic axes only), so
+   the constants always span the null space: attached to A, removed from the rhs (a mean of c_div is
+   dropped). p is defined up to a constant. Non-convergence (e.g. KSP_DIVERGED_ITS) is reported in
+   stats->reason, not raised; KSP_DIVERGED_NANORINF and KSP_DIVERGED_PC_FAILED raise an error naming
+   the KSP and PC. The caller exchanges the halos of chU and chP afterwards. */
 PETSC_EXTERN PetscErrorCode PffPressureProject(PffPressure ps, PetscInt chU, PetscReal dt, PetscInt chCdiv,
                                                PetscInt chP, PffPressureStats *stats);
 
@@ -62,7 +77,10 @@ PETSC_EXTERN PetscErrorCode PffPressureMaxDivergence(PffPressure ps, PetscInt ch
 
 /* The operator interface for preconditioners (borrowed objects, valid until the next
    SetCoefficients): the assembled A (MATMPIAIJ, without the dt factor), its diagonal, and the face
-   coefficients M_f beta_f open_f / d_f of the owned faces as a Vec in face numbering (3 per cell). */
+   coefficients of the owned faces as a Vec in face numbering (3 per cell). The coefficient is the
+   stencil weight c_f = M_f beta_f open_f / d_f^2 = A_f beta_f open_f / d_f (h beta on a uniform grid),
+   so that A = sum_f c_f (e_upper - sum w e_lower)(...)^T; the 1/d_f^2 makes it agree with A = G^T
+   diag(M beta open) G, where G carries 1/d_f. (An earlier version of this comment said "/ d_f".) */
 PETSC_EXTERN PetscErrorCode PffPressureGetOperator(PffPressure ps, Mat *A);
 PETSC_EXTERN PetscErrorCode PffPressureGetDiagonal(PffPressure ps, Vec *diag);
 PETSC_EXTERN PetscErrorCode PffPressureGetFaceCoefficients(PffPressure ps, Vec *coef);

@@ -1,0 +1,146 @@
+/* The pressure operator of the projection (PF-FLIP Eq. 8-10) from the face coefficients, and the
+   transfers between grid channels and PETSc Vecs.
+
+   With the gradient G (faces.c), the face weights M_f = A_f d_f and w_f = M_f beta_f open_f,
+     A = G^T diag(w) G,            V D u = -G^T diag(M) u,
+   so A is symmetric positive semi-definite by construction, its rows sum to zero (G 1 = 0) and on a
+   uniform grid it is the 7-point stencil with h beta_f per face. Two assemblies of the same matrix:
+   MatPtAP with the diagonal face matrix (numeric phase only after the first call), or direct
+   MatSetValues of the 2x2 / 5x5 face blocks into the fixed pattern (rows of other ranks through
+   the stash). -pressure_assembly picks one; docs/pressure.md has the timings. */
+#include "pressureimpl.h"
+
+PetscErrorCode PffPressureChannelToVec_Private(PffPressure ps, PetscInt ch, PffChannelKind kind, Vec v)
+{
+  PffChannelKind ck;
+  PetscScalar   *a;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetChannelInfo(ps->grid, ch, NULL, &ck, NULL, NULL));
+  PetscCheck(ck == kind, ps->comm, PETSC_ERR_ARG_WRONG, "pressure: channel %" PetscInt_FMT " is a %s channel, need %s",
+             ch, PffChannelKinds[ck], PffChannelKinds[kind]);
+  PetscCall(VecGetArrayWrite(v, &a));
+  for (PetscInt lb = 0; lb < ps->nlocal; lb++) {
+    const PetscInt c0 = ps->blockStart[lb], nc = ps->blockStart[lb + 1] - c0;
+    if (kind == PFF_CHANNEL_CELL) {
+      float *data;
+      PetscCall(PffGridGetBlockData(ps->grid, ch, lb, 0, &data));
+      for (PetscInt c = 0; c < nc; c++) a[c0 + c] = data[c];
+    } else
+      for (PetscInt d = 0; d < 3; d++) {
+        float *data;
+        PetscCall(PffGridGetBlockData(ps->grid, ch, lb, d, &data));
+        for (PetscInt c = 0; c < nc; c++) a[3 * (c0 + c) + d] = data[c];
+      }
+  }
+  PetscCall(VecRestoreArrayWrite(v, &a));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureVecToChannel_Private(PffPressure ps, Vec v, PffChannelKind kind, PetscInt ch)
+{
+  PffChannelKind     ck;
+  const PetscScalar *a;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetChannelInfo(ps->grid, ch, NULL, &ck, NULL, NULL));
+  PetscCheck(ck == kind, ps->comm, PETSC_ERR_ARG_WRONG, "pressure: channel %" PetscInt_FMT " is a %s channel, need %s",
+             ch, PffChannelKinds[ck], PffChannelKinds[kind]);
+  PetscCall(VecGetArrayRead(v, &a));
+  for (PetscInt lb = 0; lb < ps->nlocal; lb++) {
+    const PetscInt c0 = ps->blockStart[lb], nc = ps->blockStart[lb + 1] - c0;
+    if (kind == PFF_CHANNEL_CELL) {
+      float *data;
+      PetscCall(PffGridGetBlockData(ps->grid, ch, lb, 0, &data));
+      for (PetscInt c = 0; c < nc; c++) data[c] = (float)a[c0 + c];
+    } else
+      for (PetscInt d = 0; d < 3; d++) {
+        float *data;
+        PetscCall(PffGridGetBlockData(ps->grid, ch, lb, d, &data));
+        for (PetscInt c = 0; c < nc; c++) data[c] = (float)a[3 * (c0 + c) + d];
+      }
+  }
+  PetscCall(VecRestoreArrayRead(v, &a));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* max_i |(V D u)_i| / V_i with V D u = -G^T M u; uses the work Vecs wf and vcell. */
+PetscErrorCode PffPressureMaxDivergenceVec_Private(PffPressure ps, Vec u, PetscReal *maxdiv)
+{
+  PetscFunctionBeginUser;
+  PetscCall(VecPointwiseMult(ps->wf, ps->mface, u));
+  PetscCall(MatMultTranspose(ps->G, ps->wf, ps->vcell));
+  PetscCall(VecPointwiseDivide(ps->vcell, ps->vcell, ps->vol));
+  PetscCall(VecNorm(ps->vcell, NORM_INFINITY, maxdiv));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* A = 0, then the face blocks w_f g g^T with g the row of G, added into the fixed pattern. */
+static PetscErrorCode AssembleDirect(PffPressure ps)
+{
+  const PetscScalar *w;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatZeroEntries(ps->A));
+  PetscCall(VecGetArrayRead(ps->w, &w));
+  for (PetscInt r = 0; r < 3 * ps->ncells; r++) {
+    PetscInt    cols[5], m;
+    PetscScalar g[5], vals[25];
+    if (w[r] == 0) continue;
+    m = PffPressureGradientRow(ps, r, cols, g);
+    for (PetscInt a = 0; a < m; a++)
+      for (PetscInt b = 0; b < m; b++) vals[a * m + b] = w[r] * g[a] * g[b];
+    PetscCall(MatSetValues(ps->A, m, cols, m, cols, vals, ADD_VALUES));
+  }
+  PetscCall(VecRestoreArrayRead(ps->w, &w));
+  PetscCall(MatAssemblyBegin(ps->A, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(ps->A, MAT_FINAL_ASSEMBLY));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureAssemble_Private(PffPressure ps, PetscInt chBeta, PetscInt chOpen)
+{
+  PetscScalar       *beta, *open, *w, *coef;
+  const PetscScalar *m;
+  PetscInt           bad     = -1, gbad;
+  PetscReal          badBeta = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffPressureChannelToVec_Private(ps, chBeta, PFF_CHANNEL_FACE, ps->beta));
+  if (chOpen >= 0)
+    PetscCall(PffPressureChannelToVec_Private(ps, chOpen, PFF_CHANNEL_FACE, ps->open));
+  else
+    PetscCall(VecSet(ps->open, 1.0));
+  PetscCall(VecGetArray(ps->beta, &beta));
+  PetscCall(VecGetArray(ps->open, &open));
+  PetscCall(VecGetArrayWrite(ps->w, &w));
+  PetscCall(VecGetArrayWrite(ps->coef, &coef));
+  PetscCall(VecGetArrayRead(ps->mface, &m));
+  for (PetscInt r = 0; r < 3 * ps->ncells; r++) {
+    const PetscBool structural = (PetscBool)(ps->kind[r] != PFF_FACE_WALL && ps->kind[r] != PFF_FACE_INACTIVE);
+    open[r]                    = structural && PetscRealPart(open[r]) > 0.5 ? 1.0 : 0.0;
+    if (open[r] != 0 && !(PetscRealPart(beta[r]) > 0 && PetscIsNormalReal(PetscRealPart(beta[r])))) {
+      bad     = r;
+      badBeta = PetscRealPart(beta[r]);
+    }
+    w[r]    = m[r] * beta[r] * open[r];
+    coef[r] = open[r] != 0 ? w[r] / (ps->dface[r] * ps->dface[r]) : 0.0;
+  }
+  PetscCall(VecRestoreArrayRead(ps->mface, &m));
+  PetscCall(VecRestoreArrayWrite(ps->coef, &coef));
+  PetscCall(VecRestoreArrayWrite(ps->w, &w));
+  PetscCall(VecRestoreArray(ps->open, &open));
+  PetscCall(VecRestoreArray(ps->beta, &beta));
+  PetscCall(MPIU_Allreduce(&bad, &gbad, 1, MPIU_INT, MPI_MAX, ps->comm));
+  PetscCheck(gbad < 0, ps->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "pressure: beta = 1/rho must be positive and finite on open faces; a rank found %g (%s)", (double)badBeta,
+             bad >= 0 ? "this rank" : "another rank");
+
+  if (ps->assembly == PFF_PRESSURE_ASSEMBLY_PTAP) {
+    PetscCall(MatDiagonalSet(ps->W, ps->w, INSERT_VALUES));
+    PetscCall(MatPtAP(ps->W, ps->G, MAT_REUSE_MATRIX, 2.0, &ps->A));
+  } else
+    PetscCall(AssembleDirect(ps));
+  PetscCall(MatGetDiagonal(ps->A, ps->diag));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}

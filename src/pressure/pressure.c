@@ -1,0 +1,307 @@
+/* pressure: interface of the two-phase pressure projection (PF-FLIP Sec. 3.5, Eq. 8-10).
+
+   Stage "Pressure" of the time step: SetUp once per grid topology (face list, gradient G, the
+   operator pattern, Vecs and the Krylov solver), SetCoefficients once per step (beta = 1/rho and the
+   open mask from face channels, A = G^T diag(M beta open) G), Project (rhs from V D u*, KSP solve,
+   u <- u* - dt beta G p). The scenes are closed boxes or periodic, so A is singular with the
+   constants as null space: it is attached to A and removed from the rhs. */
+#include "pressureimpl.h"
+
+const char *const PffPressureAssemblyTypes[] = {"ptap", "direct", "PffPressureAssemblyType", "PFF_PRESSURE_ASSEMBLY_",
+                                                NULL};
+
+#define PFF_PRESSURE_KSP_TYPE_DEFAULT KSPFCG
+#define PFF_PRESSURE_PC_TYPE_DEFAULT PCGAMG
+#define PFF_PRESSURE_RTOL_DEFAULT 1e-4
+#define PFF_PRESSURE_ASSEMBLY_DEFAULT PFF_PRESSURE_ASSEMBLY_PTAP
+
+PetscErrorCode PffPressureCreate(PffGrid grid, PffPressure *ps)
+{
+  PffPressure p;
+  PC          pc;
+
+  PetscFunctionBeginUser;
+  PetscCheck(ps != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL output argument");
+  PetscCheck(grid != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL grid");
+  PetscCall(PffGridGetRaster(grid, NULL, NULL, NULL)); /* errors unless the grid is set up */
+  PetscCall(PetscNew(&p));
+  p->grid     = grid;
+  p->assembly = PFF_PRESSURE_ASSEMBLY_DEFAULT;
+  PetscCall(PffGridGetComm(grid, &p->comm));
+  PetscCall(KSPCreate(p->comm, &p->ksp));
+  PetscCall(KSPSetOptionsPrefix(p->ksp, "pressure_"));
+  PetscCall(KSPSetType(p->ksp, PFF_PRESSURE_KSP_TYPE_DEFAULT));
+  PetscCall(KSPSetTolerances(p->ksp, PFF_PRESSURE_RTOL_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT));
+  PetscCall(KSPSetInitialGuessNonzero(p->ksp, PETSC_TRUE));
+  /* rtol then bounds the true residual V (D u + c_div) / dt, whatever the PC */
+  PetscCall(KSPSetNormType(p->ksp, KSP_NORM_UNPRECONDITIONED));
+  PetscCall(KSPGetPC(p->ksp, &pc));
+  PetscCall(PCSetType(pc, PFF_PRESSURE_PC_TYPE_DEFAULT));
+  *ps = p;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureSetFromOptions(PffPressure ps)
+{
+  PetscFunctionBeginUser;
+  PetscOptionsBegin(ps->comm, NULL, "Pressure projection", "PffPressure");
+  PetscCall(PetscOptionsEnum("-pressure_assembly", "Assembly of A = G^T W G", "PffPressureSetCoefficients",
+                             PffPressureAssemblyTypes, (PetscEnum)ps->assembly, (PetscEnum *)&ps->assembly, NULL));
+  PetscOptionsEnd();
+  PetscCall(KSPSetFromOptions(ps->ksp));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureSetUp(PffPressure ps)
+{
+  PetscScalar *vol, *m;
+
+  PetscFunctionBeginUser;
+  if (ps->setup) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PetscLogEventBegin(PFF_PressSetUp, 0, 0, 0, 0));
+  PetscCall(PffPressureBuildFaces_Private(ps));
+  PetscCall(PffPressureBuildGradient_Private(ps));
+  PetscCall(MatCreateVecs(ps->G, &ps->p, &ps->uf));
+  PetscCall(VecDuplicate(ps->p, &ps->b));
+  PetscCall(VecDuplicate(ps->p, &ps->vcell));
+  PetscCall(VecDuplicate(ps->p, &ps->vol));
+  PetscCall(VecDuplicate(ps->p, &ps->diag));
+  PetscCall(VecDuplicate(ps->uf, &ps->wf));
+  PetscCall(VecDuplicate(ps->uf, &ps->mface));
+  PetscCall(VecDuplicate(ps->uf, &ps->beta));
+  PetscCall(VecDuplicate(ps->uf, &ps->open));
+  PetscCall(VecDuplicate(ps->uf, &ps->coef));
+  PetscCall(VecDuplicate(ps->uf, &ps->w));
+
+  /* V_i = h^3 and M_f = A_f d_f = h^2 d_f with h the cell's own size (see faces.c) */
+  PetscCall(VecGetArrayWrite(ps->vol, &vol));
+  PetscCall(VecGetArrayWrite(ps->mface, &m));
+  for (PetscInt lb = 0; lb < ps->nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(ps->grid, lb, &info));
+    const PetscReal h = info.h;
+    for (PetscInt c = ps->blockStart[lb]; c < ps->blockStart[lb + 1]; c++) {
+      vol[c] = h * h * h;
+      for (PetscInt d = 0; d < 3; d++) m[3 * c + d] = h * h * ps->dface[3 * c + d];
+    }
+  }
+  PetscCall(VecRestoreArrayWrite(ps->mface, &m));
+  PetscCall(VecRestoreArrayWrite(ps->vol, &vol));
+
+  PetscCall(MatNullSpaceCreate(ps->comm, PETSC_TRUE, 0, NULL, &ps->nullsp));
+  PetscCall(MatSetNullSpace(ps->A, ps->nullsp));
+  PetscCall(MatSetOption(ps->A, MAT_NEW_NONZERO_LOCATION_ERR, PETSC_TRUE));
+  PetscCall(MatSetOption(ps->A, MAT_SYMMETRIC, PETSC_TRUE));
+  PetscCall(MatSetOption(ps->A, MAT_SYMMETRY_ETERNAL, PETSC_TRUE));
+  ps->setup = PETSC_TRUE;
+  PetscCall(PetscLogEventEnd(PFF_PressSetUp, 0, 0, 0, 0));
+  PetscCall(PetscInfo(NULL,
+                      "pressure: %" PetscInt_FMT " cells; faces interior %" PetscInt64_FMT " same %" PetscInt64_FMT
+                      " coarser %" PetscInt64_FMT " finer %" PetscInt64_FMT " wall %" PetscInt64_FMT
+                      " inactive %" PetscInt64_FMT "\n",
+                      ps->ntotal, ps->nkind[0], ps->nkind[1], ps->nkind[2], ps->nkind[3], ps->nkind[4], ps->nkind[5]));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureDestroy(PffPressure *ps)
+{
+  PffPressure p;
+
+  PetscFunctionBeginUser;
+  if (ps == NULL || *ps == NULL) PetscFunctionReturn(PETSC_SUCCESS);
+  p = *ps;
+  PetscCall(KSPDestroy(&p->ksp));
+  PetscCall(MatNullSpaceDestroy(&p->nullsp));
+  PetscCall(MatDestroy(&p->A));
+  PetscCall(MatDestroy(&p->W));
+  PetscCall(MatDestroy(&p->G));
+  PetscCall(VecDestroy(&p->p));
+  PetscCall(VecDestroy(&p->b));
+  PetscCall(VecDestroy(&p->vcell));
+  PetscCall(VecDestroy(&p->vol));
+  PetscCall(VecDestroy(&p->diag));
+  PetscCall(VecDestroy(&p->uf));
+  PetscCall(VecDestroy(&p->wf));
+  PetscCall(VecDestroy(&p->mface));
+  PetscCall(VecDestroy(&p->beta));
+  PetscCall(VecDestroy(&p->open));
+  PetscCall(VecDestroy(&p->coef));
+  PetscCall(VecDestroy(&p->w));
+  PetscCall(PetscFree(p->blockStart));
+  PetscCall(PetscFree(p->kind));
+  PetscCall(PetscFree(p->lower));
+  PetscCall(PetscFree(p->lower4));
+  PetscCall(PetscFree(p->dface));
+  PetscCall(PetscFree(*ps));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffPressureCheckSetUp(PffPressure ps, PetscBool coefficients)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(ps != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL object");
+  PetscCheck(ps->setup, ps->comm, PETSC_ERR_ORDER, "pressure: call PffPressureSetUp() first");
+  PetscCheck(!coefficients || ps->coefficientsSet, ps->comm, PETSC_ERR_ORDER,
+             "pressure: call PffPressureSetCoefficients() first");
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureSetCoefficients(PffPressure ps, PetscInt chBeta, PetscInt chOpen)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffPressureCheckSetUp(ps, PETSC_FALSE));
+  PetscCall(PetscLogEventBegin(PFF_PressAssemble, 0, 0, 0, 0));
+  PetscCall(PffPressureAssemble_Private(ps, chBeta, chOpen));
+  PetscCall(KSPSetOperators(ps->ksp, ps->A, ps->A));
+  ps->coefficientsSet = PETSC_TRUE;
+  PetscCall(PetscLogEventEnd(PFF_PressAssemble, 0, 0, 0, 0));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Block Jacobi: ICC(0) on the blocks unless the user chose -pressure_sub_pc_type (needs the sub-KSPs,
+   which exist after PCSetUp and are set up at the first solve). */
+static PetscErrorCode PffPressureApplySubPCDefault(PffPressure ps)
+{
+  PC        pc;
+  PetscBool isbjacobi, userSet;
+
+  PetscFunctionBeginUser;
+  if (ps->subPCDefaultApplied) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(KSPGetPC(ps->ksp, &pc));
+  PetscCall(PetscObjectTypeCompare((PetscObject)pc, PCBJACOBI, &isbjacobi));
+  PetscCall(PetscOptionsHasName(NULL, "pressure_", "-sub_pc_type", &userSet));
+  if (isbjacobi && !userSet) {
+    KSP     *sub;
+    PetscInt nsub;
+    PetscCall(PCBJacobiGetSubKSP(pc, &nsub, NULL, &sub));
+    for (PetscInt s = 0; s < nsub; s++) {
+      PC subpc;
+      PetscCall(KSPGetPC(sub[s], &subpc));
+      PetscCall(PCSetType(subpc, PCICC));
+    }
+  }
+  ps->subPCDefaultApplied = PETSC_TRUE;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureProject(PffPressure ps, PetscInt chU, PetscReal dt, PetscInt chCdiv, PetscInt chP,
+                                  PffPressureStats *stats)
+{
+  PffPressureStats   st = {0};
+  PetscLogDouble     t0, t1, t2;
+  PetscScalar       *u;
+  const PetscScalar *gp, *beta, *open;
+  PetscReal          bnorm, rnorm;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffPressureCheckSetUp(ps, PETSC_TRUE));
+  PetscCheck(dt > 0 && PetscIsNormalReal(dt), ps->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "pressure: time step dt = %g must be positive", (double)dt);
+  PetscCall(PetscLogEventBegin(PFF_PressSolve, 0, 0, 0, 0));
+  PetscCall(PffPressureChannelToVec_Private(ps, chU, PFF_CHANNEL_FACE, ps->uf));
+  PetscCall(PffPressureMaxDivergenceVec_Private(ps, ps->uf, &st.divBefore));
+
+  /* b = -(V D u*_open + V c_div) / dt = (G^T M (open u*) - V c_div) / dt; closed faces end at u = 0,
+     so their u* must not enter the balance */
+  PetscCall(VecPointwiseMult(ps->wf, ps->uf, ps->open));
+  PetscCall(VecPointwiseMult(ps->wf, ps->wf, ps->mface));
+  PetscCall(MatMultTranspose(ps->G, ps->wf, ps->vcell));
+  if (chCdiv >= 0) {
+    PetscCall(PffPressureChannelToVec_Private(ps, chCdiv, PFF_CHANNEL_CELL, ps->b));
+    PetscCall(VecPointwiseMult(ps->b, ps->b, ps->vol));
+    PetscCall(VecAYPX(ps->b, -1.0, ps->vcell));
+  } else
+    PetscCall(VecCopy(ps->vcell, ps->b));
+  PetscCall(VecScale(ps->b, 1.0 / dt));
+  PetscCall(MatNullSpaceRemove(ps->nullsp, ps->b));
+
+  PetscCall(PffPressureChannelToVec_Private(ps, chP, PFF_CHANNEL_CELL, ps->p));
+  PetscCall(PetscTime(&t0));
+  PetscCall(KSPSetUp(ps->ksp));
+  PetscCall(PffPressureApplySubPCDefault(ps));
+  PetscCall(KSPSetUpOnBlocks(ps->ksp));
+  PetscCall(PetscTime(&t1));
+  PetscCall(KSPSolve(ps->ksp, ps->b, ps->p));
+  PetscCall(PetscTime(&t2));
+  PetscCall(KSPGetIterationNumber(ps->ksp, &st.its));
+  PetscCall(KSPGetConvergedReason(ps->ksp, &st.reason));
+  if (st.reason == KSP_DIVERGED_NANORINF || st.reason == KSP_DIVERGED_PC_FAILED) {
+    KSPType ktype;
+    PCType  ptype;
+    PC      pc;
+    PetscCall(KSPGetType(ps->ksp, &ktype));
+    PetscCall(KSPGetPC(ps->ksp, &pc));
+    PetscCall(PCGetType(pc, &ptype));
+    SETERRQ(ps->comm, PETSC_ERR_NOT_CONVERGED,
+            "pressure solver (KSP %s, PC %s, options prefix pressure_) failed: %s after %" PetscInt_FMT " iterations",
+            ktype, ptype, KSPConvergedReasons[st.reason], st.its);
+  }
+  /* true relative residual, whatever norm the KSP monitors */
+  PetscCall(MatMult(ps->A, ps->p, ps->vcell));
+  PetscCall(VecAYPX(ps->vcell, -1.0, ps->b));
+  PetscCall(VecNorm(ps->vcell, NORM_2, &rnorm));
+  PetscCall(VecNorm(ps->b, NORM_2, &bnorm));
+  st.rnorm = bnorm > 0 ? rnorm / bnorm : rnorm;
+
+  /* u = u* - dt beta G p on open faces, 0 on closed ones */
+  PetscCall(MatMult(ps->G, ps->p, ps->wf));
+  PetscCall(VecGetArray(ps->uf, &u));
+  PetscCall(VecGetArrayRead(ps->wf, &gp));
+  PetscCall(VecGetArrayRead(ps->beta, &beta));
+  PetscCall(VecGetArrayRead(ps->open, &open));
+  for (PetscInt r = 0; r < 3 * ps->ncells; r++) u[r] = open[r] != 0 ? u[r] - dt * beta[r] * gp[r] : 0.0;
+  PetscCall(VecRestoreArrayRead(ps->open, &open));
+  PetscCall(VecRestoreArrayRead(ps->beta, &beta));
+  PetscCall(VecRestoreArrayRead(ps->wf, &gp));
+  PetscCall(VecRestoreArray(ps->uf, &u));
+  PetscCall(PffPressureMaxDivergenceVec_Private(ps, ps->uf, &st.divAfter));
+  PetscCall(PffPressureVecToChannel_Private(ps, ps->uf, PFF_CHANNEL_FACE, chU));
+  PetscCall(PffPressureVecToChannel_Private(ps, ps->p, PFF_CHANNEL_CELL, chP));
+  st.setupTime = t1 - t0;
+  st.solveTime = t2 - t1;
+  PetscCall(PetscLogEventEnd(PFF_PressSolve, 0, 0, 0, 0));
+  if (stats) *stats = st;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureMaxDivergence(PffPressure ps, PetscInt chU, PetscReal *maxdiv)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffPressureCheckSetUp(ps, PETSC_FALSE));
+  PetscCheck(maxdiv != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL output argument");
+  PetscCall(PffPressureChannelToVec_Private(ps, chU, PFF_CHANNEL_FACE, ps->uf));
+  PetscCall(PffPressureMaxDivergenceVec_Private(ps, ps->uf, maxdiv));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureGetOperator(PffPressure ps, Mat *A)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffPressureCheckSetUp(ps, PETSC_TRUE));
+  *A = ps->A;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureGetDiagonal(PffPressure ps, Vec *diag)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffPressureCheckSetUp(ps, PETSC_TRUE));
+  *diag = ps->diag;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureGetFaceCoefficients(PffPressure ps, Vec *coef)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffPressureCheckSetUp(ps, PETSC_TRUE));
+  *coef = ps->coef;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureGetKSP(PffPressure ps, KSP *ksp)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(ps != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL object");
+  *ksp = ps->ksp;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}

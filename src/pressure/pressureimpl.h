@@ -1,0 +1,80 @@
+/* The private body of PffPressure: the face list of the owned cells, the gradient matrix, the
+   assembled operator and the Krylov solver. Only src/pressure/ includes this header. */
+#pragma once
+
+#include <pff.h>
+
+/* How the lower face of an owned cell along one axis sits in the block raster. */
+typedef enum {
+  PFF_FACE_INTERIOR, /* both cells in the same block */
+  PFF_FACE_SAME,     /* lower cell in a same-level neighbour block */
+  PFF_FACE_COARSER,  /* fine above coarse: lower side = one coarse cell, d_f = Delta_g 2h, A_f = h^2 */
+  PFF_FACE_FINER,    /* coarse above fine: lower side = 4 fine cells (1/4 each), d_f = Delta_g h, A_f = h^2 */
+  PFF_FACE_WALL,     /* domain wall (closed) */
+  PFF_FACE_INACTIVE, /* inactive neighbour block (closed) */
+  PFF_FACE_NKINDS
+} PffFaceKind;
+
+PETSC_INTERN const char *const PffFaceKinds[];
+
+typedef enum { PFF_PRESSURE_ASSEMBLY_PTAP, PFF_PRESSURE_ASSEMBLY_DIRECT } PffPressureAssemblyType;
+PETSC_INTERN const char *const PffPressureAssemblyTypes[];
+
+struct _n_PffPressure {
+  PffGrid   grid;
+  MPI_Comm  comm; /* the grid's, borrowed */
+  PetscBool setup, coefficientsSet;
+
+  /* cell numbering: owned cells are global rows rstart .. rstart + ncells - 1 */
+  PetscInt  nlocal, ncells, rstart, ntotal;
+  PetscInt *blockStart; /* [nlocal + 1] first local cell of each owned block */
+
+  /* face list, structure of arrays over the owned face rows r = 3 * (local cell) + d
+     (global face row = 3 * (global cell) + d): */
+  unsigned char *kind;   /* PffFaceKind */
+  PetscInt      *lower;  /* global lower cell; for PFF_FACE_FINER the index of its 4-cell set; -1 when closed */
+  PetscInt      *lower4; /* [4 * nfiner] the fine cells under each coarse face */
+  PetscInt       nfiner;
+  PetscReal     *dface;                  /* d_f (0 when closed) */
+  PetscInt64     nkind[PFF_FACE_NKINDS]; /* global counts per class, for PffPressureView-style info */
+
+  Mat          G;      /* gradient: 3 ncells x ncells rows, (G p)_f = (p_upper - sum w_c p_c) / d_f */
+  Mat          W;      /* diag(M_f beta_f open_f) on the face rows, for MatPtAP */
+  Mat          A;      /* G^T W G */
+  MatNullSpace nullsp; /* constants */
+  KSP          ksp;
+
+  Vec p, b, vcell, vol, diag;             /* cell Vecs: pressure, rhs, work, cell volumes, diag(A) */
+  Vec uf, wf, mface, beta, open, coef, w; /* face Vecs: velocity, work, M_f, beta_f, open_f, coefficient, W */
+
+  PffPressureAssemblyType assembly;
+  PetscBool               subPCDefaultApplied;
+};
+
+/* Columns and values of face row r of G: at most 5 (the cell, and 1 or 4 lower cells). */
+static inline PetscInt PffPressureGradientRow(PffPressure ps, PetscInt r, PetscInt cols[5], PetscScalar vals[5])
+{
+  const PetscInt  kind = ps->kind[r];
+  const PetscReal id   = ps->dface[r] > 0 ? 1.0 / ps->dface[r] : 0.0;
+
+  if (kind == PFF_FACE_WALL || kind == PFF_FACE_INACTIVE) return 0;
+  cols[0] = ps->rstart + r / 3;
+  vals[0] = id;
+  if (kind != PFF_FACE_FINER) {
+    cols[1] = ps->lower[r];
+    vals[1] = -id;
+    return 2;
+  }
+  for (PetscInt q = 0; q < 4; q++) {
+    cols[1 + q] = ps->lower4[4 * ps->lower[r] + q];
+    vals[1 + q] = -0.25 * id;
+  }
+  return 5;
+}
+
+PETSC_INTERN PetscErrorCode PffPressureBuildFaces_Private(PffPressure);
+PETSC_INTERN PetscErrorCode PffPressureBuildGradient_Private(PffPressure);
+PETSC_INTERN PetscErrorCode PffPressureAssemble_Private(PffPressure, PetscInt, PetscInt);
+PETSC_INTERN PetscErrorCode PffPressureChannelToVec_Private(PffPressure, PetscInt, PffChannelKind, Vec);
+PETSC_INTERN PetscErrorCode PffPressureVecToChannel_Private(PffPressure, Vec, PffChannelKind, PetscInt);
+PETSC_INTERN PetscErrorCode PffPressureMaxDivergenceVec_Private(PffPressure, Vec, PetscReal *);
