@@ -1,0 +1,137 @@
+/* Migration (DESIGN.md Sec. 4 step 9, Sec. 6): every particle goes to the rank that owns the block
+   containing it. Periodic axes are wrapped and walled axes clamped first (so nothing leaves the
+   domain), then counts by destination are exchanged (MPI_Alltoall) and the particles themselves in
+   one MPI_Alltoallv of packed records. Kept particles stay in order, received ones are appended in
+   rank order, then everything is binned. Nothing is created or lost: a particle in an inactive block
+   is an error, so the global count and mass per type are invariant. */
+#include "particlesimpl.h"
+
+PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
+{
+  const PetscInt    *level;
+  const PetscMPIInt *owner;
+  PetscInt           nb[3], nbad = 0;
+  PetscInt64         loc[3] = {0, 0, 0}; /* sent, wrapped, clamped */
+  const PetscInt     n      = p->n;
+  PetscInt          *dest;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscLogEventBegin(PFF_PartMigrate, 0, 0, 0, 0));
+  PetscCall(PffGridGetRaster(p->grid, nb, &level, &owner));
+  PetscCall(PffParticlesGetWork_Private(p, 0, NULL, (size_t)n, &dest));
+  PetscInt64 sent = 0, wrapped = 0, clamped = 0;
+#pragma omp parallel for reduction(+ : sent, wrapped, clamped, nbad) schedule(static)
+  for (PetscInt i = 0; i < n; i++) {
+    PetscBool w, c;
+    PffParticlesWrapClamp_Private(p, &p->s.x[3 * i], &w, &c);
+    wrapped += w;
+    clamped += c;
+    const PetscInt gid = PffParticlesLocate_Private(p, &p->s.x[3 * i], level);
+    dest[i]            = gid >= 0 ? (PetscInt)owner[gid] : -1;
+    if (gid < 0)
+      nbad++;
+    else if (dest[i] != p->rank)
+      sent++;
+  }
+  loc[0] = sent;
+  loc[1] = wrapped;
+  loc[2] = clamped;
+  if (nbad > 0) {
+    PetscInt i = 0;
+    while (dest[i] >= 0) i++;
+    SETERRQ(PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+            "%" PetscInt_FMT " particles lie in inactive blocks, e.g. id %" PetscInt64_FMT " at (%g, %g, %g)", nbad,
+            (PetscInt64)p->s.id[i], (double)p->s.x[3 * i], (double)p->s.x[3 * i + 1], (double)p->s.x[3 * i + 2]);
+  }
+  if (p->size > 1) {
+    PetscMPIInt *scount, *rcount, *sdispl, *rdispl;
+    PetscInt    *fill;
+    PetscCall(PetscCalloc4(p->size, &scount, p->size, &rcount, p->size + 1, &sdispl, p->size + 1, &rdispl));
+    PetscCall(PetscMalloc1(p->size, &fill));
+    for (PetscInt i = 0; i < n; i++)
+      if (dest[i] != p->rank) scount[dest[i]]++;
+    PetscCallMPI(MPI_Alltoall(scount, 1, MPI_INT, rcount, 1, MPI_INT, p->comm));
+    PetscInt64 ns = 0, nr = 0;
+    for (PetscMPIInt r = 0; r < p->size; r++) {
+      ns += scount[r];
+      nr += rcount[r];
+    }
+    PffPackedParticle *sbuf, *rbuf;
+    PetscCall(PetscMalloc2(ns, &sbuf, nr, &rbuf));
+    /* byte counts and displacements of the packed records */
+    const PetscMPIInt rec = (PetscMPIInt)sizeof(PffPackedParticle);
+    sdispl[0] = rdispl[0] = 0;
+    for (PetscMPIInt r = 0; r < p->size; r++) {
+      fill[r] = sdispl[r]; /* next record to pack for rank r */
+      PetscCall(PetscMPIIntCast((PetscInt64)sdispl[r] + scount[r], &sdispl[r + 1]));
+      PetscCall(PetscMPIIntCast((PetscInt64)rdispl[r] + rcount[r], &rdispl[r + 1]));
+    }
+    PetscMPIInt bytes; /* the byte totals must fit MPI counts */
+    PetscCall(PetscMPIIntCast(ns * rec, &bytes));
+    PetscCall(PetscMPIIntCast(nr * rec, &bytes));
+    /* pack the leavers and compact the stayers in place, keeping their order */
+    PetscInt m = 0;
+    for (PetscInt i = 0; i < n; i++) {
+      if (dest[i] != p->rank) {
+        PffPackedParticle *q = &sbuf[fill[dest[i]]++];
+        for (int d = 0; d < 3; d++) {
+          q->x[d] = p->s.x[3 * i + d];
+          q->v[d] = p->s.v[3 * i + d];
+        }
+        q->id    = p->s.id[i];
+        q->type  = p->s.type[i];
+        q->level = p->s.level[i];
+        q->flags = p->s.flags[i];
+        PetscCall(PetscArrayzero(q->pad, 5));
+        continue;
+      }
+      if (m != i) {
+        for (int d = 0; d < 3; d++) {
+          p->s.x[3 * m + d] = p->s.x[3 * i + d];
+          p->s.v[3 * m + d] = p->s.v[3 * i + d];
+        }
+        p->s.id[m]    = p->s.id[i];
+        p->s.type[m]  = p->s.type[i];
+        p->s.level[m] = p->s.level[i];
+        p->s.flags[m] = p->s.flags[i];
+      }
+      m++;
+    }
+    for (PetscMPIInt r = 0; r < p->size; r++) {
+      sdispl[r] *= rec;
+      rdispl[r] *= rec;
+      scount[r] *= rec;
+      rcount[r] *= rec;
+    }
+    PetscCallMPI(MPI_Alltoallv(sbuf, scount, sdispl, MPI_BYTE, rbuf, rcount, rdispl, MPI_BYTE, p->comm));
+    p->n = m;
+    PetscCall(PffParticlesReserve_Private(p, m + (PetscInt)nr));
+    for (PetscInt64 r = 0; r < nr; r++) {
+      const PffPackedParticle *q = &rbuf[r];
+      const PetscInt           j = p->n++;
+      for (int d = 0; d < 3; d++) {
+        p->s.x[3 * j + d] = q->x[d];
+        p->s.v[3 * j + d] = q->v[d];
+      }
+      p->s.id[j]    = q->id;
+      p->s.type[j]  = q->type;
+      p->s.level[j] = q->level;
+      p->s.flags[j] = q->flags;
+    }
+    PetscCall(PetscFree2(sbuf, rbuf));
+    PetscCall(PetscFree4(scount, rcount, sdispl, rdispl));
+    PetscCall(PetscFree(fill));
+  }
+  p->binned = PETSC_FALSE;
+  PetscCall(PetscLogEventEnd(PFF_PartMigrate, 0, 0, 0, 0));
+  PetscCall(PffParticlesBin(p));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, loc, 3, MPIU_INT64, MPI_SUM, p->comm));
+  if (stats) {
+    stats->sent     = loc[0];
+    stats->wrapped  = loc[1];
+    stats->clamped  = loc[2];
+    stats->pushed   = 0;
+    stats->substeps = 0;
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}

@@ -1,0 +1,189 @@
+/* P2G (PF-FLIP Sec. 3.2, Eq. 3-6; DESIGN.md Sec. 4 step 2): mass and momentum of the particles
+   splatted onto the MAC faces,
+     chMass[f] = sum_p w_fp m_p / 8^l_f,   chMom[f] = sum_p w_fp m_p v_p,d / 8^l_f,
+     w_fp = (max(1 - (|x_f - x_p| / r)^2, 0))^3,   m_p = density[type] * 8^l_p,
+   with r = h of the block the particle lies in. The particle's level only sets its volume. Per axis a
+   face lattice point lies within r of the particle only for the two lattice indices around it, so
+   each component has a 2 x 2 x 2 stencil, which reaches at most one cell beyond the block (any
+   channel width >= 1 suffices).
+
+   Threads: blocks are coloured by the parity of their raster coordinates (8 colours; on a periodic
+   axis with an odd block count the last block gets a third colour, since it touches block 0), so
+   two blocks of one colour never write the same face, and the colours run one after another with
+   a parallel loop over the blocks of each colour: no locks or atomics.
+
+   Level boundaries: a particle always splats on the lattice of its own block and normalises by
+   8^(its block's level). Contributions that land in the ghost region of a coarser or finer
+   neighbour are moved by the grid's conservative reverse halo (whole or half values to the coarse
+   face under a fine one, equal shares to the fine faces under a coarse one). This conserves the
+   sum of the stored values but not the "8^-l_f" normalisation of the receiving face: at faces
+   within one cell of a level boundary the density of a uniform lattice deviates from
+   density * rho~_0 (by up to about a factor 8 in the ghost layer's share). Momentum and mass get
+   the same treatment, so mom / mass is still a weighted mean of particle velocities. Away from
+   level boundaries the result is exact. Wall ghost regions are zero boxes that the reverse halo
+   does not sum, so contributions to the upper wall faces (index n of the normal component) are
+   dropped; the boundary conditions own those faces. */
+#include "particlesimpl.h"
+
+PetscErrorCode PffParticlesGetKernelSum(PffParticles p, PetscReal *rho0)
+{
+  /* offsets of the lattice (i + 1/4 or 3/4) from a face, per axis, in cells; the same for all axes
+     and components, since faces sit at integer or half-integer positions */
+  const PetscReal off[4] = {-0.75, -0.25, 0.25, 0.75};
+  PetscReal       sum    = 0;
+
+  PetscFunctionBeginUser;
+  PetscCheck(rho0 != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "PffParticlesGetKernelSum: output pointer is NULL");
+  (void)p;
+  for (int a = 0; a < 4; a++)
+    for (int b = 0; b < 4; b++)
+      for (int c = 0; c < 4; c++) {
+        const PetscReal q = 1 - (off[a] * off[a] + off[b] * off[b] + off[c] * off[c]);
+        if (q > 0) sum += q * q * q;
+      }
+  *rho0 = sum;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffCheckFaceChannel(PffGrid grid, PetscInt ch, const char what[])
+{
+  PffChannelKind kind;
+  PetscInt       width;
+  const char    *name;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetChannelInfo(grid, ch, &name, &kind, NULL, &width));
+  PetscCheck(kind == PFF_CHANNEL_FACE, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "%s channel %s must be a face channel",
+             what, name);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Zeroes the owned values of channel ch and every region view within width of each block: the ghost
+   buffers may hold a forward halo's values, and splatting adds to them. */
+static PetscErrorCode PffZeroWithGhosts(PffGrid grid, PetscInt ch, PetscInt nlocal, const PffBlockInfo *info)
+{
+  PetscInt width;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetChannelInfo(grid, ch, NULL, NULL, NULL, &width));
+  for (PetscInt lb = 0; lb < nlocal; lb++)
+    for (PetscInt comp = 0; comp < 3; comp++) {
+      float         *data;
+      const PffView *views;
+      const PetscInt n = info[lb].n;
+      PetscCall(PffGridGetBlockData(grid, ch, lb, comp, &data));
+      PetscCall(PetscArrayzero(data, n * n * n));
+      PetscCall(PffGridGetBlockViews(grid, ch, lb, comp, &views));
+      for (PetscInt k = -width; k < n + width; k++)
+        for (PetscInt j = -width; j < n + width; j++) {
+          const PetscBool inner = (PetscBool)(j >= 0 && j < n && k >= 0 && k < n);
+          for (PetscInt i = -width; i < n + width; i++) {
+            if (inner && i == 0) i = n; /* skip the block's own row */
+            if (i >= n + width) break;
+            *PffViewsAt(views, i, j, k, n) = 0;
+          }
+        }
+    }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Splats the particles [i0, i1) of one block into the views of its three face components. */
+static void PffSplatBlock(const PffParticleSoA *s, PetscInt i0, PetscInt i1, const PffBlockInfo *info,
+                          const PffView *vm[3], const PffView *vp[3], const PetscReal density[])
+{
+  const PetscReal ih = 1.0 / info->h, norm = 1.0 / (PetscReal)((PetscInt64)1 << (3 * info->level));
+  const PetscInt  n = info->n;
+
+  for (PetscInt i = i0; i < i1; i++) {
+    const PetscReal m = density[s->type[i]] * (PetscReal)((PetscInt64)1 << (3 * s->level[i])) * norm;
+    PetscReal       sp[3];
+    for (int a = 0; a < 3; a++) sp[a] = (s->x[3 * i + a] - info->lo[a]) * ih;
+    for (int d = 0; d < 3; d++) {
+      PetscInt  c0[3];
+      PetscReal q2[3][2];
+      for (int a = 0; a < 3; a++) {
+        const PetscReal f = sp[a] - (a == d ? 0.0 : 0.5), fl = PetscFloorReal(f), t = f - fl;
+        c0[a]    = (PetscInt)fl;
+        q2[a][0] = t * t;
+        q2[a][1] = (1 - t) * (1 - t);
+      }
+      PetscReal w[8];
+      for (int q = 0; q < 8; q++) {
+        const PetscReal r = 1 - (q2[0][q & 1] + q2[1][(q >> 1) & 1] + q2[2][(q >> 2) & 1]);
+        w[q]              = r > 0 ? r * r * r * m : 0;
+      }
+      const PetscReal vd = s->v[3 * i + d];
+      for (int q = 0; q < 8; q++) {
+        if (w[q] == 0) continue;
+        const PetscInt ii = c0[0] + (q & 1), jj = c0[1] + ((q >> 1) & 1), kk = c0[2] + ((q >> 2) & 1);
+        *PffViewsAt(vm[d], ii, jj, kk, n) += (float)w[q];
+        *PffViewsAt(vp[d], ii, jj, kk, n) += (float)(w[q] * vd);
+      }
+    }
+  }
+}
+
+PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTICLE_NTYPES], PetscInt chMass,
+                               PetscInt chMom)
+{
+  PffBlockInfo   *info;
+  const PffView **views;
+  PetscInt       *order, cstart[28] = {0};
+  const PetscInt  nlocal = p->nlocal;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffParticlesCheckBinned_Private(p, "PffParticlesP2G"));
+  PetscCheck(chMass != chMom, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "P2G needs two different channels");
+  PetscCall(PffCheckFaceChannel(p->grid, chMass, "P2G mass"));
+  PetscCall(PffCheckFaceChannel(p->grid, chMom, "P2G momentum"));
+  PetscCall(PetscLogEventBegin(PFF_P2G, 0, 0, 0, 0));
+  PetscCall(PetscMalloc3(nlocal, &info, 6 * nlocal, &views, nlocal, &order));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PetscCall(PffGridGetBlockInfo(p->grid, lb, &info[lb]));
+    for (PetscInt comp = 0; comp < 3; comp++) {
+      PetscCall(PffGridGetBlockViews(p->grid, chMass, lb, comp, &views[6 * lb + comp]));
+      PetscCall(PffGridGetBlockViews(p->grid, chMom, lb, comp, &views[6 * lb + 3 + comp]));
+    }
+  }
+  PetscCall(PffZeroWithGhosts(p->grid, chMass, nlocal, info));
+  PetscCall(PffZeroWithGhosts(p->grid, chMom, nlocal, info));
+
+  /* blocks sorted by colour (counting sort) */
+  PetscInt *colour;
+  PetscCall(PetscMalloc1(nlocal, &colour));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PetscInt c = 0;
+    for (int a = 0, m = 1; a < 3; a++, m *= 3) {
+      const PetscInt  ia  = info[lb].ijk[a];
+      const PetscBool odd = (PetscBool)(p->periodic[a] && (p->nb[a] & 1) && ia == p->nb[a] - 1);
+      c += m * (odd ? 2 : (ia & 1));
+    }
+    colour[lb] = c;
+    cstart[c + 1]++;
+  }
+  for (int c = 0; c < 27; c++) cstart[c + 1] += cstart[c];
+  {
+    PetscInt fill[27];
+    for (int c = 0; c < 27; c++) fill[c] = cstart[c];
+    for (PetscInt lb = 0; lb < nlocal; lb++) order[fill[colour[lb]]++] = lb;
+  }
+  PetscCall(PetscFree(colour));
+
+  const PffParticleSoA *s     = &p->s;
+  const PetscInt       *start = p->start;
+  for (int c = 0; c < 27; c++) {
+#pragma omp parallel for schedule(dynamic, 1)
+    for (PetscInt e = cstart[c]; e < cstart[c + 1]; e++) {
+      const PetscInt lb = order[e];
+      PffSplatBlock(s, start[lb], start[lb + 1], &info[lb], &views[6 * lb], &views[6 * lb + 3], density);
+    }
+  }
+  PetscCall(PetscFree3(info, views, order));
+
+  PetscCall(PffGridHaloReverseBegin(p->grid, chMass));
+  PetscCall(PffGridHaloReverseEnd(p->grid, chMass));
+  PetscCall(PffGridHaloReverseBegin(p->grid, chMom));
+  PetscCall(PffGridHaloReverseEnd(p->grid, chMom));
+  PetscCall(PetscLogEventEnd(PFF_P2G, 0, 0, 0, 0));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}

@@ -1,0 +1,271 @@
+/* The particle store: life cycle, options, structure-of-arrays storage with growable capacity,
+   appending and removing particles, and global totals (count and mass per type, Eq. 5). */
+#include "particlesimpl.h"
+
+const char *const PffParticleTypes[] = {"liquid", "air", "PffParticleType", "PFF_PARTICLE_", NULL};
+
+PetscErrorCode PffParticlesCreate(PffGrid grid, PffParticles *part)
+{
+  PffParticles p;
+  PetscInt     nb[3];
+
+  PetscFunctionBeginUser;
+  PetscCheck(grid != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "PffParticlesCreate needs a set-up grid");
+  PetscCheck(part != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "PffParticlesCreate: output pointer is NULL");
+  PetscCall(PffInitializePackage());
+  PetscCall(PetscNew(&p));
+  p->grid = grid;
+  PetscCall(PffGridGetComm(grid, &p->comm));
+  PetscCallMPI(MPI_Comm_rank(p->comm, &p->rank));
+  PetscCallMPI(MPI_Comm_size(p->comm, &p->size));
+  p->jitter     = PFF_PARTICLES_JITTER_DEFAULT;
+  p->seed       = PFF_PARTICLES_SEED_DEFAULT;
+  p->substepCfl = PFF_PARTICLES_SUBSTEP_CFL_DEFAULT;
+  PetscCall(PffGridGetSizes(grid, &p->n0, &p->nlevels, p->origin, &p->h0, p->periodic));
+  PetscCall(PffGridGetRaster(grid, nb, NULL, NULL));
+  for (int d = 0; d < 3; d++) {
+    p->nb[d]    = nb[d];
+    p->cells[d] = nb[d] * p->n0;
+  }
+  while (((PetscInt)1 << p->log2n0) < p->n0) p->log2n0++;
+  *part = p;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffParticlesSetFromOptions(PffParticles p)
+{
+  PetscInt seed = (PetscInt)p->seed;
+
+  PetscFunctionBeginUser;
+  PetscOptionsBegin(p->comm, NULL, "FLIP particles", "PffParticles");
+  PetscCall(PetscOptionsReal("-particles_jitter", "Jitter of the seeding lattice as a fraction of the sub-cell spacing",
+                             "PffParticlesSeed", p->jitter, &p->jitter, NULL));
+  PetscCall(PetscOptionsInt("-particles_seed", "Key of the counter-based random number generator", "PffParticlesSeed",
+                            seed, &seed, NULL));
+  PetscCall(PetscOptionsReal("-particles_substep_cfl", "Cells a particle may move per RK3 sub-step",
+                             "PffParticlesAdvect", p->substepCfl, &p->substepCfl, NULL));
+  PetscOptionsEnd();
+  PetscCheck(p->jitter >= 0 && p->jitter <= 1, p->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-particles_jitter %g is invalid: must be in [0, 1]", (double)p->jitter);
+  PetscCheck(seed >= 0, p->comm, PETSC_ERR_ARG_OUTOFRANGE, "-particles_seed %" PetscInt_FMT " is invalid: must be >= 0",
+             seed);
+  PetscCheck(p->substepCfl > 0 && PetscIsNormalReal(p->substepCfl), p->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-particles_substep_cfl %g is invalid: must be positive", (double)p->substepCfl);
+  p->seed = (uint64_t)seed;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffParticleSoAFree(PffParticleSoA *s)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscFree(s->x));
+  PetscCall(PetscFree(s->v));
+  PetscCall(PetscFree(s->id));
+  PetscCall(PetscFree(s->type));
+  PetscCall(PetscFree(s->level));
+  PetscCall(PetscFree(s->flags));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffParticlesDestroy(PffParticles *part)
+{
+  PetscFunctionBeginUser;
+  if (part == NULL || *part == NULL) PetscFunctionReturn(PETSC_SUCCESS);
+  PffParticles p = *part;
+  PetscCall(PffParticleSoAFree(&p->s));
+  PetscCall(PffParticleSoAFree(&p->tmp));
+  PetscCall(PetscFree(p->start));
+  PetscCall(PetscFree(p->blk));
+  PetscCall(PetscFree(p->lgid));
+  PetscCall(PetscFree(p->local));
+  PetscCall(PetscFree(p->work));
+  PetscCall(PetscFree(p->iwork));
+  PetscCall(PetscFree(p));
+  *part = NULL;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Grows one array set to capacity cap, keeping the first n entries. */
+static PetscErrorCode PffParticleSoAGrow(PffParticleSoA *s, PetscInt n, PetscInt cap)
+{
+  PffParticleSoA t;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc1(3 * cap, &t.x));
+  PetscCall(PetscMalloc1(3 * cap, &t.v));
+  PetscCall(PetscMalloc1(cap, &t.id));
+  PetscCall(PetscMalloc1(cap, &t.type));
+  PetscCall(PetscMalloc1(cap, &t.level));
+  PetscCall(PetscMalloc1(cap, &t.flags));
+  if (n > 0) {
+    PetscCall(PetscArraycpy(t.x, s->x, 3 * n));
+    PetscCall(PetscArraycpy(t.v, s->v, 3 * n));
+    PetscCall(PetscArraycpy(t.id, s->id, n));
+    PetscCall(PetscArraycpy(t.type, s->type, n));
+    PetscCall(PetscArraycpy(t.level, s->level, n));
+    PetscCall(PetscArraycpy(t.flags, s->flags, n));
+  }
+  PetscCall(PffParticleSoAFree(s));
+  *s = t;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Ensures capacity for m particles (geometric growth); keeps the n stored ones. */
+PetscErrorCode PffParticlesReserve_Private(PffParticles p, PetscInt m)
+{
+  PetscFunctionBeginUser;
+  if (m <= p->cap) PetscFunctionReturn(PETSC_SUCCESS);
+  const PetscInt cap = PetscMax(m, PetscMax(1024, p->cap + p->cap / 2));
+  PetscCall(PffParticleSoAGrow(&p->s, p->n, cap));
+  PetscCall(PffParticleSoAGrow(&p->tmp, 0, cap));
+  PetscCall(PetscFree(p->blk));
+  PetscCall(PetscMalloc1(cap, &p->blk));
+  p->cap    = cap;
+  p->binned = PETSC_FALSE;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Scratch arrays of at least nr reals and ni integers (either pointer may be NULL); borrowed until the next call. */
+PetscErrorCode PffParticlesGetWork_Private(PffParticles p, size_t nr, PetscReal **r, size_t ni, PetscInt **i)
+{
+  PetscFunctionBeginUser;
+  if (nr > p->nwork) {
+    PetscCall(PetscFree(p->work));
+    p->nwork = PetscMax(nr, p->nwork + p->nwork / 2);
+    PetscCall(PetscMalloc1(p->nwork, &p->work));
+  }
+  if (ni > p->niwork) {
+    PetscCall(PetscFree(p->iwork));
+    p->niwork = PetscMax(ni, p->niwork + p->niwork / 2);
+    PetscCall(PetscMalloc1(p->niwork, &p->iwork));
+  }
+  if (r) *r = p->work;
+  if (i) *i = p->iwork;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffParticlesCheckBinned_Private(PffParticles p, const char caller[])
+{
+  PetscFunctionBeginUser;
+  PetscCheck(p->binned, PETSC_COMM_SELF, PETSC_ERR_ORDER,
+             "%s needs binned particles: call PffParticlesMigrate (or PffParticlesBin) after adding or removing",
+             caller);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Periodic axes: the image in [origin, origin + L), wrapped in index space like PffGridLocate. Walled
+   axes: clamped a millionth of a finest cell inside, so the point lies strictly within the domain. */
+void PffParticlesWrapClamp_Private(PffParticles p, PetscReal x[3], PetscBool *wrapped, PetscBool *clamped)
+{
+  *wrapped = *clamped = PETSC_FALSE;
+  for (int d = 0; d < 3; d++) {
+    const PetscReal nc = (PetscReal)p->cells[d], s = (x[d] - p->origin[d]) / p->h0;
+    if (p->periodic[d]) {
+      if (s >= 0 && s < nc) continue;
+      PetscReal t = PetscFmodReal(s, nc);
+      if (t < 0) t += nc;
+      if (t >= nc) t = 0;
+      x[d]     = p->origin[d] + t * p->h0;
+      *wrapped = PETSC_TRUE;
+      /* the division in PffGridLocate may still round up to nc */
+      if ((x[d] - p->origin[d]) / p->h0 >= nc) x[d] = p->origin[d];
+    } else {
+      const PetscReal eps = 1e-6;
+      if (s < eps) {
+        x[d]     = p->origin[d] + eps * p->h0;
+        *clamped = PETSC_TRUE;
+      } else if (s > nc - eps) {
+        x[d]     = p->origin[d] + (nc - eps) * p->h0;
+        *clamped = PETSC_TRUE;
+      }
+    }
+  }
+}
+
+PetscErrorCode PffParticlesGetArrays(PffParticles p, PffParticleArrays *a)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(a != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "PffParticlesGetArrays: output pointer is NULL");
+  a->n     = p->n;
+  a->x     = p->s.x;
+  a->v     = p->s.v;
+  a->id    = p->s.id;
+  a->type  = p->s.type;
+  a->level = p->s.level;
+  a->flags = p->s.flags;
+  a->start = p->binned ? p->start : NULL;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffParticlesAdd(PffParticles p, PetscInt m, const PetscReal x[], const PetscReal v[],
+                               const uint64_t id[], const uint8_t type[], const int8_t level[], const uint8_t flags[])
+{
+  PetscFunctionBeginUser;
+  PetscCheck(m >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "cannot add %" PetscInt_FMT " particles", m);
+  if (m == 0) PetscFunctionReturn(PETSC_SUCCESS);
+  for (PetscInt i = 0; i < m; i++) {
+    PetscCheck(type[i] < PFF_PARTICLE_NTYPES, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+               "particle %" PetscInt_FMT " has type %d, not a PffParticleType", i, (int)type[i]);
+    PetscCheck(level[i] >= 0 && level[i] < p->nlevels, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+               "particle %" PetscInt_FMT " has level %d outside the grid's levels 0..%" PetscInt_FMT, i, (int)level[i],
+               p->nlevels - 1);
+  }
+  PetscCall(PffParticlesReserve_Private(p, p->n + m));
+  PetscCall(PetscArraycpy(p->s.x + 3 * p->n, x, 3 * m));
+  PetscCall(PetscArraycpy(p->s.v + 3 * p->n, v, 3 * m));
+  PetscCall(PetscArraycpy(p->s.id + p->n, id, m));
+  PetscCall(PetscArraycpy(p->s.type + p->n, type, m));
+  PetscCall(PetscArraycpy(p->s.level + p->n, level, m));
+  if (flags)
+    PetscCall(PetscArraycpy(p->s.flags + p->n, flags, m));
+  else
+    PetscCall(PetscArrayzero(p->s.flags + p->n, m));
+  p->n += m;
+  p->binned = PETSC_FALSE;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffParticlesRemove(PffParticles p, const PetscBool remove[])
+{
+  PetscInt  m   = 0;
+  PetscBool bin = p->binned;
+
+  PetscFunctionBeginUser;
+  for (PetscInt i = 0; i < p->n; i++) {
+    if (remove[i]) continue;
+    if (m != i) {
+      for (int d = 0; d < 3; d++) {
+        p->s.x[3 * m + d] = p->s.x[3 * i + d];
+        p->s.v[3 * m + d] = p->s.v[3 * i + d];
+      }
+      p->s.id[m]    = p->s.id[i];
+      p->s.type[m]  = p->s.type[i];
+      p->s.level[m] = p->s.level[i];
+      p->s.flags[m] = p->s.flags[i];
+    }
+    m++;
+  }
+  p->n      = m;
+  p->binned = PETSC_FALSE;
+  if (bin) PetscCall(PffParticlesBin(p));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffParticlesGetTotals(PffParticles p, const PetscReal density[PFF_PARTICLE_NTYPES],
+                                     PetscInt64 count[PFF_PARTICLE_NTYPES], PetscReal mass[PFF_PARTICLE_NTYPES])
+{
+  PetscInt64 c[PFF_PARTICLE_NTYPES]   = {0};
+  PetscReal  vol[PFF_PARTICLE_NTYPES] = {0};
+
+  PetscFunctionBeginUser;
+  for (PetscInt i = 0; i < p->n; i++) {
+    c[p->s.type[i]]++;
+    vol[p->s.type[i]] += (PetscReal)((PetscInt64)1 << (3 * p->s.level[i]));
+  }
+  if (count) PetscCallMPI(MPI_Allreduce(c, count, PFF_PARTICLE_NTYPES, MPIU_INT64, MPI_SUM, p->comm));
+  if (mass) {
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, vol, PFF_PARTICLE_NTYPES, MPIU_REAL, MPI_SUM, p->comm));
+    for (int t = 0; t < PFF_PARTICLE_NTYPES; t++) mass[t] = (density ? density[t] : 1.0) * vol[t];
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}

@@ -1,0 +1,104 @@
+/* Private state of PffParticles; only src/particles/ includes this. */
+#pragma once
+
+#include <pff.h>
+
+#define PFF_PARTICLES_JITTER_DEFAULT 1.0
+#define PFF_PARTICLES_SEED_DEFAULT 0
+#define PFF_PARTICLES_SUBSTEP_CFL_DEFAULT 1.0
+#define PFF_PARTICLES_MAX_SUBSTEPS 16
+
+/* Purposes of the counter-based RNG (the third key besides the seed and the particle id). */
+enum { PFF_RNG_SEED_JITTER = 1 };
+
+/* One particle packed for migration. */
+typedef struct {
+  PetscReal x[3], v[3];
+  uint64_t  id;
+  uint8_t   type;
+  int8_t    level;
+  uint8_t   flags;
+  uint8_t   pad[5];
+} PffPackedParticle;
+
+/* The structure-of-arrays store: n particles of capacity cap. */
+typedef struct {
+  PetscReal *x, *v;
+  uint64_t  *id;
+  uint8_t   *type;
+  int8_t    *level;
+  uint8_t   *flags;
+} PffParticleSoA;
+
+struct _n_PffParticles {
+  PffGrid     grid; /* borrowed */
+  MPI_Comm    comm; /* the grid's communicator, borrowed */
+  PetscMPIInt rank, size;
+
+  /* options */
+  PetscReal jitter, substepCfl;
+  uint64_t  seed;
+
+  /* store; tmp is the scatter target of the counting sort (same capacity), swapped with s */
+  PetscInt       n, cap;
+  PffParticleSoA s, tmp;
+
+  /* bins: particles of local block lb are [start[lb], start[lb + 1]); blk[i] = local block of particle i */
+  PetscBool binned;
+  PetscInt  nlocal, *start, *blk, *lgid;
+  PetscInt *local; /* [nblocks] local index of global block or -1; rebuilt by every Bin */
+  PetscInt  nblocksCache;
+
+  /* grid geometry, cached at Create (fixed for the grid's life) */
+  PetscInt  n0, log2n0, nlevels, nb[3], cells[3];
+  PetscReal origin[3], h0;
+  PetscBool periodic[3];
+
+  /* scratch for the hot paths, grown on demand */
+  PetscReal *work;
+  size_t     nwork;
+  PetscInt  *iwork;
+  size_t     niwork;
+};
+
+/* splitmix64 finaliser: a counter-based hash, the same on every rank and thread. */
+static inline uint64_t PffHash64_Private(uint64_t z)
+{
+  z += 0x9e3779b97f4a7c15ULL;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+/* Uniform in [0, 1) keyed by (seed, id, purpose, counter). */
+static inline PetscReal PffRandom01_Private(uint64_t seed, uint64_t id, uint64_t purpose, uint64_t counter)
+{
+  const uint64_t h = PffHash64_Private(PffHash64_Private(PffHash64_Private(seed) ^ id) ^ (purpose << 32 | counter));
+  return (PetscReal)(h >> 11) / 9007199254740992.0;
+}
+
+/* Global block of world position x as PffGridLocate computes it (periodic axes wrapped), -1 outside
+   the domain; the level map decides activity. */
+static inline PetscInt PffParticlesLocate_Private(PffParticles p, const PetscReal x[3], const PetscInt level[])
+{
+  PetscInt b[3];
+  for (int d = 0; d < 3; d++) {
+    const PetscReal nc = (PetscReal)p->cells[d];
+    PetscReal       s  = (x[d] - p->origin[d]) / p->h0;
+    if (p->periodic[d]) {
+      s = PetscFmodReal(s, nc);
+      if (s < 0) s += nc;
+      if (s >= nc) s = 0;
+    }
+    if (!(s >= 0 && s < nc)) return -1;
+    b[d] = ((PetscInt)s) >> p->log2n0;
+  }
+  const PetscInt gid = b[0] + p->nb[0] * (b[1] + p->nb[1] * b[2]);
+  return level[gid] >= 0 ? gid : -1;
+}
+
+PETSC_INTERN PetscErrorCode PffParticlesReserve_Private(PffParticles, PetscInt);
+PETSC_INTERN PetscErrorCode PffParticlesGetWork_Private(PffParticles, size_t, PetscReal **, size_t, PetscInt **);
+/* Wraps periodic axes and clamps walled axes of position x in place; returns what it did. */
+PETSC_INTERN void PffParticlesWrapClamp_Private(PffParticles, PetscReal x[3], PetscBool *wrapped, PetscBool *clamped);
+PETSC_INTERN PetscErrorCode PffParticlesCheckBinned_Private(PffParticles, const char[]);

@@ -1,0 +1,67 @@
+/* Seeding (PF-FLIP Sec. 3.2; DESIGN.md Sec. 6): 2 x 2 x 2 particles per cell of every owned block at
+   the block's level, each at its sub-cell centre (i + 1/4 + s/2) h, s in {0, 1}, moved by a jitter of
+   up to +-jitter/2 of the sub-cell spacing h/2 per axis, so a particle never leaves its sub-cell.
+
+   Ids are global and partition-independent: id = ((gid * n0^3 + c) * 8 + s) with gid the raster
+   index of the block, c the cell index at the block's level (x fastest, c < n^3 <= n0^3) and s the
+   sub-cell. The jitter is a counter-based hash of (seed, id, purpose, axis), so the particles (and
+   the callback's answers) are the same on any number of ranks and threads. */
+#include "particlesimpl.h"
+
+PetscErrorCode PffParticlesSeed(PffParticles p, PffSeedFn fn, void *ctx)
+{
+  PetscInt        nlocal;
+  PetscInt64      ncand = 0;
+  const PetscReal n0c   = (PetscReal)p->n0 * (PetscReal)p->n0 * (PetscReal)p->n0;
+
+  PetscFunctionBeginUser;
+  PetscCheck(fn != NULL, p->comm, PETSC_ERR_ARG_NULL, "PffParticlesSeed needs a seeding function");
+  PetscCheck(n0c * (PetscReal)(p->nb[0] * p->nb[1]) * (PetscReal)p->nb[2] * 8 < 1.8e19, p->comm,
+             PETSC_ERR_ARG_OUTOFRANGE, "the raster is too large for 64-bit particle ids");
+  PetscCall(PetscLogEventBegin(PFF_PartSeed, 0, 0, 0, 0));
+  PetscCall(PffGridGetLocalBlocks(p->grid, &nlocal));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(p->grid, lb, &info));
+    ncand += 8 * (PetscInt64)info.n * info.n * info.n;
+  }
+  PetscCall(PffParticlesReserve_Private(p, p->n + (PetscInt)ncand));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(p->grid, lb, &info));
+    const PetscInt n = info.n;
+    for (PetscInt k = 0; k < n; k++)
+      for (PetscInt j = 0; j < n; j++)
+        for (PetscInt i = 0; i < n; i++) {
+          const uint64_t cell = (uint64_t)(i + n * (j + n * k));
+          for (PetscInt sub = 0; sub < 8; sub++) {
+            const uint64_t id   = ((uint64_t)info.gid * (uint64_t)(p->n0 * p->n0 * p->n0) + cell) * 8 + (uint64_t)sub;
+            const PetscInt c[3] = {i, j, k};
+            PetscReal      x[3], v[3] = {0, 0, 0};
+            PetscInt       type = -1;
+            for (int a = 0; a < 3; a++) {
+              const PetscReal u = PffRandom01_Private(p->seed, id, PFF_RNG_SEED_JITTER, (uint64_t)a);
+              const PetscReal s = 0.25 + 0.5 * (PetscReal)((sub >> a) & 1) + p->jitter * (u - 0.5) * 0.5;
+              x[a]              = info.lo[a] + ((PetscReal)c[a] + s) * info.h;
+            }
+            PetscCall(fn(x, &type, v, ctx));
+            if (type < 0) continue;
+            PetscCheck(type < PFF_PARTICLE_NTYPES, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+                       "seeding function returned type %" PetscInt_FMT ", not a PffParticleType or -1", type);
+            const PetscInt m = p->n++;
+            for (int a = 0; a < 3; a++) {
+              p->s.x[3 * m + a] = x[a];
+              p->s.v[3 * m + a] = v[a];
+            }
+            p->s.id[m]    = id;
+            p->s.type[m]  = (uint8_t)type;
+            p->s.level[m] = (int8_t)info.level;
+            p->s.flags[m] = 0;
+          }
+        }
+  }
+  p->binned = PETSC_FALSE;
+  PetscCall(PetscLogEventEnd(PFF_PartSeed, 0, 0, 0, 0));
+  PetscCall(PffParticlesBin(p));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
