@@ -4,6 +4,12 @@ foreach(np 1 2 4)
   pff_add_unit(test_io RANKS ${np} ARGS -out test_io_np${np}.h5)
 endforeach()
 
+# Checkpoints (round trip, restart on another rank count, crash safety, errors) and frames with
+# particles; each rank count writes its own files.
+foreach(np 1 2 4)
+  pff_add_unit(test_checkpoint RANKS ${np} ARGS -prefix test_checkpoint_np${np})
+endforeach()
+
 # The Python reader and the slice plot on the frame the 2-rank run wrote (Debian's python3 with
 # h5py, numpy and matplotlib; skipped when they are missing). --check also parses the XDMF sidecar
 # and checks every hyperslab it refers to.
