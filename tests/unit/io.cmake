@@ -27,6 +27,14 @@ if(PFF_PYTHON3)
              WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR})
     set_tests_properties(test_io_postproc_summary test_io_postproc_slice PROPERTIES FIXTURES_REQUIRED io_frame
                          LABELS "unit;postproc")
+    # A frame with particles (and a hidden channel), written by the 2-rank checkpoint test.
+    set_tests_properties(test_checkpoint_np2 PROPERTIES FIXTURES_SETUP io_particle_frame)
+    add_test(NAME test_checkpoint_postproc_check
+             COMMAND ${PFF_PYTHON3} ${PROJECT_SOURCE_DIR}/postproc/pff_frame.py --check --summary
+                     test_checkpoint_np2_frame.h5
+             WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR})
+    set_tests_properties(test_checkpoint_postproc_check PROPERTIES FIXTURES_REQUIRED io_particle_frame
+                         LABELS "unit;postproc")
   else()
     message(STATUS "postproc tests skipped: ${PFF_PYTHON3} lacks h5py, numpy or matplotlib")
   endif()
