@@ -12,6 +12,9 @@ Command line:
     pff_frame.py --summary frame.h5   # block count, channels and min / max / sum of each dataset
     pff_frame.py --check frame.h5     # checks the layout and the XDMF sidecar; exit status 1 on a fault
 
+Frames written by PffIOWriteFrameParticles and checkpoints also hold /particles (count attribute, x, v,
+id, type, level, flags); --check verifies its shapes and the sidecar's Polyvertex particle grid.
+
 Needs only h5py and numpy (Debian python3-h5py, python3-numpy).
 """
 import argparse
@@ -171,6 +174,10 @@ def summary(f):
     for name, kind, comp, _ in f.datasets():
         v = f.field(name)
         print(f"{name:<24} {kind:<5} {comp:>4} {v.min():17.9e} {v.max():17.9e} {v.sum(dtype=np.float64):17.9e}")
+    n = particle_count(f)
+    if n is not None:
+        types = np.bincount(f.h5["particles/type"][...], minlength=2) if n > 0 else np.zeros(2, np.int64)
+        print(f"particles {n} (per type: {' '.join(str(int(c)) for c in types)}), x {f.h5['particles/x'].dtype}")
 
 
 def check(f):
@@ -199,7 +206,36 @@ def check(f):
             faults.append(f"/fields/{name} has shape {d.shape}, expected ({f.ncells},)")
         if kind not in ("cell", "face") or (kind == "cell" and comp != 0) or (kind == "face" and not 0 <= comp < 3):
             faults.append(f"/fields/{name}: kind {kind!r} component {comp}")
-    faults += check_xdmf(f)
+    faults += check_particles(f)
+    if not int(f.h5.attrs.get("checkpoint", 0)):  # checkpoints have no sidecar
+        faults += check_xdmf(f)
+    return faults
+
+
+PARTICLE_COLUMNS = {"x": 3, "v": 3, "id": 0, "type": 0, "level": 0, "flags": 0}
+
+
+def particle_count(f):
+    """Rows of /particles, or None when the file has no particles."""
+    if "particles" not in f.h5:
+        return None
+    return int(f.h5["particles"].attrs.get("count", -1))
+
+
+def check_particles(f):
+    n = particle_count(f)
+    if n is None:
+        return []
+    if n < 0:
+        return ["/particles has no count attribute"]
+    g = f.h5["particles"]
+    faults = []
+    for name, ncol in PARTICLE_COLUMNS.items():
+        shape = (n, ncol) if ncol else (n,)
+        if name not in g:
+            faults.append(f"/particles/{name} missing")
+        elif g[name].shape != shape:
+            faults.append(f"/particles/{name} has shape {g[name].shape}, expected {shape}")
     return faults
 
 
@@ -212,10 +248,11 @@ def check_xdmf(f):
         doc = xml.dom.minidom.parse(xmf)
     except Exception as e:  # any parse failure is the fault we report
         return [f"{xmf}: not well-formed XML: {e}"]
-    faults = []
-    grids = [g for g in doc.getElementsByTagName("Grid") if g.getAttribute("GridType") == "Uniform"]
+    uniform = [g for g in doc.getElementsByTagName("Grid") if g.getAttribute("GridType") == "Uniform"]
+    grids = [g for g in uniform if g.getAttribute("Name") != "particles"]
+    faults = check_xdmf_particles(f, xmf, [g for g in uniform if g.getAttribute("Name") == "particles"])
     if len(grids) != f.nactive:
-        return [f"{xmf}: {len(grids)} uniform grids, the frame has {f.nactive} blocks"]
+        return faults + [f"{xmf}: {len(grids)} uniform grids, the frame has {f.nactive} blocks"]
     h5name = os.path.basename(f.path)
     names = {name for name, *_ in f.datasets()}
     for p, g in enumerate(grids):
@@ -243,6 +280,26 @@ def check_xdmf(f):
             faults.append(f"{xmf}: block {p} lists {sorted(seen)}, the frame has {sorted(names)}")
         if len(faults) > 10:
             break
+    return faults
+
+
+def check_xdmf_particles(f, xmf, grids):
+    """The particle grid: a Polyvertex of count nodes over /particles/x (none when there are no particles)."""
+    n = particle_count(f) or 0
+    if n == 0:
+        return [f"{xmf}: a particle grid but the frame has no particles"] if grids else []
+    if len(grids) != 1:
+        return [f"{xmf}: {len(grids)} particle grids, expected 1 for {n} particles"]
+    g = grids[0]
+    topo = g.getElementsByTagName("Topology")[0]
+    faults = []
+    if topo.getAttribute("TopologyType") != "Polyvertex" or topo.getAttribute("NumberOfElements") != str(n):
+        faults.append(f"{xmf}: particle topology is not a Polyvertex of {n} elements")
+    h5name = os.path.basename(f.path)
+    refs = {d.firstChild.data.strip() for d in g.getElementsByTagName("DataItem")}
+    for name in ("x", "v", "type"):
+        if f"{h5name}:/particles/{name}" not in refs:
+            faults.append(f"{xmf}: the particle grid does not refer to {h5name}:/particles/{name}")
     return faults
 
 

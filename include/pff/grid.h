@@ -146,6 +146,11 @@ PETSC_EXTERN PetscErrorCode PffGridAddChannel(PffGrid grid, const char name[], P
 PETSC_EXTERN PetscErrorCode PffGridGetChannelInfo(PffGrid grid, PetscInt ch, const char **name, PffChannelKind *kind,
                                                   PetscInt *ncomp, PetscInt *width);
 PETSC_EXTERN PetscErrorCode PffGridGetNumChannels(PffGrid grid, PetscInt *nch);
+/* Whether channel ch is written to output frames (PffIOWriteFrame, PffIOWriteFrameParticles; default
+   PETSC_TRUE). Checkpoints write every channel regardless. Not collective, but every rank must set the
+   same flags before writing a frame. */
+PETSC_EXTERN PetscErrorCode PffGridSetChannelOutput(PffGrid grid, PetscInt ch, PetscBool write);
+PETSC_EXTERN PetscErrorCode PffGridGetChannelOutput(PffGrid grid, PetscInt ch, PetscBool *write);
 /* Owned values of component comp of local block lb: n^3 floats, x fastest. Borrowed. */
 PETSC_EXTERN PetscErrorCode PffGridGetBlockData(PffGrid grid, PetscInt ch, PetscInt lb, PetscInt comp, float **data);
 /* The 27 region views of component comp of local block lb (see PffView). Borrowed. */

@@ -35,11 +35,12 @@ typedef struct {
   char           name[64];
   PffChannelKind kind;
   PetscInt       ncomp, width;
-  float         *data;  /* owned values, [local block][comp][n^3] */
-  float         *alloc; /* data - PFF_CHANNEL_PAD: row kernels may read one value past either end */
-  float         *halo;  /* ghost and source boxes of the plan */
-  PffView       *views; /* [nlocal][ncomp][27] */
-  PffHaloPlan   *plan;  /* borrowed from the grid */
+  float         *data;   /* owned values, [local block][comp][n^3] */
+  float         *alloc;  /* data - PFF_CHANNEL_PAD: row kernels may read one value past either end */
+  float         *halo;   /* ghost and source boxes of the plan */
+  PffView       *views;  /* [nlocal][ncomp][27] */
+  PffHaloPlan   *plan;   /* borrowed from the grid */
+  PetscBool      output; /* written to frames (PffGridSetChannelOutput); checkpoints write every channel */
 } PffChannel;
 
 struct _n_PffGrid {

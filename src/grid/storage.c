@@ -17,9 +17,10 @@ PetscErrorCode PffGridAddChannel(PffGrid g, const char name[], PffChannelKind ki
     PetscCheck(strcmp(g->ch[i]->name, name), g->comm, PETSC_ERR_ARG_WRONG, "channel %s exists already", name);
   PetscCall(PetscNew(&c));
   PetscCall(PetscStrncpy(c->name, name, sizeof(c->name)));
-  c->kind  = kind;
-  c->ncomp = kind == PFF_CHANNEL_FACE ? 3 : 1;
-  c->width = width;
+  c->kind   = kind;
+  c->ncomp  = kind == PFF_CHANNEL_FACE ? 3 : 1;
+  c->width  = width;
+  c->output = PETSC_TRUE;
   if (g->setupcalled) PetscCall(PffGridAllocateChannel_Private(g, c));
   g->ch[g->nch] = c;
   *ch           = g->nch++;
@@ -112,6 +113,24 @@ PetscErrorCode PffGridGetChannelInfo(PffGrid g, PetscInt ch, const char **name, 
   if (kind) *kind = g->ch[ch]->kind;
   if (ncomp) *ncomp = g->ch[ch]->ncomp;
   if (width) *width = g->ch[ch]->width;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffGridSetChannelOutput(PffGrid g, PetscInt ch, PetscBool write)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(ch >= 0 && ch < g->nch, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+             "PffGridSetChannelOutput: no channel %" PetscInt_FMT " (the grid has %" PetscInt_FMT ")", ch, g->nch);
+  g->ch[ch]->output = write;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffGridGetChannelOutput(PffGrid g, PetscInt ch, PetscBool *write)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(ch >= 0 && ch < g->nch, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+             "PffGridGetChannelOutput: no channel %" PetscInt_FMT " (the grid has %" PetscInt_FMT ")", ch, g->nch);
+  *write = g->ch[ch]->output;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <pff.h>
+#include <pff/particles.h>
 #include <hdf5.h>
 
 #define PFF_FRAME_FORMAT "pfflip-frame"
@@ -93,6 +94,24 @@ PETSC_INTERN PetscErrorCode PffIOFieldName_Private(const char name[], PffChannel
                                                    size_t len);
 
 /* Writes the XDMF sidecar xmfpath describing the frame whose final name has basename h5name; rank 0 only.
+   Lists the channels flagged for output, and a Polyvertex grid of the nparticles particles of
+   /particles (single precision) when nparticles > 0.
  *err receives 0 or the errno of a failed file operation (the caller reports it collectively). */
 PETSC_INTERN PetscErrorCode PffIOWriteXdmf_Private(PffGrid grid, const PffFrameLayout *layout, const char xmfpath[],
-                                                   const char h5name[], PetscReal time, int *err);
+                                                   const char h5name[], PetscReal time, PetscInt64 nparticles,
+                                                   int *err);
+
+/* The /particles group (particles.c): x, v (N x 3; float64 when dbl, else float32), id, type, level,
+   flags, and the attribute count = N; each rank writes its rows at the exclusive prefix sum of the
+   local counts. *count receives N. Collective on comm. */
+PETSC_INTERN PetscErrorCode PffIOWriteParticles_Private(PffParticles particles, MPI_Comm comm, hid_t file, hid_t dxpl,
+                                                        PetscBool dbl, PetscInt64 *count);
+/* Checks the /particles group of path; msg stays empty when it is complete and consistent. The same
+   result on every rank (collective metadata). */
+PETSC_INTERN PetscErrorCode PffIOCheckParticles_Private(hid_t file, const char path[], PetscInt64 *count, char msg[],
+                                                        size_t len);
+/* Reads an equal slice of the count rows of /particles on each rank, checks type and level against
+   grid (one collective error naming the first bad row), appends them to the (empty) store and migrates
+   them to their owners. Collective on comm. */
+PETSC_INTERN PetscErrorCode PffIOReadParticles_Private(PffParticles particles, PffGrid grid, MPI_Comm comm, hid_t file,
+                                                       const char path[], hid_t dxpl, PetscInt64 count);

@@ -1,5 +1,7 @@
-/* Reading frames (restart and post-processing tools): PffIOReadFrame fills a set-up grid from a frame,
-   PffIOReadLevels returns the frame's level map so that a tool can first build a matching grid.
+/* Reading frames and checkpoints (restart and post-processing tools): PffIOReadFrame fills a set-up grid
+   from a frame, PffIOReadCheckpoint also the particle store and the extra values (particles.c reads
+   the particle rows), PffIOReadLevels returns the frame's level map so that a tool can first build a
+   matching grid.
 
    A frame may be read on any number of ranks and with any partition: each rank selects its owned
    blocks at their Morton positions (layout.c), exactly as the writer did. Before touching data the
@@ -140,19 +142,29 @@ static PetscErrorCode PffIOCompareRaster(PffGrid grid, hid_t file, const char pa
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Checks that every component of every grid channel has a dataset of the right kind and length. */
+/* Checks that every component of every required grid channel has a dataset of the right kind and
+   length: all channels when all is true (checkpoints), else those flagged for output. A channel not
+   required is read when the file has any of its datasets (then all must be right) and skipped when it
+   has none. present[c] says whether channel c is read. */
 static PetscErrorCode PffIOCompareChannels(PffGrid grid, const PffFrameLayout *L, hid_t file, const char path[],
-                                           char msg[], size_t len)
+                                           PetscBool all, PetscBool present[], char msg[], size_t len)
 {
-  PetscInt nch;
-  htri_t   exists;
-  hid_t    group;
+  PetscInt  nch;
+  htri_t    exists;
+  hid_t     group;
+  PetscBool need = PETSC_FALSE;
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetNumChannels(grid, &nch));
+  for (PetscInt c = 0; c < nch; c++) {
+    PetscBool write;
+    PetscCall(PffGridGetChannelOutput(grid, c, &write));
+    present[c] = PETSC_FALSE;
+    if (write || all) need = PETSC_TRUE;
+  }
   PffCallHDF5(exists = H5Lexists(file, "fields", H5P_DEFAULT));
   if (!exists) {
-    if (nch > 0) PetscCall(PetscSNPrintf(msg, len, "frame %s: no /fields group", path));
+    if (need) PetscCall(PetscSNPrintf(msg, len, "frame %s: no /fields group", path));
     PetscFunctionReturn(PETSC_SUCCESS);
   }
   PffCallHDF5(group = H5Gopen2(file, "fields", H5P_DEFAULT));
@@ -160,8 +172,20 @@ static PetscErrorCode PffIOCompareChannels(PffGrid grid, const PffFrameLayout *L
     const char    *name;
     PffChannelKind kind;
     PetscInt       ncomp;
+    PetscBool      write, any = PETSC_FALSE;
 
+    PetscCall(PffGridGetChannelOutput(grid, c, &write));
     PetscCall(PffGridGetChannelInfo(grid, c, &name, &kind, &ncomp, NULL));
+    if (!write && !all) {
+      for (PetscInt comp = 0; comp < ncomp && !any; comp++) {
+        char dname[256];
+        PetscCall(PffIOFieldName_Private(name, kind, comp, dname, sizeof(dname)));
+        PffCallHDF5(exists = H5Lexists(group, dname, H5P_DEFAULT));
+        if (exists) any = PETSC_TRUE;
+      }
+      if (!any) continue; /* a hidden channel the frame does not hold: left untouched */
+    }
+    present[c] = PETSC_TRUE;
     for (PetscInt comp = 0; comp < ncomp && !msg[0]; comp++) {
       char     dname[256], *fkind = NULL;
       hid_t    dset, space;
@@ -246,7 +270,8 @@ static PetscErrorCode PffIOCompareBlocks(MPI_Comm comm, const PffFrameLayout *L,
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-static PetscErrorCode PffIOReadFields(PffGrid grid, const PffFrameLayout *L, hid_t file, hid_t dxpl)
+static PetscErrorCode PffIOReadFields(PffGrid grid, const PffFrameLayout *L, hid_t file, hid_t dxpl,
+                                      const PetscBool present[])
 {
   const hsize_t total = (hsize_t)L->offset[L->nactive];
   PetscInt      nch;
@@ -266,6 +291,7 @@ static PetscErrorCode PffIOReadFields(PffGrid grid, const PffFrameLayout *L, hid
     PffChannelKind kind;
     PetscInt       ncomp;
 
+    if (!present[c]) continue;
     PetscCall(PffGridGetChannelInfo(grid, c, &name, &kind, &ncomp, NULL));
     for (PetscInt comp = 0; comp < ncomp; comp++) {
       char       dname[256];
@@ -292,44 +318,103 @@ static PetscErrorCode PffIOReadFields(PffGrid grid, const PffFrameLayout *L, hid
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode PffIOReadFrame(PffGrid grid, const char path[], PetscReal *time, PetscInt *step)
+/* The shared reader. checkpoint: the file must be a checkpoint, every channel must be in it, the extra
+   values (nextra of them) are returned, and the particles are read into particles (when not NULL). */
+static PetscErrorCode PffIOReadFile(PffGrid grid, PffParticles particles, const char path[], PetscBool checkpoint,
+                                    PetscReal *time, PetscInt *step, PetscInt nextra, PetscReal extra[])
 {
   char           msg[PETSC_MAX_PATH_LEN + 512] = "";
   MPI_Comm       comm;
   PffFrameLayout L;
   hid_t          file, dxpl;
   PetscReal      t  = 0;
-  PetscInt64     st = 0;
-  PetscBool      tfound, sfound;
+  PetscInt64     st = 0, npart = 0;
+  PetscBool      tfound, sfound, present[PFF_GRID_MAX_CHANNELS];
+  double        *xbuf = NULL;
 
   PetscFunctionBeginUser;
   PetscCall(PffIOInitialize_Private());
   PetscCall(PffIOGetComm_Private(grid, &comm));
+  if (checkpoint && particles) {
+    PetscInt64 count[PFF_PARTICLE_NTYPES];
+    PetscCall(PffParticlesGetTotals(particles, NULL, count, NULL));
+    PetscCheck(count[0] + count[1] == 0, comm, PETSC_ERR_ARG_WRONGSTATE,
+               "cannot read checkpoint %s: the particle store must be empty but holds %" PetscInt64_FMT " particles",
+               path, count[0] + count[1]);
+  }
+  PetscCheck(nextra >= 0 && (nextra == 0 || extra != NULL), comm, PETSC_ERR_ARG_WRONG,
+             "checkpoint %s: %" PetscInt_FMT " extra values requested but the array is NULL or the count negative",
+             path, nextra);
   PetscCall(PffIOOpenFrame(comm, path, &file));
   PetscCall(PetscLogEventBegin(PFF_IORead, 0, 0, 0, 0));
   PetscCall(PffIOCreateTransferList_Private(&dxpl));
   PetscCall(PffIOLayoutCreate_Private(grid, &L));
-  PetscCall(PffIOCompareRaster(grid, file, path, dxpl, msg, sizeof(msg)));
-  if (!msg[0]) PetscCall(PffIOCompareChannels(grid, &L, file, path, msg, sizeof(msg)));
+  if (checkpoint) {
+    int       mark = 0, fextra = 0;
+    PetscBool found;
+
+    PetscCall(PffH5ReadAttribute_Private(file, "checkpoint", H5T_NATIVE_INT, 0, &mark, &found));
+    if (!found || mark != 1)
+      PetscCall(PetscSNPrintf(msg, sizeof(msg),
+                              "file %s is a frame, not a checkpoint (no root attribute checkpoint = 1); write it with "
+                              "PffIOWriteCheckpoint",
+                              path));
+    if (!msg[0]) {
+      PetscCall(PffH5ReadAttribute_Private(file, "nextra", H5T_NATIVE_INT, 0, &fextra, &found));
+      if (!found || fextra != nextra)
+        PetscCall(PetscSNPrintf(msg, sizeof(msg),
+                                "checkpoint %s holds %d extra values but the caller expects %" PetscInt_FMT, path,
+                                found ? fextra : 0, nextra));
+    }
+    if (!msg[0] && nextra > 0) {
+      PetscCall(PetscMalloc1(nextra, &xbuf));
+      PetscCall(PffH5ReadAttribute_Private(file, "extra", H5T_NATIVE_DOUBLE, (hsize_t)nextra, xbuf, &found));
+      if (!found)
+        PetscCall(PetscSNPrintf(msg, sizeof(msg), "checkpoint %s: no root attribute extra of %" PetscInt_FMT " values",
+                                path, nextra));
+    }
+  }
+  if (!msg[0]) PetscCall(PffIOCompareRaster(grid, file, path, dxpl, msg, sizeof(msg)));
+  if (!msg[0]) PetscCall(PffIOCompareChannels(grid, &L, file, path, checkpoint, present, msg, sizeof(msg)));
   if (!msg[0]) PetscCall(PffIOCompareBlocks(comm, &L, file, path, dxpl, msg, sizeof(msg)));
   if (!msg[0]) {
     PetscCall(PffH5ReadAttribute_Private(file, "time", PFF_H5T_NATIVE_PETSCREAL, 0, &t, &tfound));
     PetscCall(PffH5ReadAttribute_Private(file, "step", H5T_NATIVE_INT64, 0, &st, &sfound));
     if (!tfound || !sfound) PetscCall(PetscSNPrintf(msg, sizeof(msg), "frame %s: no time or step attribute", path));
   }
+  if (!msg[0] && checkpoint && particles) PetscCall(PffIOCheckParticles_Private(file, path, &npart, msg, sizeof(msg)));
   if (msg[0]) {
+    PetscCall(PetscFree(xbuf));
     PetscCall(PffIOLayoutDestroy_Private(&L));
     PffCallHDF5(H5Pclose(dxpl));
     PffCallHDF5(H5Fclose(file));
     PetscCall(PetscLogEventEnd(PFF_IORead, 0, 0, 0, 0));
     SETERRQ(comm, PETSC_ERR_FILE_UNEXPECTED, "%s", msg);
   }
-  PetscCall(PffIOReadFields(grid, &L, file, dxpl));
+  PetscCall(PffIOReadFields(grid, &L, file, dxpl, present));
+  if (checkpoint && particles) PetscCall(PffIOReadParticles_Private(particles, grid, comm, file, path, dxpl, npart));
   PetscCall(PffIOLayoutDestroy_Private(&L));
   PffCallHDF5(H5Pclose(dxpl));
   PffCallHDF5(H5Fclose(file));
+  for (PetscInt i = 0; i < nextra; i++) extra[i] = (PetscReal)xbuf[i];
+  PetscCall(PetscFree(xbuf));
   if (time) *time = t;
   if (step) PetscCall(PetscIntCast(st, step));
   PetscCall(PetscLogEventEnd(PFF_IORead, 0, 0, 0, 0));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffIOReadFrame(PffGrid grid, const char path[], PetscReal *time, PetscInt *step)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffIOReadFile(grid, NULL, path, PETSC_FALSE, time, step, 0, NULL));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffIOReadCheckpoint(PffGrid grid, PffParticles particles, const char path[], PetscReal *time,
+                                   PetscInt *step, PetscInt nextra, PetscReal extra[])
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffIOReadFile(grid, particles, path, PETSC_TRUE, time, step, nextra, extra));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -1,4 +1,8 @@
-/* PffIOWriteFrame (Output stage): one HDF5 file per frame, written collectively with MPI-IO.
+/* PffIOWriteFrame, PffIOWriteFrameParticles (Output stage) and PffIOWriteCheckpoint (restart): one
+   HDF5 file per frame or checkpoint, written collectively with MPI-IO by one worker, PffIOWriteFile.
+   A frame holds the channels flagged for output (PffGridSetChannelOutput) and, optionally, the
+   particles in single precision; a checkpoint holds every channel, the particles in double precision
+   and the caller's extra values, and has no XDMF sidecar. The particle group is written in particles.c.
 
    Every rank writes the rows and cells of the blocks it owns, at their Morton positions (layout.c),
    so the file is the same on any number of ranks except /blocks/owner and the mpi_ranks attribute.
@@ -34,8 +38,16 @@ static PetscErrorCode PffIOBcastString(MPI_Comm comm, char **s)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* What a frame file holds besides the grid; a plain frame is {NULL, PETSC_FALSE, 0, NULL}. */
+typedef struct {
+  PffParticles     particles;  /* NULL: no /particles group */
+  PetscBool        checkpoint; /* every channel, float64 particles, root attribute checkpoint = 1, no sidecar */
+  PetscInt         nextra;     /* checkpoint only: the caller's extra values */
+  const PetscReal *extra;
+} PffIOWriteOptions;
+
 static PetscErrorCode PffIOWriteRootAttributes(MPI_Comm comm, hid_t file, PetscReal time, PetscInt step,
-                                               const char scene[])
+                                               const char scene[], const PffIOWriteOptions *o)
 {
   char       *options = NULL, *versions = NULL, *scn = NULL;
   double      t  = (double)time;
@@ -72,6 +84,23 @@ static PetscErrorCode PffIOWriteRootAttributes(MPI_Comm comm, hid_t file, PetscR
   PetscCall(PffH5WriteAttributeString_Private(file, "versions", versions));
   PetscCall(PffH5WriteAttribute_Private(file, "mpi_ranks", H5T_STD_I32LE, H5T_NATIVE_INT, 0, &size));
   PetscCall(PffH5WriteAttribute_Private(file, "omp_threads", H5T_STD_I32LE, H5T_NATIVE_INT, 0, &threads));
+  if (o->checkpoint) {
+    const int   one = 1;
+    PetscMPIInt nextra;
+    double     *extra;
+
+    PetscCall(PetscMPIIntCast(o->nextra, &nextra));
+    PetscCall(PffH5WriteAttribute_Private(file, "checkpoint", H5T_STD_I32LE, H5T_NATIVE_INT, 0, &one));
+    PetscCall(PffH5WriteAttribute_Private(file, "nextra", H5T_STD_I32LE, H5T_NATIVE_INT, 0, &nextra));
+    if (nextra > 0) {
+      /* Rank 0's values, so that every rank writes the same attribute. */
+      PetscCall(PetscMalloc1(nextra, &extra));
+      for (int i = 0; i < nextra; i++) extra[i] = (double)o->extra[i];
+      PetscCallMPI(MPI_Bcast(extra, nextra, MPI_DOUBLE, 0, comm));
+      PetscCall(PffH5WriteAttribute_Private(file, "extra", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, (hsize_t)nextra, extra));
+      PetscCall(PetscFree(extra));
+    }
+  }
   PetscCall(PetscFree(options));
   PetscCall(PetscFree(versions));
   PetscCall(PetscFree(scn));
@@ -170,9 +199,11 @@ static PetscErrorCode PffIOWriteBlocks(PffGrid grid, MPI_Comm comm, const PffFra
 }
 
 /* /fields: one float32 dataset per channel component; the owned blocks are packed in Morton order,
-   the order in which HDF5 walks the union of hyperslabs. */
-static PetscErrorCode PffIOWriteFields(PffGrid grid, const PffFrameLayout *L, hid_t file, hid_t dxpl)
+   the order in which HDF5 walks the union of hyperslabs. all: every channel (checkpoints), otherwise
+   only those with the output flag (PffGridSetChannelOutput). */
+static PetscErrorCode PffIOWriteFields(PffGrid grid, const PffFrameLayout *L, hid_t file, hid_t dxpl, PetscBool all)
 {
+  PetscBool     first = PETSC_TRUE;
   const hsize_t total = (hsize_t)L->offset[L->nactive];
   PetscInt      nch;
   float        *buf;
@@ -189,7 +220,10 @@ static PetscErrorCode PffIOWriteFields(PffGrid grid, const PffFrameLayout *L, hi
     const char    *name;
     PffChannelKind kind;
     PetscInt       ncomp;
+    PetscBool      write;
 
+    PetscCall(PffGridGetChannelOutput(grid, c, &write));
+    if (!write && !all) continue;
     PetscCall(PffGridGetChannelInfo(grid, c, &name, &kind, &ncomp, NULL));
     for (PetscInt comp = 0; comp < ncomp; comp++) {
       char       dname[256];
@@ -211,7 +245,8 @@ static PetscErrorCode PffIOWriteFields(PffGrid grid, const PffFrameLayout *L, hi
       PetscCall(PffH5WriteAttributeString_Private(dset, "channel", name));
       PffCallHDF5(H5Dwrite(dset, H5T_NATIVE_FLOAT, mspace, fspace, dxpl, buf));
       PffCallHDF5(H5Dclose(dset));
-      if (c == 0 && comp == 0) {
+      if (first) {
+        first = PETSC_FALSE;
         /* HDF5 silently falls back to independent I/O (much slower at scale); say so under -info. */
         H5D_mpio_actual_io_mode_t mode;
         uint32_t                  lcause, gcause;
@@ -251,17 +286,24 @@ static PetscErrorCode PffIOFrameNames(const char path[], char tmp[], char xmf[],
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode PffIOWriteFrame(PffGrid grid, const char path[], PetscReal time, PetscInt step, const char scene[])
+/* Writes the file <path>.tmp collectively, and renames it (and, for frames, the XDMF sidecar) once
+   every rank has closed it: the shared path of frames and checkpoints. */
+static PetscErrorCode PffIOWriteFile(PffGrid grid, const char path[], PetscReal time, PetscInt step, const char scene[],
+                                     const PffIOWriteOptions *o)
 {
   char           tmp[PETSC_MAX_PATH_LEN], xmf[PETSC_MAX_PATH_LEN], xmftmp[PETSC_MAX_PATH_LEN];
-  const char    *base = NULL;
+  const char    *base = NULL, *what = o->checkpoint ? "checkpoint" : "frame";
   MPI_Comm       comm;
   PetscMPIInt    rank;
   PffFrameLayout L;
   hid_t          fapl, dxpl, file;
-  int            err[3] = {0, 0, 0}; /* errno of: XDMF write, frame rename, XDMF rename */
+  PetscInt64     npart  = -1;        /* particles written, -1 for none */
+  int            err[3] = {0, 0, 0}; /* errno of: XDMF write, file rename, XDMF rename */
 
   PetscFunctionBeginUser;
+  PetscCheck(o->nextra >= 0 && (o->nextra == 0 || o->extra != NULL), PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
+             "checkpoint %s: %" PetscInt_FMT " extra values requested but the array is NULL or the count negative",
+             path, o->nextra);
   PetscCall(PffIOInitialize_Private());
   PetscCall(PffIOGetComm_Private(grid, &comm));
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
@@ -271,16 +313,18 @@ PetscErrorCode PffIOWriteFrame(PffGrid grid, const char path[], PetscReal time, 
 
   PetscCall(PffIOCreateAccessList_Private(comm, &fapl));
   PetscCall(PffIOCreateTransferList_Private(&dxpl));
+  /* H5F_ACC_TRUNC also overwrites a stale <path>.tmp that a killed writer left behind. */
   file = H5Fcreate(tmp, H5F_ACC_TRUNC, H5P_DEFAULT, fapl);
   if (file < 0) {
     char msg[256];
     PffHDF5ErrorMessage_Private(msg, sizeof(msg));
-    SETERRQ(comm, PETSC_ERR_FILE_OPEN, "cannot create frame %s: %s", tmp, msg);
+    SETERRQ(comm, PETSC_ERR_FILE_OPEN, "cannot create %s %s: %s", what, tmp, msg);
   }
-  PetscCall(PffIOWriteRootAttributes(comm, file, time, step, scene));
+  PetscCall(PffIOWriteRootAttributes(comm, file, time, step, scene, o));
   PetscCall(PffIOWriteGridGroup(grid, comm, file, dxpl));
   PetscCall(PffIOWriteBlocks(grid, comm, &L, file, dxpl));
-  PetscCall(PffIOWriteFields(grid, &L, file, dxpl));
+  PetscCall(PffIOWriteFields(grid, &L, file, dxpl, o->checkpoint));
+  if (o->particles) PetscCall(PffIOWriteParticles_Private(o->particles, comm, file, dxpl, o->checkpoint, &npart));
   PffCallHDF5(H5Fclose(file));
   PffCallHDF5(H5Pclose(dxpl));
   PffCallHDF5(H5Pclose(fapl));
@@ -288,16 +332,46 @@ PetscErrorCode PffIOWriteFrame(PffGrid grid, const char path[], PetscReal time, 
   /* Every rank has closed the file before rank 0 gives it its final name. */
   PetscCallMPI(MPI_Barrier(comm));
   if (rank == 0) {
-    PetscCall(PffIOWriteXdmf_Private(grid, &L, xmftmp, base, time, &err[0]));
+    if (!o->checkpoint) PetscCall(PffIOWriteXdmf_Private(grid, &L, xmftmp, base, time, npart, &err[0]));
     if (rename(tmp, path) != 0) err[1] = errno;
-    if (!err[0] && rename(xmftmp, xmf) != 0) err[2] = errno;
+    if (!o->checkpoint && !err[0] && rename(xmftmp, xmf) != 0) err[2] = errno;
   }
   PetscCallMPI(MPI_Bcast(err, 3, MPI_INT, 0, comm));
   PetscCheck(!err[1], comm, PETSC_ERR_FILE_WRITE, "cannot rename %s to %s: %s", tmp, path, strerror(err[1]));
   PetscCheck(!err[0], comm, PETSC_ERR_FILE_WRITE, "cannot write %s: %s", xmftmp, strerror(err[0]));
   PetscCheck(!err[2], comm, PETSC_ERR_FILE_WRITE, "cannot rename %s to %s: %s", xmftmp, xmf, strerror(err[2]));
-  PetscCall(PetscInfo(NULL, "wrote frame %s (%" PetscInt_FMT " blocks) and %s\n", path, L.nactive, xmf));
+  PetscCall(PetscInfo(NULL, "wrote %s %s (%" PetscInt_FMT " blocks, %" PetscInt64_FMT " particles)\n", what, path,
+                      L.nactive, npart < 0 ? 0 : npart));
   PetscCall(PffIOLayoutDestroy_Private(&L));
   PetscCall(PetscLogEventEnd(PFF_IOWrite, 0, 0, 0, 0));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffIOWriteFrame(PffGrid grid, const char path[], PetscReal time, PetscInt step, const char scene[])
+{
+  const PffIOWriteOptions o = {NULL, PETSC_FALSE, 0, NULL};
+
+  PetscFunctionBeginUser;
+  PetscCall(PffIOWriteFile(grid, path, time, step, scene, &o));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffIOWriteFrameParticles(PffGrid grid, PffParticles particles, const char path[], PetscReal time,
+                                        PetscInt step, const char scene[])
+{
+  const PffIOWriteOptions o = {particles, PETSC_FALSE, 0, NULL};
+
+  PetscFunctionBeginUser;
+  PetscCall(PffIOWriteFile(grid, path, time, step, scene, &o));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffIOWriteCheckpoint(PffGrid grid, PffParticles particles, const char path[], PetscReal time,
+                                    PetscInt step, PetscInt nextra, const PetscReal extra[], const char scene[])
+{
+  const PffIOWriteOptions o = {particles, PETSC_TRUE, nextra, extra};
+
+  PetscFunctionBeginUser;
+  PetscCall(PffIOWriteFile(grid, path, time, step, scene, &o));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

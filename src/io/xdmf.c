@@ -5,7 +5,12 @@
    per field dataset, read through a HyperSlab of the 1-D dataset (start = block offset, stride 1,
    count n^3) reshaped to n x n x n (z slowest, which matches our x-fastest storage). Face components
    appear as cell data too; docs/file-format.md says where they really sit. Rank 0 writes it alone:
-   the replicated raster tells it every block. */
+   the replicated raster tells it every block. Only the channels flagged for output appear.
+
+   Beside the block collection, a frame with particles gets a second uniform grid "particles": a
+   Polyvertex topology (NumberOfElements = N, NodesPerElement = 1, no connectivity array: vertex i is
+   point i) on XYZ geometry from /particles/x, with the node attributes type (scalar) and velocity
+   (vector, /particles/v). */
 #include <errno.h>
 #include <stdio.h>
 #include "h5util.h"
@@ -37,7 +42,7 @@ static void PffXmlPuts(FILE *fp, const char s[])
 }
 
 PetscErrorCode PffIOWriteXdmf_Private(PffGrid grid, const PffFrameLayout *L, const char xmfpath[], const char h5name[],
-                                      PetscReal time, int *err)
+                                      PetscReal time, PetscInt64 nparticles, int *err)
 {
   const PetscInt *level;
   PetscInt        nb[3], n0, nch;
@@ -87,7 +92,10 @@ PetscErrorCode PffIOWriteXdmf_Private(PffGrid grid, const PffFrameLayout *L, con
       const char    *name;
       PffChannelKind kind;
       PetscInt       ncomp;
+      PetscBool      write;
 
+      PetscCall(PffGridGetChannelOutput(grid, c, &write));
+      if (!write) continue;
       PetscCall(PffGridGetChannelInfo(grid, c, &name, &kind, &ncomp, NULL));
       for (PetscInt comp = 0; comp < ncomp; comp++) {
         char dname[256];
@@ -116,7 +124,35 @@ PetscErrorCode PffIOWriteXdmf_Private(PffGrid grid, const PffFrameLayout *L, con
     }
     fprintf(fp, "   </Grid>\n");
   }
-  fprintf(fp, "  </Grid>\n </Domain>\n</Xdmf>\n");
+  fprintf(fp, "  </Grid>\n");
+  if (nparticles > 0) {
+    /* The particles: a Polyvertex topology (one vertex per element, implicit connectivity 0..N-1) over
+       the float32 positions of /particles/x, with type and velocity as node data. */
+    fprintf(fp, "  <Grid Name=\"particles\" GridType=\"Uniform\">\n");
+    fprintf(fp, "   <Time Value=\"%.17g\"/>\n", (double)time);
+    fprintf(fp,
+            "   <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"%" PetscInt64_FMT
+            "\" NodesPerElement=\"1\"/>\n",
+            nparticles);
+    fprintf(fp, "   <Geometry GeometryType=\"XYZ\">\n");
+    fprintf(fp,
+            "    <DataItem Dimensions=\"%" PetscInt64_FMT " 3\" NumberType=\"Float\" Precision=\"4\" Format=\"HDF\">",
+            nparticles);
+    PffXmlPuts(fp, h5name);
+    fprintf(fp, ":/particles/x</DataItem>\n   </Geometry>\n");
+    fprintf(fp, "   <Attribute Name=\"type\" AttributeType=\"Scalar\" Center=\"Node\">\n");
+    fprintf(fp, "    <DataItem Dimensions=\"%" PetscInt64_FMT "\" NumberType=\"UChar\" Precision=\"1\" Format=\"HDF\">",
+            nparticles);
+    PffXmlPuts(fp, h5name);
+    fprintf(fp, ":/particles/type</DataItem>\n   </Attribute>\n");
+    fprintf(fp, "   <Attribute Name=\"velocity\" AttributeType=\"Vector\" Center=\"Node\">\n");
+    fprintf(fp,
+            "    <DataItem Dimensions=\"%" PetscInt64_FMT " 3\" NumberType=\"Float\" Precision=\"4\" Format=\"HDF\">",
+            nparticles);
+    PffXmlPuts(fp, h5name);
+    fprintf(fp, ":/particles/v</DataItem>\n   </Attribute>\n  </Grid>\n");
+  }
+  fprintf(fp, " </Domain>\n</Xdmf>\n");
   if (ferror(fp)) *err = errno ? errno : EIO;
   if (fclose(fp) != 0 && !*err) *err = errno ? errno : EIO;
   PetscFunctionReturn(PETSC_SUCCESS);

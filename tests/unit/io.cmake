@@ -4,6 +4,12 @@ foreach(np 1 2 4)
   pff_add_unit(test_io RANKS ${np} ARGS -out test_io_np${np}.h5)
 endforeach()
 
+# Checkpoints (round trip, restart on another rank count, crash safety, errors) and frames with
+# particles; each rank count writes its own files.
+foreach(np 1 2 4)
+  pff_add_unit(test_checkpoint RANKS ${np} ARGS -prefix test_checkpoint_np${np})
+endforeach()
+
 # The Python reader and the slice plot on the frame the 2-rank run wrote (Debian's python3 with
 # h5py, numpy and matplotlib; skipped when they are missing). --check also parses the XDMF sidecar
 # and checks every hyperslab it refers to.
@@ -20,6 +26,14 @@ if(PFF_PYTHON3)
              COMMAND ${PFF_PYTHON3} ${PROJECT_SOURCE_DIR}/postproc/slice.py test_io_np2.h5 phi -o test_io_np2_phi.png
              WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR})
     set_tests_properties(test_io_postproc_summary test_io_postproc_slice PROPERTIES FIXTURES_REQUIRED io_frame
+                         LABELS "unit;postproc")
+    # A frame with particles (and a hidden channel), written by the 2-rank checkpoint test.
+    set_tests_properties(test_checkpoint_np2 PROPERTIES FIXTURES_SETUP io_particle_frame)
+    add_test(NAME test_checkpoint_postproc_check
+             COMMAND ${PFF_PYTHON3} ${PROJECT_SOURCE_DIR}/postproc/pff_frame.py --check --summary
+                     test_checkpoint_np2_frame.h5
+             WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR})
+    set_tests_properties(test_checkpoint_postproc_check PROPERTIES FIXTURES_REQUIRED io_particle_frame
                          LABELS "unit;postproc")
   else()
     message(STATUS "postproc tests skipped: ${PFF_PYTHON3} lacks h5py, numpy or matplotlib")

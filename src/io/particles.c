@@ -1,0 +1,205 @@
+/* The /particles group of frames and checkpoints (Output stage and restart).
+
+   Writing: rank r owns rows [o_r, o_r + n_r) of every particle dataset, o_r = sum_{q<r} n_q (MPI_Exscan
+   of the local counts), so the rows follow the ranks and, within a rank, the store's order; the file
+   therefore depends on the partition, but the set of particles does not. Every rank takes part in
+   every collective call, selecting nothing when it holds no particle. x and v are float32 in frames
+   (converted here, so that the transfer stays collective) and float64 in checkpoints (exact restart).
+
+   Reading (restart on any number of ranks): rank r of P reads rows [N r / P, N (r + 1) / P), appends
+   them to the empty store and migrates them to the owners of their blocks. */
+#include <stdint.h>
+#include "h5util.h"
+
+#define PFF_PARTICLE_DATASETS 6
+
+/* Selects rows [start, start + n) of a dataspace of rows x ncol (ncol = 0: 1-D), none when n = 0. */
+static PetscErrorCode PffIOSelectRows(hid_t space, hsize_t start, hsize_t n, hsize_t ncol)
+{
+  const hsize_t off[2] = {start, 0}, cnt[2] = {n, ncol};
+
+  PetscFunctionBeginUser;
+  if (n == 0)
+    PffCallHDF5(H5Sselect_none(space));
+  else
+    PffCallHDF5(H5Sselect_hyperslab(space, H5S_SELECT_SET, off, NULL, cnt, NULL));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Creates dataset name of total rows (x ncol) and writes this rank's n rows at start. */
+static PetscErrorCode PffIOWriteRows(hid_t group, const char name[], hid_t filetype, hid_t memtype, hsize_t total,
+                                     hsize_t ncol, hsize_t start, hsize_t n, hid_t dxpl, const void *buf)
+{
+  const hsize_t dims[2] = {total, ncol};
+  hid_t         dset, fspace, mspace;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffH5CreateDataset_Private(group, name, filetype, ncol > 0 ? 2 : 1, dims, &dset));
+  PffCallHDF5(fspace = H5Dget_space(dset));
+  PetscCall(PffIOSelectRows(fspace, start, n, ncol));
+  PetscCall(PffIOCreateMemSpace_Private(n, ncol, &mspace));
+  PffCallHDF5(H5Dwrite(dset, memtype, mspace, fspace, dxpl, buf));
+  PffCallHDF5(H5Sclose(mspace));
+  PffCallHDF5(H5Sclose(fspace));
+  PffCallHDF5(H5Dclose(dset));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffIOWriteParticles_Private(PffParticles particles, MPI_Comm comm, hid_t file, hid_t dxpl, PetscBool dbl,
+                                           PetscInt64 *count)
+{
+  PffParticleArrays a;
+  PetscInt64        n, start = 0, total = 0;
+  PetscMPIInt       rank;
+  hid_t             group;
+  const hid_t       ftype = dbl ? H5T_IEEE_F64LE : H5T_IEEE_F32LE;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  PetscCall(PffParticlesGetArrays(particles, &a));
+  n = a.n;
+  PetscCallMPI(MPI_Exscan(&n, &start, 1, MPIU_INT64, MPI_SUM, comm));
+  if (rank == 0) start = 0; /* MPI_Exscan leaves rank 0's result undefined */
+  PetscCallMPI(MPI_Allreduce(&n, &total, 1, MPIU_INT64, MPI_SUM, comm));
+
+  PffCallHDF5(group = H5Gcreate2(file, "particles", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
+  PetscCall(PffH5WriteAttribute_Private(group, "count", H5T_STD_I64LE, H5T_NATIVE_INT64, 0, &total));
+  for (int k = 0; k < 2; k++) {
+    const char      *name = k == 0 ? "x" : "v";
+    const PetscReal *src  = k == 0 ? a.x : a.v;
+    if (dbl) {
+      PetscCall(PffIOWriteRows(group, name, ftype, PFF_H5T_NATIVE_PETSCREAL, (hsize_t)total, 3, (hsize_t)start,
+                               (hsize_t)n, dxpl, src));
+    } else {
+      float *buf;
+      PetscCall(PetscMalloc1(3 * n + 1, &buf));
+      for (PetscInt64 i = 0; i < 3 * n; i++) buf[i] = (float)src[i];
+      PetscCall(PffIOWriteRows(group, name, ftype, H5T_NATIVE_FLOAT, (hsize_t)total, 3, (hsize_t)start, (hsize_t)n,
+                               dxpl, buf));
+      PetscCall(PetscFree(buf));
+    }
+  }
+  PetscCall(PffIOWriteRows(group, "id", H5T_STD_U64LE, H5T_NATIVE_UINT64, (hsize_t)total, 0, (hsize_t)start, (hsize_t)n,
+                           dxpl, a.id));
+  PetscCall(PffIOWriteRows(group, "type", H5T_STD_U8LE, H5T_NATIVE_UINT8, (hsize_t)total, 0, (hsize_t)start, (hsize_t)n,
+                           dxpl, a.type));
+  PetscCall(PffIOWriteRows(group, "level", H5T_STD_I8LE, H5T_NATIVE_INT8, (hsize_t)total, 0, (hsize_t)start, (hsize_t)n,
+                           dxpl, a.level));
+  PetscCall(PffIOWriteRows(group, "flags", H5T_STD_U8LE, H5T_NATIVE_UINT8, (hsize_t)total, 0, (hsize_t)start,
+                           (hsize_t)n, dxpl, a.flags));
+  PffCallHDF5(H5Gclose(group));
+  *count = total;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static const char *const PffParticleDatasets[PFF_PARTICLE_DATASETS] = {"x", "v", "id", "type", "level", "flags"};
+
+PetscErrorCode PffIOCheckParticles_Private(hid_t file, const char path[], PetscInt64 *count, char msg[], size_t len)
+{
+  PetscBool found;
+  htri_t    exists;
+  hid_t     group;
+
+  PetscFunctionBeginUser;
+  *count = 0;
+  PffCallHDF5(exists = H5Lexists(file, "particles", H5P_DEFAULT));
+  if (!exists) {
+    PetscCall(PetscSNPrintf(msg, len, "checkpoint %s: no /particles group", path));
+    PetscFunctionReturn(PETSC_SUCCESS);
+  }
+  PffCallHDF5(group = H5Gopen2(file, "particles", H5P_DEFAULT));
+  PetscCall(PffH5ReadAttribute_Private(group, "count", H5T_NATIVE_INT64, 0, count, &found));
+  if (!found || *count < 0)
+    PetscCall(PetscSNPrintf(msg, len, "checkpoint %s: /particles has no count attribute (or a negative one)", path));
+  for (int k = 0; k < PFF_PARTICLE_DATASETS && !msg[0]; k++) {
+    const int ncol    = k < 2 ? 3 : 0;
+    hsize_t   dims[2] = {0, 0};
+    int       ndims;
+    hid_t     dset, space;
+
+    PffCallHDF5(exists = H5Lexists(group, PffParticleDatasets[k], H5P_DEFAULT));
+    if (!exists) {
+      PetscCall(PetscSNPrintf(msg, len, "checkpoint %s: no dataset /particles/%s", path, PffParticleDatasets[k]));
+      break;
+    }
+    PffCallHDF5(dset = H5Dopen2(group, PffParticleDatasets[k], H5P_DEFAULT));
+    PffCallHDF5(space = H5Dget_space(dset));
+    PffCallHDF5(ndims = H5Sget_simple_extent_ndims(space));
+    if (ndims == (ncol ? 2 : 1)) PffCallHDF5(H5Sget_simple_extent_dims(space, dims, NULL));
+    if (ndims != (ncol ? 2 : 1) || dims[0] != (hsize_t)*count || (ncol && dims[1] != (hsize_t)ncol))
+      PetscCall(PetscSNPrintf(msg, len,
+                              "checkpoint %s: /particles/%s is not an array of %" PetscInt64_FMT " rows%s (count "
+                              "attribute)",
+                              path, PffParticleDatasets[k], *count, ncol ? " of 3 values" : ""));
+    PffCallHDF5(H5Sclose(space));
+    PffCallHDF5(H5Dclose(dset));
+  }
+  PffCallHDF5(H5Gclose(group));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Reads rows [start, start + n) of /particles/<name> into buf, converted to memtype. */
+static PetscErrorCode PffIOReadRows(hid_t group, const char name[], hid_t memtype, hsize_t ncol, hsize_t start,
+                                    hsize_t n, hid_t dxpl, void *buf)
+{
+  hid_t dset, fspace, mspace;
+
+  PetscFunctionBeginUser;
+  PffCallHDF5(dset = H5Dopen2(group, name, H5P_DEFAULT));
+  PffCallHDF5(fspace = H5Dget_space(dset));
+  PetscCall(PffIOSelectRows(fspace, start, n, ncol));
+  PetscCall(PffIOCreateMemSpace_Private(n, ncol, &mspace));
+  PffCallHDF5(H5Dread(dset, memtype, mspace, fspace, dxpl, buf));
+  PffCallHDF5(H5Sclose(mspace));
+  PffCallHDF5(H5Sclose(fspace));
+  PffCallHDF5(H5Dclose(dset));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffIOReadParticles_Private(PffParticles particles, PffGrid grid, MPI_Comm comm, hid_t file,
+                                          const char path[], hid_t dxpl, PetscInt64 count)
+{
+  PetscMPIInt rank, size;
+  PetscInt64  lo, bad = -1;
+  PetscInt    n, nlevels;
+  PetscReal  *x, *v;
+  uint64_t   *id;
+  uint8_t    *type, *flags;
+  int8_t     *level;
+  hid_t       group;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(comm, &rank));
+  PetscCallMPI(MPI_Comm_size(comm, &size));
+  PetscCall(PffGridGetSizes(grid, NULL, &nlevels, NULL, NULL, NULL));
+  {
+    const PetscInt64 base = count / size, rem = count % size;
+    lo = base * rank + PetscMin((PetscInt64)rank, rem);
+    PetscCall(PetscIntCast(base + (rank < rem ? 1 : 0), &n));
+  }
+  PetscCall(PetscMalloc6(3 * n + 1, &x, 3 * n + 1, &v, n + 1, &id, n + 1, &type, n + 1, &level, n + 1, &flags));
+  PffCallHDF5(group = H5Gopen2(file, "particles", H5P_DEFAULT));
+  PetscCall(PffIOReadRows(group, "x", PFF_H5T_NATIVE_PETSCREAL, 3, (hsize_t)lo, (hsize_t)n, dxpl, x));
+  PetscCall(PffIOReadRows(group, "v", PFF_H5T_NATIVE_PETSCREAL, 3, (hsize_t)lo, (hsize_t)n, dxpl, v));
+  PetscCall(PffIOReadRows(group, "id", H5T_NATIVE_UINT64, 0, (hsize_t)lo, (hsize_t)n, dxpl, id));
+  PetscCall(PffIOReadRows(group, "type", H5T_NATIVE_UINT8, 0, (hsize_t)lo, (hsize_t)n, dxpl, type));
+  PetscCall(PffIOReadRows(group, "level", H5T_NATIVE_INT8, 0, (hsize_t)lo, (hsize_t)n, dxpl, level));
+  PetscCall(PffIOReadRows(group, "flags", H5T_NATIVE_UINT8, 0, (hsize_t)lo, (hsize_t)n, dxpl, flags));
+  PffCallHDF5(H5Gclose(group));
+  /* PffParticlesAdd would stop on this rank alone; find the first bad row on any rank instead. */
+  for (PetscInt i = 0; i < n && bad < 0; i++)
+    if (type[i] >= PFF_PARTICLE_NTYPES || level[i] < 0 || level[i] >= nlevels) bad = lo + i;
+  if (bad < 0) bad = INT64_MAX;
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &bad, 1, MPIU_INT64, MPI_MIN, comm));
+  if (bad != INT64_MAX) {
+    PetscCall(PetscFree6(x, v, id, type, level, flags));
+    SETERRQ(comm, PETSC_ERR_FILE_UNEXPECTED,
+            "checkpoint %s: particle row %" PetscInt64_FMT
+            " has a type that is not a PffParticleType or a level outside the grid's 0..%" PetscInt_FMT,
+            path, bad, nlevels - 1);
+  }
+  PetscCall(PffParticlesAdd(particles, n, x, v, id, type, level, flags));
+  PetscCall(PetscFree6(x, v, id, type, level, flags));
+  PetscCall(PffParticlesMigrate(particles, NULL));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
