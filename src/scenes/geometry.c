@@ -154,8 +154,7 @@ static PetscErrorCode PffGeometrySetRegion(PffGeometry g, const char *kind, Pets
   if (in->type == PFF_SHAPE_HALFSPACE) {
     const PetscReal len = PetscSqrtReal(PetscSqr(s->b[0]) + PetscSqr(s->b[1]) + PetscSqr(s->b[2]));
     PetscCheck(len > 0, comm, PETSC_ERR_ARG_OUTOFRANGE,
-               "-%s_%" PetscInt_FMT "_normal %g,%g,%g is invalid: the normal must not be zero", kind, i,
-               (double)s->b[0], (double)s->b[1], (double)s->b[2]);
+               "-%s_%" PetscInt_FMT "_normal is invalid: the normal must not be zero", kind, i);
     for (int d = 0; d < 3; d++) s->b[d] /= len;
   }
   PetscCall(PffGeometryCheckVector(comm, kind, i, "velocity", in->setv, in->nv, PETSC_FALSE, type));
