@@ -1,0 +1,421 @@
+/* Scene geometry: liquid regions (initial condition) and solid obstacles (boundary), from options.
+
+   A shape is a box [lo, hi], a sphere |x - c| <= r, or (liquid only) a half-space
+   (x - p) . n <= 0. Membership includes the boundary. The solids enter the solver through their
+   signed distance phi_s (negative inside), used to push particles out along grad phi_s after
+   advection and to mark solid faces for the pressure solve:
+
+     box:    q = |x - c| - s (c centre, s half sizes, per axis)
+             phi = |max(q, 0)| + min(max_a q_a, 0)            (exact, inside and outside)
+     sphere: phi = |x - c| - r                                 (exact)
+     union:  phi = min_k phi_k                                 (exact outside the solids)
+
+   The gradient is the unit vector from the nearest surface point (outside a box), the outward
+   normal of the nearest face (inside a box), or the radial direction (sphere). */
+#include "geometry.h"
+
+const char *const PffShapeTypes[] = {"box", "sphere", "halfspace", "PffShapeType", "PFF_SHAPE_", NULL};
+/* solids are bounded: the same values without the half-space */
+static const char *const PffSolidShapeTypes[] = {"box", "sphere", "PffShapeType", "PFF_SHAPE_", NULL};
+
+typedef struct {
+  PffShapeType type;
+  PetscReal    a[3]; /* box lo, sphere centre, half-space point */
+  PetscReal    b[3]; /* box hi, half-space unit normal */
+  PetscReal    r;    /* sphere radius */
+  PetscReal    v[3]; /* initial velocity (liquid) */
+} PffShape;
+
+struct _n_PffGeometry {
+  MPI_Comm  comm;
+  PetscInt  nliquid, nsolid;
+  PffShape  liquid[PFF_GEOMETRY_MAX_REGIONS], solid[PFF_GEOMETRY_MAX_REGIONS];
+  PetscReal lo[3], hi[3];
+};
+
+/* Raw values of one region as read, validated after PetscOptionsEnd. Arrays hold more than 3 values
+   so that a wrong count can be reported (PETSc drops values beyond the array size). */
+#define PFF_GEOMETRY_MAX_VALUES 8
+typedef struct {
+  PetscInt  type;
+  PetscReal a[PFF_GEOMETRY_MAX_VALUES], b[PFF_GEOMETRY_MAX_VALUES], v[PFF_GEOMETRY_MAX_VALUES], r;
+  PetscInt  na, nb, nv;
+  PetscBool seta, setb, setr, setv;
+} PffShapeInput;
+
+/* parameter names of each shape type: the two that define it */
+static const char *const PffShapeKeyA[] = {"lo", "center", "point"};
+static const char *const PffShapeKeyB[] = {"hi", "radius", "normal"};
+
+PetscErrorCode PffGeometryCreate(MPI_Comm comm, PffGeometry *geo)
+{
+  PffGeometry g;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscNew(&g));
+  PetscCall(PetscCommDuplicate(comm, &g->comm, NULL));
+  *geo = g;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffGeometryDestroy(PffGeometry *geo)
+{
+  PetscFunctionBeginUser;
+  if (geo == NULL || *geo == NULL) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PetscCommDestroy(&(*geo)->comm));
+  PetscCall(PetscFree(*geo));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscInt PffGeometryNumSolids(PffGeometry geo)
+{
+  return geo->nsolid;
+}
+
+PetscInt PffGeometryNumLiquids(PffGeometry geo)
+{
+  return geo->nliquid;
+}
+
+/* Reads the parameters of region i of kind "liquid" or "solid" whose type is already in in->type. */
+static PetscErrorCode PffGeometryReadRegion(PetscOptionItems *PetscOptionsObject, const char *kind, PetscInt i,
+                                            PetscBool liquid, PffShapeInput *in)
+{
+  char key[64], help[160];
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscSNPrintf(key, sizeof(key), "-%s_%" PetscInt_FMT "_%s", kind, i, PffShapeKeyA[in->type]));
+  PetscCall(PetscSNPrintf(help, sizeof(help), "%s %" PetscInt_FMT ": %s x,y,z", kind, i,
+                          in->type == PFF_SHAPE_BOX      ? "lower corner"
+                          : in->type == PFF_SHAPE_SPHERE ? "centre"
+                                                         : "a point on the bounding plane"));
+  in->na = PFF_GEOMETRY_MAX_VALUES;
+  PetscCall(PetscOptionsRealArray(key, help, "PffGeometrySetFromOptions", in->a, &in->na, &in->seta));
+  PetscCall(PetscSNPrintf(key, sizeof(key), "-%s_%" PetscInt_FMT "_%s", kind, i, PffShapeKeyB[in->type]));
+  if (in->type == PFF_SHAPE_SPHERE) {
+    PetscCall(PetscSNPrintf(help, sizeof(help), "%s %" PetscInt_FMT ": radius", kind, i));
+    PetscCall(PetscOptionsReal(key, help, "PffGeometrySetFromOptions", in->r, &in->r, &in->setr));
+  } else {
+    PetscCall(PetscSNPrintf(help, sizeof(help), "%s %" PetscInt_FMT ": %s", kind, i,
+                            in->type == PFF_SHAPE_BOX ? "upper corner x,y,z"
+                                                      : "normal x,y,z, pointing away from the liquid"));
+    in->nb = PFF_GEOMETRY_MAX_VALUES;
+    PetscCall(PetscOptionsRealArray(key, help, "PffGeometrySetFromOptions", in->b, &in->nb, &in->setb));
+  }
+  if (liquid) {
+    PetscCall(PetscSNPrintf(key, sizeof(key), "-%s_%" PetscInt_FMT "_velocity", kind, i));
+    PetscCall(PetscSNPrintf(help, sizeof(help), "%s %" PetscInt_FMT ": initial velocity x,y,z", kind, i));
+    in->nv = PFF_GEOMETRY_MAX_VALUES;
+    PetscCall(PetscOptionsRealArray(key, help, "PffGeometrySetFromOptions", in->v, &in->nv, &in->setv));
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Checks that a vector option was given with 3 values. */
+static PetscErrorCode PffGeometryCheckVector(MPI_Comm comm, const char *kind, PetscInt i, const char *name,
+                                             PetscBool set, PetscInt n, PetscBool required, const char *type)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(set || !required, comm, PETSC_ERR_ARG_WRONG, "-%s_%" PetscInt_FMT "_%s is missing: a %s needs it", kind, i,
+             name, type);
+  PetscCheck(!set || n == 3, comm, PETSC_ERR_ARG_SIZ, "-%s_%" PetscInt_FMT "_%s takes 3 values, got %" PetscInt_FMT,
+             kind, i, name, n);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Validates region i and stores it in *s. */
+static PetscErrorCode PffGeometrySetRegion(PffGeometry g, const char *kind, PetscInt i, const PffShapeInput *in,
+                                           PffShape *s)
+{
+  const char *type = PffShapeTypes[in->type];
+  MPI_Comm    comm = g->comm;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscMemzero(s, sizeof(*s)));
+  s->type = (PffShapeType)in->type;
+  PetscCall(PffGeometryCheckVector(comm, kind, i, PffShapeKeyA[in->type], in->seta, in->na, PETSC_TRUE, type));
+  for (int d = 0; d < 3; d++) s->a[d] = in->a[d];
+  if (in->type == PFF_SHAPE_SPHERE) {
+    PetscCheck(in->setr, comm, PETSC_ERR_ARG_WRONG, "-%s_%" PetscInt_FMT "_radius is missing: a sphere needs it", kind,
+               i);
+    PetscCheck(in->r > 0, comm, PETSC_ERR_ARG_OUTOFRANGE,
+               "-%s_%" PetscInt_FMT "_radius %g is invalid: must be positive", kind, i, (double)in->r);
+    s->r = in->r;
+  } else {
+    PetscCall(PffGeometryCheckVector(comm, kind, i, PffShapeKeyB[in->type], in->setb, in->nb, PETSC_TRUE, type));
+    for (int d = 0; d < 3; d++) s->b[d] = in->b[d];
+  }
+  if (in->type == PFF_SHAPE_BOX) {
+    for (int d = 0; d < 3; d++)
+      PetscCheck(s->b[d] > s->a[d], comm, PETSC_ERR_ARG_OUTOFRANGE,
+                 "-%s_%" PetscInt_FMT "_hi is invalid: hi must exceed lo on every axis, but on %c lo = %g, hi = %g",
+                 kind, i, "xyz"[d], (double)s -> a[d], (double)s -> b[d]);
+  }
+  if (in->type == PFF_SHAPE_HALFSPACE) {
+    const PetscReal len = PetscSqrtReal(PetscSqr(s->b[0]) + PetscSqr(s->b[1]) + PetscSqr(s->b[2]));
+    PetscCheck(len > 0, comm, PETSC_ERR_ARG_OUTOFRANGE,
+               "-%s_%" PetscInt_FMT "_normal is invalid: the normal must not be zero", kind, i);
+    for (int d = 0; d < 3; d++) s->b[d] /= len;
+  }
+  PetscCall(PffGeometryCheckVector(comm, kind, i, "velocity", in->setv, in->nv, PETSC_FALSE, type));
+  if (in->setv)
+    for (int d = 0; d < 3; d++) s->v[d] = in->v[d];
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Regions 0..n-1 of kind were read and region n is absent: no region may follow the gap (checked up to
+   the maximum, where the message says there are too many). */
+static PetscErrorCode PffGeometryCheckNumbering(MPI_Comm comm, const char *kind, PetscInt n)
+{
+  PetscFunctionBeginUser;
+  for (PetscInt j = n + 1; j <= PFF_GEOMETRY_MAX_REGIONS; j++) {
+    char      key[64];
+    PetscBool has;
+    PetscCall(PetscSNPrintf(key, sizeof(key), "-%s_%" PetscInt_FMT "_type", kind, j));
+    PetscCall(PetscOptionsHasName(NULL, NULL, key, &has));
+    PetscCheck(!has || j < PFF_GEOMETRY_MAX_REGIONS, comm, PETSC_ERR_ARG_OUTOFRANGE,
+               "%s is invalid: at most %d %s regions (numbered 0 to %d)", key, PFF_GEOMETRY_MAX_REGIONS, kind,
+               PFF_GEOMETRY_MAX_REGIONS - 1);
+    PetscCheck(!has, comm, PETSC_ERR_ARG_WRONG,
+               "%s is given but -%s_%" PetscInt_FMT "_type is not: %s regions are numbered 0, 1, 2, ... without gaps",
+               key, kind, n, kind);
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffGeometrySetFromOptions(PffGeometry geo, const PetscReal lo[3], const PetscReal hi[3])
+{
+  PffShapeInput *in;
+  PetscInt       nliquid = 0, nsolid = 0;
+  const char    *kinds[2] = {"liquid", "solid"};
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscCalloc1(2 * PFF_GEOMETRY_MAX_REGIONS, &in));
+  PetscOptionsBegin(geo->comm, NULL, "Scene geometry: liquid regions and solid obstacles", "PffGeometry");
+  for (int k = 0; k < 2; k++) {
+    const PetscBool liquid = (PetscBool)(k == 0);
+    PetscInt       *n      = liquid ? &nliquid : &nsolid;
+    for (PetscInt i = 0; i < PFF_GEOMETRY_MAX_REGIONS; i++) {
+      PffShapeInput *r = &in[k * PFF_GEOMETRY_MAX_REGIONS + i];
+      char           key[64], help[256];
+      PetscBool      set;
+      PetscEnum      type = (PetscEnum)PFF_SHAPE_BOX;
+
+      PetscCall(PetscSNPrintf(key, sizeof(key), "-%s_%" PetscInt_FMT "_type", kinds[k], i));
+      PetscCall(PetscSNPrintf(help, sizeof(help),
+                              liquid ? "Liquid region %" PetscInt_FMT
+                                       ": box (lo, hi), sphere (center, radius) or halfspace (point, normal), with "
+                                       "velocity; regions are numbered 0, 1, ... without gaps"
+                                     : "Solid obstacle %" PetscInt_FMT
+                                       ": box (lo, hi) or sphere (center, radius) inside the domain; numbered 0, 1, "
+                                       "... without gaps",
+                              i));
+      PetscCall(PetscOptionsEnum(key, help, "PffGeometrySetFromOptions", liquid ? PffShapeTypes : PffSolidShapeTypes,
+                                 type, &type, &set));
+      if (!set) break;
+      r->type = (PetscInt)type;
+      PetscCall(PffGeometryReadRegion(PetscOptionsObject, kinds[k], i, liquid, r));
+      (*n)++;
+    }
+  }
+  PetscOptionsEnd();
+
+  PetscCall(PffGeometryCheckNumbering(geo->comm, "liquid", nliquid));
+  PetscCall(PffGeometryCheckNumbering(geo->comm, "solid", nsolid));
+  for (int d = 0; d < 3; d++) {
+    PetscCheck(hi[d] > lo[d], geo->comm, PETSC_ERR_ARG_OUTOFRANGE, "the domain is empty along %c: [%g, %g]", "xyz"[d],
+               (double)lo[d], (double)hi[d]);
+    geo->lo[d] = lo[d];
+    geo->hi[d] = hi[d];
+  }
+  for (PetscInt i = 0; i < nliquid; i++) PetscCall(PffGeometrySetRegion(geo, "liquid", i, &in[i], &geo->liquid[i]));
+  for (PetscInt i = 0; i < nsolid; i++) {
+    PffShape *s = &geo->solid[i];
+    PetscReal slo[3], shi[3], tol = 0;
+    PetscCall(PffGeometrySetRegion(geo, "solid", i, &in[PFF_GEOMETRY_MAX_REGIONS + i], s));
+    for (int d = 0; d < 3; d++) {
+      slo[d] = s->type == PFF_SHAPE_BOX ? s->a[d] : s->a[d] - s->r;
+      shi[d] = s->type == PFF_SHAPE_BOX ? s->b[d] : s->a[d] + s->r;
+      tol    = PetscMax(tol, 1e-12 * (hi[d] - lo[d]));
+    }
+    /* touching a wall is fine (a step on the floor); crossing it would cut the obstacle off */
+    for (int d = 0; d < 3; d++)
+      PetscCheck(slo[d] >= lo[d] - tol && shi[d] <= hi[d] + tol, geo->comm, PETSC_ERR_ARG_OUTOFRANGE,
+                 "-solid_%" PetscInt_FMT ": the obstacle extends outside the domain [%g, %g] x [%g, %g] x [%g, %g] "
+                 "(along %c it spans [%g, %g])",
+                 i, (double)lo[0], (double)hi[0], (double)lo[1], (double)hi[1], (double)lo[2], (double)hi[2], "xyz"[d],
+                 (double)slo[d], (double)shi[d]);
+  }
+  geo->nliquid = nliquid;
+  geo->nsolid  = nsolid;
+  PetscCall(PetscFree(in));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static inline PetscBool PffShapeContains(const PffShape *s, const PetscReal x[3])
+{
+  switch (s->type) {
+  case PFF_SHAPE_BOX:
+    return (PetscBool)(x[0] >= s->a[0] && x[0] <= s->b[0] && x[1] >= s->a[1] && x[1] <= s->b[1] && x[2] >= s->a[2] &&
+                       x[2] <= s->b[2]);
+  case PFF_SHAPE_SPHERE:
+    return (PetscBool)(PetscSqr(x[0] - s->a[0]) + PetscSqr(x[1] - s->a[1]) + PetscSqr(x[2] - s->a[2]) <= s->r * s->r);
+  case PFF_SHAPE_HALFSPACE:
+    return (PetscBool)((x[0] - s->a[0]) * s->b[0] + (x[1] - s->a[1]) * s->b[1] + (x[2] - s->a[2]) * s->b[2] <= 0);
+  }
+  return PETSC_FALSE;
+}
+
+PetscInt PffGeometryLiquidAt(PffGeometry geo, const PetscReal x[3], PetscReal v[3])
+{
+  for (PetscInt i = 0; i < geo->nliquid; i++) {
+    if (!PffShapeContains(&geo->liquid[i], x)) continue;
+    if (v != NULL)
+      for (int d = 0; d < 3; d++) v[d] = geo->liquid[i].v[d];
+    return i;
+  }
+  if (v != NULL) v[0] = v[1] = v[2] = 0;
+  return -1;
+}
+
+/* Exact signed distance of a box or a sphere, with its unit gradient. */
+static PetscReal PffShapeDistance(const PffShape *s, const PetscReal x[3], PetscReal g[3])
+{
+  if (s->type == PFF_SHAPE_SPHERE) {
+    const PetscReal e[3] = {x[0] - s->a[0], x[1] - s->a[1], x[2] - s->a[2]};
+    const PetscReal len  = PetscSqrtReal(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+    for (int d = 0; d < 3; d++) g[d] = len > 0 ? e[d] / len : (d == 2 ? 1.0 : 0.0); /* any unit vector at the centre */
+    return len - s->r;
+  }
+  PetscReal q[3], sgn[3], out = 0, qmax = PETSC_MIN_REAL;
+  int       amax = 0;
+  for (int d = 0; d < 3; d++) {
+    const PetscReal c = 0.5 * (s->a[d] + s->b[d]), e = x[d] - c;
+    sgn[d] = e < 0 ? -1.0 : 1.0;
+    q[d]   = PetscAbsReal(e) - 0.5 * (s->b[d] - s->a[d]);
+    if (q[d] > 0) out += q[d] * q[d];
+    if (q[d] > qmax) {
+      qmax = q[d];
+      amax = d;
+    }
+  }
+  if (out > 0) { /* outside: towards the nearest surface point */
+    out = PetscSqrtReal(out);
+    for (int d = 0; d < 3; d++) g[d] = q[d] > 0 ? sgn[d] * q[d] / out : 0.0;
+    return out;
+  }
+  /* inside or on the surface: the outward normal of the nearest face */
+  for (int d = 0; d < 3; d++) g[d] = d == amax ? sgn[d] : 0.0;
+  return qmax;
+}
+
+PetscReal PffGeometrySolidDistance(const PetscReal x[3], PetscReal grad[3], void *ctx)
+{
+  PffGeometry geo  = (PffGeometry)ctx;
+  PetscReal   dist = PETSC_MAX_REAL, g[3] = {0, 0, 0};
+
+  for (PetscInt k = 0; k < geo->nsolid; k++) {
+    PetscReal       gk[3];
+    const PetscReal dk = PffShapeDistance(&geo->solid[k], x, gk);
+    if (dk < dist) {
+      dist = dk;
+      for (int d = 0; d < 3; d++) g[d] = gk[d];
+    }
+  }
+  if (grad != NULL)
+    for (int d = 0; d < 3; d++) grad[d] = g[d];
+  return dist;
+}
+
+PetscErrorCode PffGeometryCheck(PffGeometry geo, PffGrid grid)
+{
+  const PetscInt nl = geo->nliquid, M = PFF_GEOMETRY_MAX_REGIONS;
+  PetscInt       found[PFF_GEOMETRY_MAX_REGIONS + 1], overlap, nlocal;
+  MPI_Comm       comm;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetComm(grid, &comm));
+  PetscCall(PffGridGetLocalBlocks(grid, &nlocal));
+  for (PetscInt i = 0; i < nl; i++) found[i] = 0;
+  /* the overlapping pair (j, i), i < j, with the smallest j * M + i; M * M means none */
+  found[nl] = M * M;
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(grid, lb, &info));
+    const PetscInt  ns = PFF_PARTICLES_PER_AXIS * info.n;
+    const PetscReal hs = info.h / PFF_PARTICLES_PER_AXIS;
+    for (PetscInt k = 0; k < ns; k++)
+      for (PetscInt j = 0; j < ns; j++)
+        for (PetscInt i = 0; i < ns; i++) {
+          /* sub-cell points (c + 1/4) h and (c + 3/4) h: the particle lattice of PffParticlesSeed */
+          const PetscReal x[3]  = {info.lo[0] + ((PetscReal)i + 0.5) * hs, info.lo[1] + ((PetscReal)j + 0.5) * hs,
+                                   info.lo[2] + ((PetscReal)k + 0.5) * hs};
+          PetscInt        first = -1;
+          if (nl == 0 || PffGeometrySolidDistance(x, NULL, geo) < 0) continue;
+          for (PetscInt r = 0; r < nl; r++) {
+            if (!PffShapeContains(&geo->liquid[r], x)) continue;
+            found[r] = 1;
+            if (first < 0)
+              first = r;
+            else
+              found[nl] = PetscMin(found[nl], r * M + first);
+          }
+        }
+  }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, found, (PetscMPIInt)nl, MPIU_INT, MPI_MAX, comm));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &found[nl], 1, MPIU_INT, MPI_MIN, comm));
+  overlap = found[nl];
+  for (PetscInt i = 0; i < nl; i++)
+    PetscCheck(found[i], comm, PETSC_ERR_ARG_WRONG,
+               "-liquid_%" PetscInt_FMT ": the region contains no particle seed position (empty or inside a solid)", i);
+  if (overlap < M * M) {
+    const PetscInt j = overlap / M, i = overlap % M;
+    SETERRQ(comm, PETSC_ERR_ARG_INCOMP,
+            "-liquid_%" PetscInt_FMT " (%s) overlaps -liquid_%" PetscInt_FMT
+            " (%s); liquid regions must not overlap because their initial velocities would be ambiguous",
+            j, PffShapeTypes[geo->liquid[j].type], i, PffShapeTypes[geo->liquid[i].type]);
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffGeometryViewShape(PetscViewer viewer, const char *kind, PetscInt i, const PffShape *s,
+                                           PetscBool liquid)
+{
+  char line[256] = "";
+
+  PetscFunctionBeginUser;
+  switch (s->type) {
+  case PFF_SHAPE_BOX:
+    PetscCall(PetscSNPrintf(line, sizeof(line), "box lo (%g, %g, %g) hi (%g, %g, %g)", (double)s->a[0], (double)s->a[1],
+                            (double)s->a[2], (double)s->b[0], (double)s->b[1], (double)s->b[2]));
+    break;
+  case PFF_SHAPE_SPHERE:
+    PetscCall(PetscSNPrintf(line, sizeof(line), "sphere center (%g, %g, %g) radius %g", (double)s->a[0],
+                            (double)s->a[1], (double)s->a[2], (double)s->r));
+    break;
+  case PFF_SHAPE_HALFSPACE:
+    PetscCall(PetscSNPrintf(line, sizeof(line), "halfspace point (%g, %g, %g) normal (%g, %g, %g)", (double)s->a[0],
+                            (double)s->a[1], (double)s->a[2], (double)s->b[0], (double)s->b[1], (double)s->b[2]));
+    break;
+  }
+  if (liquid)
+    PetscCall(PetscViewerASCIIPrintf(viewer, "  %s_%" PetscInt_FMT ": %s velocity (%g, %g, %g)\n", kind, i, line,
+                                     (double)s->v[0], (double)s->v[1], (double)s->v[2]));
+  else
+    PetscCall(PetscViewerASCIIPrintf(viewer, "  %s_%" PetscInt_FMT ": %s\n", kind, i, line));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffGeometryView(PffGeometry geo, PetscViewer viewer)
+{
+  PetscFunctionBeginUser;
+  if (viewer == NULL) viewer = PETSC_VIEWER_STDOUT_(geo->comm);
+  PetscCall(PetscViewerASCIIPrintf(viewer, "Geometry: %" PetscInt_FMT " liquid region%s, %" PetscInt_FMT " solid%s\n",
+                                   geo->nliquid, geo->nliquid == 1 ? "" : "s", geo->nsolid,
+                                   geo->nsolid == 1 ? "" : "s"));
+  for (PetscInt i = 0; i < geo->nliquid; i++)
+    PetscCall(PffGeometryViewShape(viewer, "liquid", i, &geo->liquid[i], PETSC_TRUE));
+  for (PetscInt i = 0; i < geo->nsolid; i++)
+    PetscCall(PffGeometryViewShape(viewer, "solid", i, &geo->solid[i], PETSC_FALSE));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
