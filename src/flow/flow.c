@@ -133,6 +133,11 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
   PetscCall(PffGridAddChannel(f->grid, "p", PFF_CHANNEL_CELL, 1, &f->chP));
   PetscCall(PffGridAddChannel(f->grid, "cdiv", PFF_CHANNEL_CELL, 1, &f->chCdiv));
   PetscCall(PffGridAddChannel(f->grid, "vorticity", PFF_CHANNEL_CELL, 1, &f->chVort));
+  /* working channels stay out of frames (checkpoints keep everything) */
+  for (PetscInt k = 0; k < 6; k++) {
+    const PetscInt hidden[6] = {f->chMass, f->chUt, f->chPhiF, f->chBeta, f->chOpen, f->chCdiv};
+    PetscCall(PffGridSetChannelOutput(f->grid, hidden[k], PETSC_FALSE));
+  }
   PetscCall(PffParticlesGetKernelSum(f->part, &f->rho0));
   PetscCall(PffFlowOpenFaces_Private(f));
   if (!f->prescribed && f->usePressure) PetscCall(PffPressureSetUp(f->press));

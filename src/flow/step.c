@@ -97,7 +97,7 @@ static PetscErrorCode PffFlowChooseDt(PffFlow f, PetscReal umax, PetscReal dtmax
 
 PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
 {
-  PetscLogDouble t0 = 0;
+  PetscLogDouble t0   = 0;
   PetscReal      umax = 0, dt = 0, h0, alpha[PFF_PARTICLE_NTYPES * PFF_GRID_MAX_LEVELS];
   PetscInt64     count[PFF_PARTICLE_NTYPES];
   PetscReal      mass[PFF_PARTICLE_NTYPES];

@@ -50,7 +50,16 @@ static PetscErrorCode PffFlowSceneSetFromOptions(PffScene s)
   PetscCall(PetscOptionsInt("-sim_max_steps", "Stop after this many steps (0: no limit)", NULL, fs->maxSteps,
                             &fs->maxSteps, NULL));
   PetscCall(PetscOptionsBool("-sim_frames", "Write HDF5 frames", NULL, fs->frames, &fs->frames, NULL));
+  PetscCall(PetscOptionsBool("-sim_frame_particles", "Include the particles in frames", NULL, fs->frameParticles,
+                             &fs->frameParticles, NULL));
+  PetscCall(PetscOptionsInt("-sim_checkpoint_every",
+                            "Write <output_dir>/checkpoint.h5 every this many steps (0: never)", NULL,
+                            fs->checkpointEvery, &fs->checkpointEvery, NULL));
+  PetscCall(PetscOptionsString("-sim_restart", "Continue from this checkpoint (any rank count)", NULL, fs->restart,
+                               fs->restart, sizeof(fs->restart), NULL));
   PetscOptionsEnd();
+  PetscCheck(fs->checkpointEvery >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-sim_checkpoint_every %" PetscInt_FMT " is invalid: must be >= 0", fs->checkpointEvery);
   PetscCheck(fs->tEnd > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-sim_t_end %g is invalid: must be positive",
              (double)fs->tEnd);
   PetscCheck(fs->outputInterval >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE,
@@ -79,7 +88,51 @@ static PetscErrorCode PffFlowSceneWriteFrame(PffFlowScene *fs, PetscInt frame)
   PetscCall(PffFlowGetTime(fs->flow, &t, &step));
   PetscCall(PffFlowUpdateFields(fs->flow, PETSC_TRUE));
   PetscCall(PetscSNPrintf(path, sizeof(path), "%s/frame_%04" PetscInt_FMT ".h5", fs->scene->outdir, frame));
-  PetscCall(PffIOWriteFrame(fs->grid, path, t, step, fs->scene->name));
+  if (fs->frameParticles) {
+    PffParticles p;
+    PetscCall(PffFlowGetParticles(fs->flow, &p));
+    PetscCall(PffIOWriteFrameParticles(fs->grid, p, path, t, step, fs->scene->name));
+  } else
+    PetscCall(PffIOWriteFrame(fs->grid, path, t, step, fs->scene->name));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* <output_dir>/checkpoint.h5, written to a temporary name and renamed by the io module. */
+static PetscErrorCode PffFlowSceneCheckpoint(PffFlowScene *fs)
+{
+  char         path[PETSC_MAX_PATH_LEN];
+  PetscReal    t;
+  PetscInt     step;
+  PffParticles p;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffFlowGetTime(fs->flow, &t, &step));
+  PetscCall(PffFlowGetParticles(fs->flow, &p));
+  PetscCall(PetscSNPrintf(path, sizeof(path), "%s/checkpoint.h5", fs->scene->outdir));
+  PetscCall(PffIOWriteCheckpoint(fs->grid, p, path, t, step, 0, NULL, fs->scene->name));
+  PetscCall(PetscPrintf(fs->scene->comm, "checkpoint %s at step %" PetscInt_FMT "\n", path, step));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Seeds, or continues from -sim_restart: particles and fields from the checkpoint, then the fields
+   that derive from the particles. */
+static PetscErrorCode PffFlowSceneStart(PffFlowScene *fs)
+{
+  PetscFunctionBeginUser;
+  if (!fs->restart[0]) {
+    PetscCall(PffFlowSeed(fs->flow, fs->ops.seed, fs->ctx));
+    PetscFunctionReturn(PETSC_SUCCESS);
+  }
+  PffParticles p;
+  PetscReal    t;
+  PetscInt     step;
+  PetscCall(PffFlowGetParticles(fs->flow, &p));
+  PetscCall(PffIOReadCheckpoint(fs->grid, p, fs->restart, &t, &step, 0, NULL));
+  PetscCall(PffFlowSetTime(fs->flow, t, step));
+  PetscCall(PffFlowUpdateFields(fs->flow, PETSC_FALSE));
+  fs->restarted = PETSC_TRUE;
+  PetscCall(PetscPrintf(fs->scene->comm, "restarted from %s at step %" PetscInt_FMT ", t %.6e\n", fs->restart, step,
+                        (double)t));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -117,22 +170,31 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
   PetscCall(PffGridView(fs->grid, NULL));
-  PetscCall(PffFlowSeed(fs->flow, fs->ops.seed, fs->ctx));
+  PetscCall(PffFlowSceneStart(fs));
   if (rank == 0) {
     char path[PETSC_MAX_PATH_LEN];
     PetscCall(PetscSNPrintf(path, sizeof(path), "%s/%s_diag.csv", s->outdir, s->name));
-    fs->diag = fopen(path, "w");
+    /* a restarted run appends to the diagnostics of the run it continues */
+    fs->diag = fopen(path, fs->restarted ? "a" : "w");
     PetscCheck(fs->diag, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "-output_dir: cannot write %s", path);
-    fprintf(fs->diag,
-            "step,t,t_over_t0,dt,cfl,particles,ksp_its,ksp_rnorm,umax_grid,liquid_volume,bubbles_deleted,"
-            "droplet_candidates,wall_s%s\n",
-            fs->ops.diagHeader ? fs->ops.diagHeader : "");
+    if (!fs->restarted)
+      fprintf(fs->diag,
+              "step,t,t_over_t0,dt,cfl,particles,ksp_its,ksp_rnorm,umax_grid,liquid_volume,bubbles_deleted,"
+              "droplet_candidates,wall_s%s\n",
+              fs->ops.diagHeader ? fs->ops.diagHeader : "");
   }
   PetscCall(PffFlowGetTime(fs->flow, &t, &step));
   PetscCall(PetscMemzero(&st, sizeof(st)));
-  PetscCall(PffFlowSceneDiagRow(fs, step, t, &st, 0));
-  PetscCall(PffFlowSceneWriteFrame(fs, frame++));
-  nextOut = every > 0 ? t + every : tEnd;
+  if (!fs->restarted) {
+    PetscCall(PffFlowSceneDiagRow(fs, step, t, &st, 0));
+    PetscCall(PffFlowSceneWriteFrame(fs, frame++));
+    nextOut = every > 0 ? t + every : tEnd;
+  } else {
+    /* frames continue the numbering of the interrupted run */
+    const PetscReal done = every > 0 ? PetscFloorReal(t / every * (1 + 1e-12)) : 0;
+    frame                = (PetscInt)done + 1;
+    nextOut              = every > 0 ? (done + 1) * every : tEnd;
+  }
   PetscCall(PffProgressStart(&prog, tEnd, fs->maxSteps));
   PetscCall(PetscTime(&tstart));
   while (t < tEnd * (1 - 1e-12) && (!fs->maxSteps || step < fs->maxSteps)) {
@@ -155,13 +217,17 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
       PetscCall(PffFlowSceneWriteFrame(fs, frame++));
       nextOut = every > 0 ? nextOut + every : tEnd;
     }
+    if (fs->checkpointEvery > 0 && step % fs->checkpointEvery == 0) PetscCall(PffFlowSceneCheckpoint(fs));
   }
   PetscCall(PetscTime(&tnow));
   PetscCall(PffFlowUpdateFields(fs->flow, PETSC_FALSE));
   if (fs->ops.finish) PetscCall(fs->ops.finish(fs));
   PetscCall(PetscPrintf(s->comm, "summary: %" PetscInt_FMT " steps  t %.6e  wall %.2f s  (%.3f s/step)\n", step,
                         (double)t, tnow - tstart, step ? stepTime / (double)step : 0.0));
-  PetscCall(PetscPrintf(s->comm, "summary: stage shares of the step time (rank 0):"));
+  /* the slowest rank sets the pace: shares of the largest per-rank stage times */
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, total, PFF_FLOW_NSTAGES, MPI_DOUBLE, MPI_MAX, s->comm));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &stepTime, 1, MPI_DOUBLE, MPI_MAX, s->comm));
+  PetscCall(PetscPrintf(s->comm, "summary: stage shares of the step time (max over ranks):"));
   for (PetscInt k = 0; k < PFF_FLOW_NSTAGES; k++)
     PetscCall(
         PetscPrintf(s->comm, "  %s %.1f%%", PffFlowStageNames[k], stepTime > 0 ? 100 * total[k] / stepTime : 0.0));
@@ -198,6 +264,7 @@ PetscErrorCode PffFlowSceneCreate_Private(PffScene s, const PffFlowSceneOps *ops
   fs->tEnd              = 1;
   fs->timeUnit          = 1;
   fs->frames            = PETSC_TRUE;
+  fs->frameParticles    = PETSC_TRUE;
   s->data               = fs;
   s->ops.setfromoptions = PffFlowSceneSetFromOptions;
   s->ops.run            = PffFlowSceneRun;

@@ -29,8 +29,9 @@ struct _PffFlowScene {
   void           *ctx; /* the scene's own data */
 
   PetscReal tEnd, outputInterval, timeUnit;
-  PetscInt  maxSteps;
-  PetscBool frames;
+  PetscInt  maxSteps, checkpointEvery;
+  PetscBool frames, frameParticles, restarted;
+  char      restart[PETSC_MAX_PATH_LEN];
   FILE     *diag;
 };
 
