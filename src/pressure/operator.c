@@ -98,6 +98,47 @@ static PetscErrorCode AssembleDirect(PffPressure ps)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Cells with every face closed (inside a solid) have an empty row: they get a unit diagonal, so
+   every preconditioner sees a definite block there, and the null space becomes the constant over the
+   connected cells only (the indicator of the non-empty rows). */
+static PetscErrorCode PffPressureIsolatedCells(PffPressure ps)
+{
+  PetscScalar *d, *z;
+  PetscInt     n, nisolated = 0;
+  Vec          ind;
+
+  PetscFunctionBeginUser;
+  PetscCall(VecGetLocalSize(ps->diag, &n));
+  PetscCall(VecDuplicate(ps->diag, &ind));
+  PetscCall(VecGetArray(ps->diag, &d));
+  PetscCall(VecGetArrayWrite(ind, &z));
+  for (PetscInt i = 0; i < n; i++) {
+    const PetscBool empty = PetscRealPart(d[i]) == 0 ? PETSC_TRUE : PETSC_FALSE;
+    z[i]                  = empty ? 0.0 : 1.0;
+    if (empty) nisolated++;
+  }
+  PetscCall(VecRestoreArrayWrite(ind, &z));
+  PetscCall(VecRestoreArray(ps->diag, &d));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nisolated, 1, MPIU_INT, MPI_SUM, ps->comm));
+  if (nisolated > 0) {
+    Vec       one;
+    PetscReal nrm;
+    PetscCall(VecDuplicate(ind, &one));
+    PetscCall(VecSet(one, 1.0));
+    PetscCall(VecAXPY(one, -1.0, ind)); /* 1 on the empty rows */
+    PetscCall(MatDiagonalSet(ps->A, one, ADD_VALUES));
+    PetscCall(VecAXPY(ps->diag, 1.0, one));
+    PetscCall(VecDestroy(&one));
+    PetscCall(VecNorm(ind, NORM_2, &nrm));
+    PetscCall(VecScale(ind, 1.0 / nrm));
+    PetscCall(MatNullSpaceDestroy(&ps->nullsp));
+    PetscCall(MatNullSpaceCreate(ps->comm, PETSC_FALSE, 1, &ind, &ps->nullsp));
+    PetscCall(MatSetNullSpace(ps->A, ps->nullsp));
+  }
+  PetscCall(VecDestroy(&ind));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffPressureAssemble_Private(PffPressure ps, PetscInt chBeta, PetscInt chOpen)
 {
   PetscScalar       *beta, *open, *w, *coef;
@@ -142,5 +183,6 @@ PetscErrorCode PffPressureAssemble_Private(PffPressure ps, PetscInt chBeta, Pets
   } else
     PetscCall(AssembleDirect(ps));
   PetscCall(MatGetDiagonal(ps->A, ps->diag));
+  PetscCall(PffPressureIsolatedCells(ps));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
