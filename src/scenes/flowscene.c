@@ -1,6 +1,8 @@
 /* The fluid-scene driver: -sim_* options, the time loop, diagnostics CSV, frames and the run
    summary with each stage's share of the step time. */
 #include "flowscene.h"
+#include <errno.h>
+#include <unistd.h>
 
 PetscErrorCode PffFlowSceneDefault(const char key[], const char value[])
 {
@@ -58,6 +60,14 @@ static PetscErrorCode PffFlowSceneSetFromOptions(PffScene s)
   PetscCall(PetscOptionsString("-sim_restart", "Continue from this checkpoint (any rank count)", NULL, fs->restart,
                                fs->restart, sizeof(fs->restart), NULL));
   PetscOptionsEnd();
+  if (fs->restart[0]) {
+    PetscMPIInt rank;
+    int         err = 0;
+    PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
+    if (rank == 0 && access(fs->restart, R_OK)) err = errno;
+    PetscCallMPI(MPI_Bcast(&err, 1, MPI_INT, 0, s->comm));
+    PetscCheck(!err, s->comm, PETSC_ERR_FILE_OPEN, "-sim_restart %s cannot be read: %s", fs->restart, strerror(err));
+  }
   PetscCheck(fs->checkpointEvery >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-sim_checkpoint_every %" PetscInt_FMT " is invalid: must be >= 0", fs->checkpointEvery);
   PetscCheck(fs->tEnd > 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-sim_t_end %g is invalid: must be positive",

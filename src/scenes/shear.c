@@ -21,6 +21,8 @@ static PetscErrorCode PffShearSetFromOptions(PffFlowScene *fs)
   PetscOptionsBegin(fs->scene->comm, NULL, "Shear-flow advection scene", "PffScene");
   PetscCall(PetscOptionsInt("-shear_resolution", "Cells per axis of the unit cube", NULL, sh->resolution,
                             &sh->resolution, NULL));
+  PetscCall(PetscOptionsReal("-shear_max_error", "Fail when the phi error exceeds this (0: no check; for tests)", NULL,
+                             sh->check, &sh->check, NULL));
   PetscCall(PetscOptionsReal("-shear_u0", "Velocity scale U0 (period T = 1/U0)", NULL, sh->u0, &sh->u0, NULL));
   PetscCall(
       PetscOptionsReal("-shear_periods", "Periods to run (t_end = periods T)", NULL, sh->periods, &sh->periods, NULL));

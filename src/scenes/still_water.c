@@ -17,6 +17,9 @@ static PetscErrorCode PffStillSetFromOptions(PffFlowScene *fs)
   PetscOptionsBegin(fs->scene->comm, NULL, "Still-water scene", "PffScene");
   PetscCall(PetscOptionsReal("-still_level", "Liquid depth as a fraction of the box height", NULL, sw->level,
                              &sw->level, NULL));
+  PetscCall(PetscOptionsReal("-still_max_velocity",
+                             "Fail when the spurious velocity exceeds this (0: no check; for tests)", NULL, sw->check,
+                             &sw->check, NULL));
   PetscCall(PetscOptionsReal("-still_ratio", "Density ratio rho_l / rho_g", NULL, sw->ratio, &sw->ratio, NULL));
   PetscCall(PetscOptionsInt("-still_resolution", "Cells per axis of the cubic box", NULL, sw->resolution,
                             &sw->resolution, NULL));
@@ -85,6 +88,9 @@ static PetscErrorCode PffStillFinish(PffFlowScene *fs)
                   "still_water: density ratio %g  max spurious |u| over the run %.3e m/s (last step %.3e)  liquid "
                   "volume drift %.3e  at t %.4f s\n",
                   (double)sw->ratio, (double)sw->umaxRun, (double)umax, (double)((vol - sw->v0) / sw->v0), (double)t));
+  PetscCheck(sw->check <= 0 || sw->umaxRun <= sw->check, fs->scene->comm, PETSC_ERR_NOT_CONVERGED,
+             "still_water: the spurious velocity %.3e exceeds -still_max_velocity %g", (double)sw->umaxRun,
+             (double)sw->check);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
