@@ -88,8 +88,10 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
              "-flow_volume_correction %g is invalid: must be in [0, 1]", (double)f->volCorr);
   PetscCall(PffParticlesSetFromOptions(f->part));
   PetscCall(PffPressureSetFromOptions(f->press));
-  /* the advection stages read velocity up to ceil(CFL) cells beyond a particle's block */
-  f->uWidth = PetscMin(PFF_GRID_MAX_WIDTH, PetscMax(2, (PetscInt)PetscCeilReal(f->cfl) + 1));
+  /* the advection stages read velocity up to about CFL cells beyond a particle's block, plus one cell
+     for the interpolation stencil and one of margin; points beyond the halo on another rank would be
+     clamped (a partition-dependent error) */
+  f->uWidth = PetscMin(PFF_GRID_MAX_WIDTH, (PetscInt)PetscCeilReal(f->cfl) + 2);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
