@@ -231,6 +231,9 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
   }
   PetscCall(PetscTime(&tnow));
   PetscCall(PffFlowUpdateFields(fs->flow, PETSC_FALSE));
+  /* the state at the end time (the step rows carry the time at which each step's fields were made) */
+  PetscCall(PetscMemzero(&st, sizeof(st)));
+  PetscCall(PffFlowSceneDiagRow(fs, step, t, &st, 0));
   if (fs->ops.finish) PetscCall(fs->ops.finish(fs));
   PetscCall(PetscPrintf(s->comm, "summary: %" PetscInt_FMT " steps  t %.6e  wall %.2f s  (%.3f s/step)\n", step,
                         (double)t, tnow - tstart, step ? stepTime / (double)step : 0.0));
