@@ -18,11 +18,11 @@ if [ -x $py ]; then
   done
   last=$(ls "$outdir"/frame_*.h5 2>/dev/null | sort | tail -n 1 || true)
   if [ -n "$last" ]; then
-    if $py "$PFF_ROOT/postproc/slice.py" "$last" phi vorticity -o "${last%.h5}_slice.png" 2>/dev/null; then
-      echo "pfflip: slice plot ${last%.h5}_slice.png"
-    elif $py "$PFF_ROOT/postproc/slice.py" "$last" u -o "${last%.h5}_u.png"; then
-      echo "pfflip: slice plot ${last%.h5}_u.png"
-    fi
+    for ch in phi vorticity u; do
+      if $py "$PFF_ROOT/postproc/slice.py" "$last" "$ch" -o "${last%.h5}_$ch.png" >/dev/null 2>&1; then
+        echo "pfflip: slice plot ${last%.h5}_$ch.png"
+      fi
+    done
   fi
 fi
 echo "pfflip: output in $outdir (open the .xmf files in ParaView)"
