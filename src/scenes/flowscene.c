@@ -258,6 +258,7 @@ static PetscErrorCode PffFlowSceneDestroy(PffScene s)
 
   PetscFunctionBeginUser;
   if (fs->ops.destroy) PetscCall(fs->ops.destroy(fs));
+  PetscCall(PetscFree(fs->ctx));
   PetscCall(PffFlowDestroy(&fs->flow));
   PetscCall(PffGridDestroy(&fs->grid));
   if (fs->diag) fclose(fs->diag);

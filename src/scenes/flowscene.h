@@ -18,6 +18,7 @@ typedef struct {
   PetscErrorCode (*diagnose)(PffFlowScene *, PetscReal t, char row[], size_t len);
   /* after the last step: final measurements printed to stdout */
   PetscErrorCode (*finish)(PffFlowScene *);
+  /* frees what ctx owns (ctx itself is freed by the driver); may be NULL */
   PetscErrorCode (*destroy)(PffFlowScene *);
 } PffFlowSceneOps;
 
@@ -26,7 +27,7 @@ struct _PffFlowScene {
   PffGrid         grid;
   PffFlow         flow;
   PffFlowSceneOps ops;
-  void           *ctx; /* the scene's own data */
+  void           *ctx; /* the scene's own data (PetscMalloc'ed; freed by the driver) */
 
   PetscReal tEnd, outputInterval, timeUnit;
   PetscInt  maxSteps, checkpointEvery;

@@ -45,7 +45,6 @@ static PetscErrorCode PffFluidDestroy(PffFlowScene *fs)
 
   PetscFunctionBeginUser;
   PetscCall(PffGeometryDestroy(&fl->geo));
-  PetscCall(PetscFree(fs->ctx));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -144,18 +144,10 @@ static PetscErrorCode PffRTFinish(PffFlowScene *fs)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-static PetscErrorCode PffRTDestroy(PffFlowScene *fs)
-{
-  PetscFunctionBeginUser;
-  PetscCall(PetscFree(fs->ctx));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
 static PetscErrorCode PffSceneCreate_RTCommon(PffScene s, PetscBool paper)
 {
   PffRT                *rt;
-  const PffFlowSceneOps ops = {PffRTSetFromOptions, NULL,        PffRTSeed,   ",spike_over_W",
-                               PffRTDiagnose,       PffRTFinish, PffRTDestroy};
+  const PffFlowSceneOps ops = {PffRTSetFromOptions, NULL, PffRTSeed, ",spike_over_W", PffRTDiagnose, PffRTFinish, NULL};
 
   PetscFunctionBeginUser;
   PetscCall(PetscNew(&rt));

@@ -140,18 +140,11 @@ static PetscErrorCode PffShearFinish(PffFlowScene *fs)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-static PetscErrorCode PffShearDestroy(PffFlowScene *fs)
-{
-  PetscFunctionBeginUser;
-  PetscCall(PetscFree(fs->ctx));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
 PetscErrorCode PffSceneCreate_ShearSphere(PffScene s)
 {
   PffShear             *sh;
-  const PffFlowSceneOps ops = {PffShearSetFromOptions, PffShearSetUp,  PffShearSeed,   NULL,
-                               PffShearDiagnose,       PffShearFinish, PffShearDestroy};
+  const PffFlowSceneOps ops = {PffShearSetFromOptions, PffShearSetUp,  PffShearSeed, NULL,
+                               PffShearDiagnose,       PffShearFinish, NULL};
 
   PetscFunctionBeginUser;
   PetscCall(PetscNew(&sh));

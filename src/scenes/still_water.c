@@ -94,18 +94,11 @@ static PetscErrorCode PffStillFinish(PffFlowScene *fs)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-static PetscErrorCode PffStillDestroy(PffFlowScene *fs)
-{
-  PetscFunctionBeginUser;
-  PetscCall(PetscFree(fs->ctx));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
 PetscErrorCode PffSceneCreate_StillWater(PffScene s)
 {
   PffStill             *sw;
-  const PffFlowSceneOps ops = {PffStillSetFromOptions, PffStillSetUp,  PffStillSeed,   ",volume_drift",
-                               PffStillDiagnose,       PffStillFinish, PffStillDestroy};
+  const PffFlowSceneOps ops = {PffStillSetFromOptions, PffStillSetUp,  PffStillSeed, ",volume_drift",
+                               PffStillDiagnose,       PffStillFinish, NULL};
 
   PetscFunctionBeginUser;
   PetscCall(PetscNew(&sw));
