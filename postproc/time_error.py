@@ -130,6 +130,9 @@ def main(argv=None):
                 face = line.get_color() if band == "yes" else "none"
                 ax.plot([wall], [err], "o" if band in ("yes", "no") else ".", color=line.get_color(), mfc=face, ms=6)
                 ax.annotate(cells, (wall, err), textcoords="offset points", xytext=(4, 4), fontsize=7)
+        if not series:
+            ax.text(0.5, 0.5, "no run with a positive error and wall time", transform=ax.transAxes, ha="center",
+                    fontsize=8)
         if scene == "shear_sphere":
             for (source, err), style in zip(published, ["--", ":", "-."] * len(published)):
                 ax.axhline(err, color="0.4", ls=style, lw=1, label=f"{source}: {err:g}")

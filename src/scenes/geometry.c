@@ -362,7 +362,9 @@ PetscErrorCode PffGeometryCheck(PffGeometry geo, PffGrid grid)
           }
         }
   }
-  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, found, (PetscMPIInt)nl, MPIU_INT, MPI_MAX, comm));
+  PetscMPIInt mnl;
+  PetscCall(PetscMPIIntCast(nl, &mnl));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, found, mnl, MPIU_INT, MPI_MAX, comm));
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &found[nl], 1, MPIU_INT, MPI_MIN, comm));
   overlap = found[nl];
   for (PetscInt i = 0; i < nl; i++)
