@@ -50,48 +50,41 @@ PetscErrorCode PffFlowOpenFaces_Private(PffFlow f)
 /* u~* = P / m into chUt (in place) and u* = u~* + dt g into chU on open faces. */
 PetscErrorCode PffFlowFaceVelocity_Private(PffFlow f, PetscReal dt)
 {
-  PetscInt nlocal;
+  const PetscInt ch[4] = {f->chMass, f->chUt, f->chU, f->chOpen};
+  PetscInt       nlocal;
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
-  for (PetscInt lb = 0; lb < nlocal; lb++) {
-    PffBlockInfo info;
-    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
-    const PetscInt n3 = info.n * info.n * info.n;
+  for (PetscInt lb = 0; lb < nlocal; lb++)
     for (PetscInt d = 0; d < 3; d++) {
-      float *m, *ut, *u, *open;
-      PetscCall(PffGridGetBlockData(f->grid, f->chMass, lb, d, &m));
-      PetscCall(PffGridGetBlockData(f->grid, f->chUt, lb, d, &ut));
-      PetscCall(PffGridGetBlockData(f->grid, f->chU, lb, d, &u));
-      PetscCall(PffGridGetBlockData(f->grid, f->chOpen, lb, d, &open));
+      float      *a[4];
+      PetscInt    n3 = 0;
       const float gd = (float)(dt * f->gravity[d]);
+      PetscCall(PffFlowBlockData_Private(f, lb, d, 4, ch, a, &n3));
+      float *m = a[0], *ut = a[1], *u = a[2], *open = a[3];
       for (PetscInt c = 0; c < n3; c++) {
         ut[c] = m[c] > 0 ? ut[c] / m[c] : 0.0f;
         u[c]  = open[c] > 0 ? ut[c] + gd : 0.0f;
       }
     }
-  }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 /* du = u - u~* into chUt (in place). */
 PetscErrorCode PffFlowVelocityChange_Private(PffFlow f)
 {
-  PetscInt nlocal;
+  const PetscInt ch[2] = {f->chUt, f->chU};
+  PetscInt       nlocal;
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
-  for (PetscInt lb = 0; lb < nlocal; lb++) {
-    PffBlockInfo info;
-    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
-    const PetscInt n3 = info.n * info.n * info.n;
+  for (PetscInt lb = 0; lb < nlocal; lb++)
     for (PetscInt d = 0; d < 3; d++) {
-      float *ut, *u;
-      PetscCall(PffGridGetBlockData(f->grid, f->chUt, lb, d, &ut));
-      PetscCall(PffGridGetBlockData(f->grid, f->chU, lb, d, &u));
-      for (PetscInt c = 0; c < n3; c++) ut[c] = u[c] - ut[c];
+      float   *a[2];
+      PetscInt n3 = 0;
+      PetscCall(PffFlowBlockData_Private(f, lb, d, 2, ch, a, &n3));
+      for (PetscInt c = 0; c < n3; c++) a[0][c] = a[1][c] - a[0][c];
     }
-  }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

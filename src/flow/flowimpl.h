@@ -30,6 +30,19 @@ struct _n_PffFlow {
   PetscInt  step;
 };
 
+/* Component d of nch channels on local block lb (n^3 floats each, x fastest); n3 may be NULL. */
+static inline PetscErrorCode PffFlowBlockData_Private(PffFlow f, PetscInt lb, PetscInt d, PetscInt nch,
+                                                      const PetscInt ch[], float *data[], PetscInt *n3)
+{
+  PffBlockInfo info;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+  for (PetscInt k = 0; k < nch; k++) PetscCall(PffGridGetBlockData(f->grid, ch[k], lb, d, &data[k]));
+  if (n3) *n3 = info.n * info.n * info.n;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /* phase.c */
 PETSC_INTERN PetscErrorCode PffFlowPhaseField_Private(PffFlow);
 PETSC_INTERN PetscErrorCode PffFlowVolumeCorrection_Private(PffFlow, PetscReal dt);

@@ -20,17 +20,14 @@ static PetscErrorCode PffFlowRawPhase(PffFlow f, PetscInt nlocal)
                   scale = f->alphaPhi * f->rho0 * f->rho[0];
 
   PetscFunctionBeginUser;
-  for (PetscInt lb = 0; lb < nlocal; lb++) {
-    PffBlockInfo info;
-    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
-    const PetscInt n3 = info.n * info.n * info.n;
+  const PetscInt ch[2] = {f->chMass, f->chPhiF};
+  for (PetscInt lb = 0; lb < nlocal; lb++)
     for (PetscInt d = 0; d < 3; d++) {
-      float *m, *phi;
-      PetscCall(PffGridGetBlockData(f->grid, f->chMass, lb, d, &m));
-      PetscCall(PffGridGetBlockData(f->grid, f->chPhiF, lb, d, &phi));
-      for (PetscInt c = 0; c < n3; c++) phi[c] = (float)PffPhi(m[c], rtmin, scale);
+      float   *a[2];
+      PetscInt n3 = 0;
+      PetscCall(PffFlowBlockData_Private(f, lb, d, 2, ch, a, &n3));
+      for (PetscInt c = 0; c < n3; c++) a[1][c] = (float)PffPhi(a[0][c], rtmin, scale);
     }
-  }
   PetscCall(PffGridHaloBegin(f->grid, f->chPhiF));
   PetscCall(PffGridHaloEnd(f->grid, f->chPhiF));
   for (PetscInt lb = 0; lb < nlocal; lb++) {
@@ -116,16 +113,16 @@ PetscErrorCode PffFlowVolumeCorrection_Private(PffFlow f, PetscReal dt)
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  const PetscInt ch[2] = {f->chMass, f->chPhiF};
   for (PetscInt lb = 0; lb < nlocal; lb++) {
-    PffBlockInfo info;
-    float       *cdiv, *m[3], *phi[3];
-    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
-    PetscCall(PffGridGetBlockData(f->grid, f->chCdiv, lb, 0, &cdiv));
+    float   *cdiv, *m[3], *phi[3], *a[2];
+    PetscInt n3 = 0;
+    PetscCall(PffFlowBlockData_Private(f, lb, 0, 1, &f->chCdiv, &cdiv, &n3));
     for (PetscInt d = 0; d < 3; d++) {
-      PetscCall(PffGridGetBlockData(f->grid, f->chMass, lb, d, &m[d]));
-      PetscCall(PffGridGetBlockData(f->grid, f->chPhiF, lb, d, &phi[d]));
+      PetscCall(PffFlowBlockData_Private(f, lb, d, 2, ch, a, NULL));
+      m[d]   = a[0];
+      phi[d] = a[1];
     }
-    const PetscInt n3 = info.n * info.n * info.n;
     for (PetscInt c = 0; c < n3; c++) {
       const PetscReal s = (PetscReal)(phi[0][c] + phi[1][c] + phi[2][c]);
       PetscReal       target;

@@ -85,16 +85,7 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
         PetscCall(PetscArrayzero(q->pad, 5));
         continue;
       }
-      if (m != i) {
-        for (int d = 0; d < 3; d++) {
-          p->s.x[3 * m + d] = p->s.x[3 * i + d];
-          p->s.v[3 * m + d] = p->s.v[3 * i + d];
-        }
-        p->s.id[m]    = p->s.id[i];
-        p->s.type[m]  = p->s.type[i];
-        p->s.level[m] = p->s.level[i];
-        p->s.flags[m] = p->s.flags[i];
-      }
+      if (m != i) PffParticlesMove_Private(p, m, i);
       m++;
     }
     for (PetscMPIInt r = 0; r < p->size; r++) {

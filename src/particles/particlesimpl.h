@@ -97,6 +97,19 @@ static inline PetscInt PffParticlesLocate_Private(PffParticles p, const PetscRea
   return level[gid] >= 0 ? gid : -1;
 }
 
+/* Moves particle src to slot dst (compaction after removals or sends). */
+static inline void PffParticlesMove_Private(PffParticles p, PetscInt dst, PetscInt src)
+{
+  for (int d = 0; d < 3; d++) {
+    p->s.x[3 * dst + d] = p->s.x[3 * src + d];
+    p->s.v[3 * dst + d] = p->s.v[3 * src + d];
+  }
+  p->s.id[dst]    = p->s.id[src];
+  p->s.type[dst]  = p->s.type[src];
+  p->s.level[dst] = p->s.level[src];
+  p->s.flags[dst] = p->s.flags[src];
+}
+
 PETSC_INTERN PetscErrorCode PffParticlesReserve_Private(PffParticles, PetscInt);
 PETSC_INTERN PetscErrorCode PffParticlesGetWork_Private(PffParticles, size_t, PetscReal **, size_t, PetscInt **);
 /* Wraps periodic axes and clamps walled axes of position x in place; returns what it did. */

@@ -10,57 +10,50 @@
    the stash). -pressure_assembly picks one; docs/pressure.md has the timings. */
 #include "pressureimpl.h"
 
-PetscErrorCode PffPressureChannelToVec_Private(PffPressure ps, PetscInt ch, PffChannelKind kind, Vec v)
+/* Copies between a channel's owned values and a Vec in cell (or face, 3 per cell) numbering. */
+static PetscErrorCode PffPressureCopy(PffPressure ps, PetscInt ch, PffChannelKind kind, Vec v, PetscBool toVec)
 {
   PffChannelKind ck;
   PetscScalar   *a;
+  const PetscInt ncomp = kind == PFF_CHANNEL_CELL ? 1 : 3;
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetChannelInfo(ps->grid, ch, NULL, &ck, NULL, NULL));
   PetscCheck(ck == kind, ps->comm, PETSC_ERR_ARG_WRONG, "pressure: channel %" PetscInt_FMT " is a %s channel, need %s",
              ch, PffChannelKinds[ck], PffChannelKinds[kind]);
-  PetscCall(VecGetArrayWrite(v, &a));
+  if (toVec)
+    PetscCall(VecGetArrayWrite(v, &a));
+  else
+    PetscCall(VecGetArray(v, &a));
   for (PetscInt lb = 0; lb < ps->nlocal; lb++) {
     const PetscInt c0 = ps->blockStart[lb], nc = ps->blockStart[lb + 1] - c0;
-    if (kind == PFF_CHANNEL_CELL) {
+    for (PetscInt d = 0; d < ncomp; d++) {
       float *data;
-      PetscCall(PffGridGetBlockData(ps->grid, ch, lb, 0, &data));
-      for (PetscInt c = 0; c < nc; c++) a[c0 + c] = data[c];
-    } else
-      for (PetscInt d = 0; d < 3; d++) {
-        float *data;
-        PetscCall(PffGridGetBlockData(ps->grid, ch, lb, d, &data));
-        for (PetscInt c = 0; c < nc; c++) a[3 * (c0 + c) + d] = data[c];
-      }
+      PetscCall(PffGridGetBlockData(ps->grid, ch, lb, d, &data));
+      if (toVec)
+        for (PetscInt c = 0; c < nc; c++) a[ncomp * (c0 + c) + d] = data[c];
+      else
+        for (PetscInt c = 0; c < nc; c++) data[c] = (float)PetscRealPart(a[ncomp * (c0 + c) + d]);
+    }
   }
-  PetscCall(VecRestoreArrayWrite(v, &a));
+  if (toVec)
+    PetscCall(VecRestoreArrayWrite(v, &a));
+  else
+    PetscCall(VecRestoreArray(v, &a));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureChannelToVec_Private(PffPressure ps, PetscInt ch, PffChannelKind kind, Vec v)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffPressureCopy(ps, ch, kind, v, PETSC_TRUE));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 PetscErrorCode PffPressureVecToChannel_Private(PffPressure ps, Vec v, PffChannelKind kind, PetscInt ch)
 {
-  PffChannelKind     ck;
-  const PetscScalar *a;
-
   PetscFunctionBeginUser;
-  PetscCall(PffGridGetChannelInfo(ps->grid, ch, NULL, &ck, NULL, NULL));
-  PetscCheck(ck == kind, ps->comm, PETSC_ERR_ARG_WRONG, "pressure: channel %" PetscInt_FMT " is a %s channel, need %s",
-             ch, PffChannelKinds[ck], PffChannelKinds[kind]);
-  PetscCall(VecGetArrayRead(v, &a));
-  for (PetscInt lb = 0; lb < ps->nlocal; lb++) {
-    const PetscInt c0 = ps->blockStart[lb], nc = ps->blockStart[lb + 1] - c0;
-    if (kind == PFF_CHANNEL_CELL) {
-      float *data;
-      PetscCall(PffGridGetBlockData(ps->grid, ch, lb, 0, &data));
-      for (PetscInt c = 0; c < nc; c++) data[c] = (float)a[c0 + c];
-    } else
-      for (PetscInt d = 0; d < 3; d++) {
-        float *data;
-        PetscCall(PffGridGetBlockData(ps->grid, ch, lb, d, &data));
-        for (PetscInt c = 0; c < nc; c++) data[c] = (float)a[3 * (c0 + c) + d];
-      }
-  }
-  PetscCall(VecRestoreArrayRead(v, &a));
+  PetscCall(PffPressureCopy(ps, ch, kind, v, PETSC_FALSE));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -154,6 +154,8 @@ static PetscErrorCode PffFlowSceneDiagRow(PffFlowScene *fs, PetscInt step, Petsc
 
   PetscFunctionBeginUser;
   PetscCall(PffFlowGetDiagnostics(fs->flow, &umaxGrid, &vol));
+  fs->umaxGrid     = umaxGrid;
+  fs->liquidVolume = vol;
   if (fs->ops.diagnose) PetscCall(fs->ops.diagnose(fs, t, extra, sizeof(extra)));
   if (fs->diag) {
     fprintf(fs->diag,

@@ -16,7 +16,7 @@ typedef struct {
   /* extra CSV columns: header names (comma separated, leading comma) and one row's values */
   const char *diagHeader;
   PetscErrorCode (*diagnose)(PffFlowScene *, PetscReal t, char row[], size_t len);
-  /* after the last step: final measurements printed to stdout */
+  /* after the last step, once the final diagnostics row is written: final measurements to stdout */
   PetscErrorCode (*finish)(PffFlowScene *);
   /* frees what ctx owns (ctx itself is freed by the driver); may be NULL */
   PetscErrorCode (*destroy)(PffFlowScene *);
@@ -34,6 +34,7 @@ struct _PffFlowScene {
   PetscBool frames, frameParticles, restarted;
   char      restart[PETSC_MAX_PATH_LEN];
   FILE     *diag;
+  PetscReal umaxGrid, liquidVolume; /* of the latest diagnostics row (PffFlowGetDiagnostics) */
 };
 
 /* Sets option key to value when the user has not set it (scene defaults derived from physics). */
