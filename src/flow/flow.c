@@ -136,10 +136,9 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
   PetscCall(PffGridAddChannel(f->grid, "cdiv", PFF_CHANNEL_CELL, 1, &f->chCdiv));
   PetscCall(PffGridAddChannel(f->grid, "vorticity", PFF_CHANNEL_CELL, 1, &f->chVort));
   /* working channels stay out of frames (checkpoints keep everything) */
-  for (PetscInt k = 0; k < 6; k++) {
-    const PetscInt hidden[6] = {f->chMass, f->chUt, f->chPhiF, f->chBeta, f->chOpen, f->chCdiv};
+  const PetscInt hidden[] = {f->chMass, f->chUt, f->chPhiF, f->chBeta, f->chOpen, f->chCdiv};
+  for (size_t k = 0; k < PETSC_STATIC_ARRAY_LENGTH(hidden); k++)
     PetscCall(PffGridSetChannelOutput(f->grid, hidden[k], PETSC_FALSE));
-  }
   PetscCall(PffParticlesGetKernelSum(f->part, &f->rho0));
   PetscCall(PffFlowOpenFaces_Private(f));
   if (!f->prescribed && f->usePressure) PetscCall(PffPressureSetUp(f->press));
