@@ -85,3 +85,28 @@ PETSC_EXTERN PetscErrorCode PffPressureGetOperator(PffPressure ps, Mat *A);
 PETSC_EXTERN PetscErrorCode PffPressureGetDiagonal(PffPressure ps, Vec *diag);
 PETSC_EXTERN PetscErrorCode PffPressureGetFaceCoefficients(PffPressure ps, Vec *coef);
 PETSC_EXTERN PetscErrorCode PffPressureGetKSP(PffPressure ps, KSP *ksp);
+
+/* The adaptive multigrid preconditioner of PF-FLIP Sec. 6, -pressure_pc_type pffmg (a PCSHELL inside
+   the pressure KSP; docs/pressure.md). Options, prefix pressure_: -pffmg_smoother rbgs|jacobi (two-stage
+   red-black hybrid Gauss-Seidel, default, or weighted Jacobi), -pffmg_adaptive (adaptive relaxation,
+   Algorithm 2, default true), -pffmg_block_sweeps (repeat block-local sweeps until the update falls by 1/3,
+   default true), -pffmg_block_sweeps_max (4), -pffmg_adaptive_steps (10), -pffmg_sweeps (fixed pre/post
+   sweeps without adaptivity, 2), -pffmg_omega (6/7), -pffmg_theta_sigmas (2), -pffmg_max_levels, and
+   the coarsest-level KSP under pressure_pffmg_coarse_ (default preonly + redundant LU). The functions
+   below need pffmg as the PC and a KSPSetUp or solve before them. */
+typedef struct {
+  PetscInt   levels;           /* multigrid levels; the last is solved by the coarse KSP */
+  PetscInt64 applications;     /* V-cycles (PC applications) on this rank */
+  PetscInt64 blockRelaxations; /* block relaxations, summed over ranks by GetStats */
+  PetscInt64 cellUpdates;      /* cell updates, summed over ranks by GetStats */
+  PetscInt64 adaptiveSteps;    /* steps of Algorithm 2 on this rank */
+} PffMGStats;
+
+/* Statistics since the last reset (collective: sums over ranks). */
+PETSC_EXTERN PetscErrorCode PffPressureMGGetStats(PffPressure ps, PffMGStats *stats);
+PETSC_EXTERN PetscErrorCode PffPressureMGResetStats(PffPressure ps);
+/* Level L's Galerkin operator and the prolongation from level L+1 (NULL on the coarsest); borrowed. */
+PETSC_EXTERN PetscErrorCode PffPressureMGGetLevel(PffPressure ps, PetscInt L, Mat *A, Mat *P);
+/* Applies level L's smoother to A_L x = b in place: sweeps > 0 fixed hybrid sweeps (or Jacobi), sweeps = 0
+   the configured pre-smoother (adaptive when on). Collective. */
+PETSC_EXTERN PetscErrorCode PffPressureMGSmooth(PffPressure ps, PetscInt L, Vec b, Vec x, PetscInt sweeps);

@@ -6,7 +6,7 @@ PetscClassId  PFF_CLASSID;
 PetscLogEvent PFF_GridSetUp, PFF_GridRefine, PFF_GridPartition, PFF_HaloSetUp, PFF_HaloBegin, PFF_HaloEnd,
     PFF_HaloRevBegin, PFF_HaloRevEnd, PFF_GridInterp, PFF_GridLaplacian, PFF_IOWrite, PFF_IORead, PFF_PartSeed,
     PFF_PartBin, PFF_PartMigrate, PFF_P2G, PFF_G2P, PFF_Advect, PFF_PressSetUp, PFF_PressAssemble, PFF_PressSolve,
-    PFF_PhaseField, PFF_Forces, PFF_CkptWrite, PFF_CkptRead;
+    PFF_PhaseField, PFF_Forces, PFF_CkptWrite, PFF_CkptRead, PFF_MGSetUp, PFF_MGApply, PFF_MGSmooth, PFF_MGCoarse;
 
 static PetscBool PffPackageInitialized = PETSC_FALSE;
 
@@ -41,5 +41,9 @@ PetscErrorCode PffInitializePackage(void)
   PetscCall(PetscLogEventRegister("Forces", PFF_CLASSID, &PFF_Forces));
   PetscCall(PetscLogEventRegister("CkptWrite", PFF_CLASSID, &PFF_CkptWrite));
   PetscCall(PetscLogEventRegister("CkptRead", PFF_CLASSID, &PFF_CkptRead));
+  PetscCall(PetscLogEventRegister("MGSetUp", PFF_CLASSID, &PFF_MGSetUp));
+  PetscCall(PetscLogEventRegister("MGApply", PFF_CLASSID, &PFF_MGApply));
+  PetscCall(PetscLogEventRegister("MGSmooth", PFF_CLASSID, &PFF_MGSmooth));
+  PetscCall(PetscLogEventRegister("MGCoarse", PFF_CLASSID, &PFF_MGCoarse));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

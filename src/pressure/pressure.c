@@ -24,6 +24,7 @@ PetscErrorCode PffPressureCreate(PffGrid grid, PffPressure *ps)
   PetscCheck(ps != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL output argument");
   PetscCheck(grid != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL grid");
   PetscCall(PffGridGetRaster(grid, NULL, NULL, NULL)); /* errors unless the grid is set up */
+  PetscCall(PffPressureMGRegister_Private());
   PetscCall(PetscNew(&p));
   p->grid     = grid;
   p->assembly = PFF_PRESSURE_ASSEMBLY_DEFAULT;
@@ -49,6 +50,13 @@ PetscErrorCode PffPressureSetFromOptions(PffPressure ps)
                              PffPressureAssemblyTypes, (PetscEnum)ps->assembly, (PetscEnum *)&ps->assembly, NULL));
   PetscOptionsEnd();
   PetscCall(KSPSetFromOptions(ps->ksp));
+  {
+    PC        pc;
+    PetscBool mg;
+    PetscCall(KSPGetPC(ps->ksp, &pc));
+    PetscCall(PffPressureMGIsActive_Private(pc, &mg));
+    if (mg) PetscCall(PffPressureMGSetFromOptions_Private(pc, ps->grid));
+  }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

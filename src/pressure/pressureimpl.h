@@ -78,3 +78,6 @@ PETSC_INTERN PetscErrorCode PffPressureAssemble_Private(PffPressure, PetscInt, P
 PETSC_INTERN PetscErrorCode PffPressureChannelToVec_Private(PffPressure, PetscInt, PffChannelKind, Vec);
 PETSC_INTERN PetscErrorCode PffPressureVecToChannel_Private(PffPressure, Vec, PffChannelKind, PetscInt);
 PETSC_INTERN PetscErrorCode PffPressureMaxDivergenceVec_Private(PffPressure, Vec, PetscReal *);
+PETSC_INTERN PetscErrorCode PffPressureMGRegister_Private(void);
+PETSC_INTERN PetscErrorCode PffPressureMGIsActive_Private(PC, PetscBool *);
+PETSC_INTERN PetscErrorCode PffPressureMGSetFromOptions_Private(PC, PffGrid);

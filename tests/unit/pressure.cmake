@@ -1,3 +1,7 @@
 # pressure: operator (symmetry, row sums, the 7-point limit), projection with every PC on uniform and
 # graded grids (closed and periodic), partition independence, hydrostatic balance. At 1, 2 and 4 ranks.
 pff_add_unit(test_pressure RANKS 1 2 4)
+# pffmg: Galerkin levels against explicit P^T A P and Algorithm 1's face sums, smoother energy decrease on
+# every level, FCG + pffmg convergence on the bubbly problem (iterations rank-independent within 3),
+# adaptive relaxation cheaper than fixed sweeps for a localised residual. At 1, 2 and 4 ranks.
+pff_add_unit(test_pffmg RANKS 1 2 4)

@@ -1,0 +1,296 @@
+/* pffmg: the adaptive multigrid preconditioner of PF-FLIP Sec. 6, as a PETSc PCSHELL inside
+   KSPFCG (flexible CG, Polak-Ribiere; Sec. 6.4), registered as the PC type "pffmg" so that
+   -pressure_pc_type pffmg selects it like any PETSc PC.
+
+   One application is a V-cycle with zero initial guess over the multigrid levels of mglevels.c:
+   smooth (mgsmooth.c), restrict the residual with R = P^T, recurse, add P times the correction,
+   smooth again; the coarsest level (every block one cell) is solved by the KSP with options prefix
+   pressure_pffmg_coarse_ (default: a redundant direct solve). The smoother is the two-stage
+   red-black hybrid Gauss-Seidel with adaptive relaxation (Algorithm 2), or fixed sweeps, or
+   weighted Jacobi, chosen by options so that the comparison of the paper's Fig. 17 can be redone.
+   Set-up is symbolic once per grid and numeric (Galerkin products, coarse factorisation) each time
+   the coefficients change, i.e. once per time step. */
+#include "mgimpl.h"
+
+#define PFF_MG_NAME "pffmg"
+#define PFF_MG_SMOOTHER_DEFAULT PFF_MG_SMOOTHER_RBGS
+#define PFF_MG_ADAPTIVE_DEFAULT PETSC_TRUE
+#define PFF_MG_BLOCK_SWEEPS_DEFAULT PETSC_TRUE
+#define PFF_MG_SWEEPS_DEFAULT 2
+#define PFF_MG_ADAPTIVE_STEPS_DEFAULT 10
+#define PFF_MG_BLOCK_SWEEPS_MAX_DEFAULT 4
+#define PFF_MG_OMEGA_DEFAULT (6.0 / 7.0)
+#define PFF_MG_THETA_SIGMAS_DEFAULT 2.0
+#define PFF_MG_MAX_LEVELS_DEFAULT 16
+#define PFF_MG_CORRECTION_DEFAULT 2.0
+
+static PetscErrorCode PffMGGetContext(PC pc, PffMG **mg)
+{
+  const char *name = NULL;
+
+  PetscFunctionBeginUser;
+  PetscCall(PCShellGetName(pc, &name));
+  PetscCheck(name != NULL && strcmp(name, PFF_MG_NAME) == 0, PetscObjectComm((PetscObject)pc), PETSC_ERR_ARG_WRONG,
+             "pressure: the preconditioner is not pffmg (-pressure_pc_type pffmg)");
+  PetscCall(PCShellGetContext(pc, mg));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode VCycle(PffMG *mg, PetscInt L, Vec b, Vec x)
+{
+  PffMGLevel *lv = &mg->lev[L];
+
+  PetscFunctionBeginUser;
+  if (L == mg->nlevels - 1) {
+    PetscCall(PetscLogEventBegin(PFF_MGCoarse, 0, 0, 0, 0));
+    PetscCall(KSPSolve(mg->coarse, b, x));
+    PetscCall(PetscLogEventEnd(PFF_MGCoarse, 0, 0, 0, 0));
+    PetscFunctionReturn(PETSC_SUCCESS);
+  }
+  PffMGLevel *c = &mg->lev[L + 1];
+  PetscCall(VecSet(x, 0.0));
+  PetscCall(PffMGSmooth_Private(mg, L, b, x));
+  PetscCall(MatMult(lv->A, x, lv->r));
+  PetscCall(VecAYPX(lv->r, -1.0, b));
+  PetscCall(MatMultTranspose(lv->P, lv->r, c->b));
+  PetscCall(VCycle(mg, L + 1, c->b, c->x));
+  if (mg->opt.correction != 1.0) PetscCall(VecScale(c->x, mg->opt.correction));
+  PetscCall(MatMultAdd(lv->P, c->x, x, x));
+  PetscCall(PffMGSmooth_Private(mg, L, b, x));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffMGApply(PC pc, Vec b, Vec x)
+{
+  PffMG *mg;
+
+  PetscFunctionBeginUser;
+  PetscCall(PCShellGetContext(pc, &mg));
+  PetscCall(PetscLogEventBegin(PFF_MGApply, 0, 0, 0, 0));
+  PetscCall(VCycle(mg, 0, b, x));
+  mg->stats.applications++;
+  PetscCall(PetscLogEventEnd(PFF_MGApply, 0, 0, 0, 0));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffMGSetUp(PC pc)
+{
+  PffMG *mg;
+  Mat    A;
+
+  PetscFunctionBeginUser;
+  PetscCall(PCShellGetContext(pc, &mg));
+  PetscCheck(mg->grid != NULL, PetscObjectComm((PetscObject)pc), PETSC_ERR_ORDER,
+             "pffmg needs the grid: use it through PffPressure (-pressure_pc_type pffmg)");
+  PetscCall(PetscLogEventBegin(PFF_MGSetUp, 0, 0, 0, 0));
+  PetscCall(PCGetOperators(pc, NULL, &A));
+  if (mg->built && mg->lev[0].A != NULL && mg->lev[0].A != A) PetscCall(PffMGDestroyLevels_Private(mg));
+  if (!mg->built) PetscCall(PffMGBuildLevels_Private(mg));
+  PetscCall(PffMGUpdateOperators_Private(mg, A));
+  mg->stats.levels = mg->nlevels;
+  PetscCall(PetscLogEventEnd(PFF_MGSetUp, 0, 0, 0, 0));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffMGView(PC pc, PetscViewer viewer)
+{
+  PffMG    *mg;
+  PetscBool ascii;
+
+  PetscFunctionBeginUser;
+  PetscCall(PCShellGetContext(pc, &mg));
+  PetscCall(PetscObjectTypeCompare((PetscObject)viewer, PETSCVIEWERASCII, &ascii));
+  if (!ascii) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PetscViewerASCIIPrintf(viewer,
+                                   "pffmg: %" PetscInt_FMT " levels, smoother %s, adaptive relaxation %s (%" PetscInt_FMT
+                                   " steps, theta = mean + %g sd), block sweeps %s (max %" PetscInt_FMT
+                                   "), fixed sweeps %" PetscInt_FMT ", omega %g\n",
+                                   mg->nlevels, PffMGSmootherTypes[mg->opt.smoother], mg->opt.adaptive ? "on" : "off",
+                                   mg->opt.adaptiveSteps, (double)mg->opt.thetaSigmas,
+                                   mg->opt.blockSweeps ? "adaptive" : "one", mg->opt.blockSweepsMax, mg->opt.sweeps,
+                                   (double)mg->opt.omega));
+  for (PetscInt L = 0; L < mg->nlevels; L++) {
+    PetscInt N = 0;
+    if (mg->lev[L].A) PetscCall(MatGetSize(mg->lev[L].A, &N, NULL));
+    PetscCall(PetscViewerASCIIPrintf(viewer, "  level %" PetscInt_FMT ": %" PetscInt_FMT " cells\n", L, N));
+  }
+  PetscCall(PetscViewerASCIIPushTab(viewer));
+  PetscCall(KSPView(mg->coarse, viewer));
+  PetscCall(PetscViewerASCIIPopTab(viewer));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffMGDestroy(PC pc)
+{
+  PffMG *mg;
+
+  PetscFunctionBeginUser;
+  PetscCall(PCShellGetContext(pc, &mg));
+  if (mg == NULL) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PffMGDestroyLevels_Private(mg));
+  PetscCall(KSPDestroy(&mg->coarse));
+  PetscCall(PetscFree(mg));
+  PetscCall(PCShellSetContext(pc, NULL));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The constructor behind PCSetType(pc, "pffmg"): a PCSHELL with our callbacks. */
+static PetscErrorCode PCCreate_PffMG(PC pc)
+{
+  PffMG      *mg;
+  const char *prefix;
+  PC          cpc;
+
+  PetscFunctionBeginUser;
+  PetscCall(PCSetType(pc, PCSHELL));
+  PetscCall(PetscNew(&mg));
+  mg->comm               = PetscObjectComm((PetscObject)pc);
+  mg->opt.smoother       = PFF_MG_SMOOTHER_DEFAULT;
+  mg->opt.adaptive       = PFF_MG_ADAPTIVE_DEFAULT;
+  mg->opt.blockSweeps    = PFF_MG_BLOCK_SWEEPS_DEFAULT;
+  mg->opt.sweeps         = PFF_MG_SWEEPS_DEFAULT;
+  mg->opt.adaptiveSteps  = PFF_MG_ADAPTIVE_STEPS_DEFAULT;
+  mg->opt.blockSweepsMax = PFF_MG_BLOCK_SWEEPS_MAX_DEFAULT;
+  mg->opt.omega          = PFF_MG_OMEGA_DEFAULT;
+  mg->opt.thetaSigmas    = PFF_MG_THETA_SIGMAS_DEFAULT;
+  mg->opt.maxLevels      = PFF_MG_MAX_LEVELS_DEFAULT;
+  mg->opt.correction     = PFF_MG_CORRECTION_DEFAULT;
+  PetscCall(KSPCreate(mg->comm, &mg->coarse));
+  PetscCall(PCGetOptionsPrefix(pc, &prefix));
+  PetscCall(KSPSetOptionsPrefix(mg->coarse, prefix));
+  PetscCall(KSPAppendOptionsPrefix(mg->coarse, "pffmg_coarse_"));
+  PetscCall(KSPSetType(mg->coarse, KSPPREONLY));
+  PetscCall(KSPGetPC(mg->coarse, &cpc));
+  PetscCall(PCSetType(cpc, PCREDUNDANT));
+  PetscCall(PCShellSetContext(pc, mg));
+  PetscCall(PCShellSetName(pc, PFF_MG_NAME));
+  PetscCall(PCShellSetApply(pc, PffMGApply));
+  PetscCall(PCShellSetSetUp(pc, PffMGSetUp));
+  PetscCall(PCShellSetView(pc, PffMGView));
+  PetscCall(PCShellSetDestroy(pc, PffMGDestroy));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureMGRegister_Private(void)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PCRegister(PFF_MG_NAME, PCCreate_PffMG));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureMGIsActive_Private(PC pc, PetscBool *active)
+{
+  const char *name = NULL;
+  PetscBool   shell;
+
+  PetscFunctionBeginUser;
+  *active = PETSC_FALSE;
+  PetscCall(PetscObjectTypeCompareAny((PetscObject)pc, &shell, PCSHELL, PFF_MG_NAME, ""));
+  if (!shell) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PCShellGetName(pc, &name));
+  *active = (PetscBool)(name != NULL && strcmp(name, PFF_MG_NAME) == 0);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Options of pffmg under the pressure KSP's prefix; also hands the grid to the PC. */
+PetscErrorCode PffPressureMGSetFromOptions_Private(PC pc, PffGrid grid)
+{
+  PffMG      *mg;
+  const char *prefix;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffMGGetContext(pc, &mg));
+  mg->grid = grid;
+  PetscCall(PCGetOptionsPrefix(pc, &prefix));
+  PetscOptionsBegin(mg->comm, prefix, "Adaptive multigrid preconditioner (pffmg)", "PC");
+  PetscCall(PetscOptionsEnum("-pffmg_smoother", "pffmg smoother: two-stage red-black hybrid Gauss-Seidel or weighted Jacobi",
+                             "PffPressureMG", PffMGSmootherTypes, (PetscEnum)mg->opt.smoother,
+                             (PetscEnum *)&mg->opt.smoother, NULL));
+  PetscCall(PetscOptionsBool("-pffmg_adaptive", "Adaptive relaxation (Algorithm 2) instead of fixed sweeps", "PffPressureMG",
+                             mg->opt.adaptive, &mg->opt.adaptive, NULL));
+  PetscCall(PetscOptionsBool("-pffmg_block_sweeps", "Repeat block-local sweeps until the update falls by 1/3",
+                             "PffPressureMG", mg->opt.blockSweeps, &mg->opt.blockSweeps, NULL));
+  PetscCall(PetscOptionsBoundedInt("-pffmg_block_sweeps_max", "Most block-local sweeps per visit (k_max)", "PffPressureMG",
+                                   mg->opt.blockSweepsMax, &mg->opt.blockSweepsMax, NULL, 1));
+  PetscCall(PetscOptionsBoundedInt("-pffmg_adaptive_steps", "Adaptive relaxation steps per smoothing (N_iter,max)",
+                                   "PffPressureMG", mg->opt.adaptiveSteps, &mg->opt.adaptiveSteps, NULL, 1));
+  PetscCall(PetscOptionsBoundedInt("-pffmg_sweeps", "Pre- and post-sweeps when adaptive relaxation is off", "PffPressureMG",
+                                   mg->opt.sweeps, &mg->opt.sweeps, NULL, 1));
+  PetscCall(PetscOptionsReal("-pffmg_omega", "Relaxation weight omega (6/7 is optimal in 3D)", "PffPressureMG",
+                             mg->opt.omega, &mg->opt.omega, NULL));
+  PetscCall(PetscOptionsReal("-pffmg_theta_sigmas", "theta = 10^(mean + this x sd) of log10 block residual maxima",
+                             "PffPressureMG", mg->opt.thetaSigmas, &mg->opt.thetaSigmas, NULL));
+  PetscCall(PetscOptionsBoundedInt("-pffmg_max_levels", "Most multigrid levels (the last is solved directly)",
+                                   "PffPressureMG", mg->opt.maxLevels, &mg->opt.maxLevels, NULL, 1));
+  PetscCall(PetscOptionsReal("-pffmg_correction", "Scale of the coarse-grid correction (piecewise-constant Galerkin is twice too stiff)",
+                             "PffPressureMG", mg->opt.correction, &mg->opt.correction, NULL));
+  PetscOptionsEnd();
+  PetscCheck(mg->opt.omega > 0 && mg->opt.omega < 2, mg->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-pressure_pffmg_omega %g is invalid: must lie in (0, 2)", (double)mg->opt.omega);
+  PetscCall(KSPSetFromOptions(mg->coarse));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffPressureGetMG(PffPressure ps, PffMG **mg)
+{
+  PC pc;
+
+  PetscFunctionBeginUser;
+  PetscCheck(ps != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL object");
+  PetscCall(KSPGetPC(ps->ksp, &pc));
+  PetscCall(PffMGGetContext(pc, mg));
+  PetscCheck((*mg)->built, ps->comm, PETSC_ERR_ORDER, "pffmg: the hierarchy exists after the first solve or KSPSetUp");
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureMGGetStats(PffPressure ps, PffMGStats *stats)
+{
+  PffMG     *mg;
+  PetscInt64 sum[2];
+
+  PetscFunctionBeginUser;
+  PetscCall(PffPressureGetMG(ps, &mg));
+  *stats = mg->stats;
+  sum[0] = mg->stats.blockRelaxations;
+  sum[1] = mg->stats.cellUpdates;
+  PetscCallMPI(MPIU_Allreduce(MPI_IN_PLACE, sum, 2, MPIU_INT64, MPI_SUM, mg->comm));
+  stats->blockRelaxations = sum[0];
+  stats->cellUpdates      = sum[1];
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureMGResetStats(PffPressure ps)
+{
+  PffMG *mg;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffPressureGetMG(ps, &mg));
+  mg->stats.applications = mg->stats.blockRelaxations = mg->stats.cellUpdates = mg->stats.adaptiveSteps = 0;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureMGGetLevel(PffPressure ps, PetscInt L, Mat *A, Mat *P)
+{
+  PffMG *mg;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffPressureGetMG(ps, &mg));
+  PetscCheck(L >= 0 && L < mg->nlevels, ps->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "pffmg: level %" PetscInt_FMT " does not exist (%" PetscInt_FMT " levels)", L, mg->nlevels);
+  if (A) *A = mg->lev[L].A;
+  if (P) *P = mg->lev[L].P;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureMGSmooth(PffPressure ps, PetscInt L, Vec b, Vec x, PetscInt sweeps)
+{
+  PffMG *mg;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffPressureGetMG(ps, &mg));
+  PetscCheck(L >= 0 && L + 1 < mg->nlevels, ps->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "pffmg: level %" PetscInt_FMT " has no smoother (%" PetscInt_FMT " levels)", L, mg->nlevels);
+  if (sweeps > 0) PetscCall(PffMGSmoothFixed_Private(mg, L, b, x, sweeps));
+  else PetscCall(PffMGSmooth_Private(mg, L, b, x));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}

@@ -1,0 +1,76 @@
+/* The private body of the adaptive multigrid preconditioner (pffmg, PF-FLIP Sec. 6): one level per
+   multigrid level L, each a set of the owned MSBG blocks at resolution max(l_block, L), the Galerkin
+   operator of that level and the block/cell colouring the smoother needs. Only src/pressure/
+   includes this header. */
+#pragma once
+
+#include "pressureimpl.h"
+
+typedef enum { PFF_MG_SMOOTHER_RBGS, PFF_MG_SMOOTHER_JACOBI } PffMGSmootherType;
+PETSC_INTERN const char *const PffMGSmootherTypes[];
+
+/* Options (prefix pressure_pffmg_), defaults beside PffMGCreate in mg.c. */
+typedef struct {
+  PffMGSmootherType smoother;
+  PetscBool         adaptive;      /* Algorithm 2 (active block lists); otherwise fixed sweeps */
+  PetscBool         blockSweeps;   /* repeat block-local sweeps until the update falls by 1/3 */
+  PetscInt          sweeps;        /* fixed pre- and post-sweeps when not adaptive */
+  PetscInt          adaptiveSteps; /* N_iter,max of Algorithm 2 */
+  PetscInt          blockSweepsMax;
+  PetscReal         omega;
+  PetscReal         thetaSigmas; /* theta = mean + thetaSigmas * std of log10 of the block maxima */
+  PetscInt          maxLevels;
+  PetscReal         correction; /* coarse-grid correction scale */
+} PffMGOptions;
+
+/* One multigrid level. Rows are the owned cells: owned blocks in local (Morton) order, cells x
+   fastest at the block's resolution at this level. */
+typedef struct {
+  PetscInt L;
+  Mat      A;              /* level operator; level 0: the pressure module's, referenced */
+  Mat      P;              /* prolongation from level L+1 (piecewise constant), NULL on the coarsest */
+  Vec      x, b, r;        /* work (x, b unused on level 0, which works on the PC's vectors) */
+  PetscInt nrows, rstart;  /* owned rows, first global row */
+  PetscInt *n;             /* [nlocal] cells per axis of each block at this level */
+  PetscInt *start;         /* [nlocal + 1] first local row of each block */
+  PetscInt *order, *split; /* rows of block lb: order[start[lb] .. split[lb]) red, then black */
+  PetscBool *relevant;     /* [nlocal] relaxed at this level (resolution L, or L+1 beside a block at L) */
+  PetscInt   ncolour[2];   /* blocks of each block colour */
+  PetscInt  *colourList;   /* [nlocal] relevant blocks: colour 0 first, then colour 1 */
+
+  /* CSR of the local rows: the diagonal block (local columns) and the off-rank block (ghost columns) */
+  Mat               Ad, Ao;
+  const PetscInt   *ai, *aj, *bi, *bj, *colmap;
+  const PetscScalar *aa, *ba;
+  PetscInt           nghost;
+  Vec                ghost; /* off-rank values of x, in colmap order */
+  VecScatter         scatter;
+  PetscScalar       *idiag; /* 1 / a_ii (0 for an empty row) */
+} PffMGLevel;
+
+typedef struct {
+  PffGrid      grid;
+  MPI_Comm     comm;
+  PffMGOptions opt;
+  PetscInt     nlevels, nlocal;
+  PffMGLevel  *lev;
+  KSP          coarse;   /* coarsest-level solver, options prefix pressure_pffmg_coarse_ */
+  PetscBool    singular; /* A has the constants as null space: the coarsest operator is pinned */
+  PetscBool    built;    /* hierarchy structure exists (coefficients are refreshed each set-up) */
+  /* per-block scratch for adaptive relaxation */
+  PetscInt      *nbr;     /* [6 nlocal] local face neighbour (or -1: none, wall, or remote -2 - gid) */
+  PetscInt       nraster; /* blocks in the raster */
+  unsigned char *flags;   /* [nraster] global activation requests (replicated) */
+  PetscReal     *bres;    /* [nlocal] per-block effective residual */
+  PetscReal     *face;    /* [6 nlocal] per-face border effective residual */
+  PetscInt      *list;    /* [nlocal] active blocks */
+  PetscInt      *gid;     /* [nlocal] raster index of each owned block */
+  unsigned char *colour;  /* [nlocal] block colour (x_b + y_b + z_b) mod 2 */
+  PffMGStats     stats;
+} PffMG;
+
+PETSC_INTERN PetscErrorCode PffMGBuildLevels_Private(PffMG *);
+PETSC_INTERN PetscErrorCode PffMGUpdateOperators_Private(PffMG *, Mat);
+PETSC_INTERN PetscErrorCode PffMGDestroyLevels_Private(PffMG *);
+PETSC_INTERN PetscErrorCode PffMGSmooth_Private(PffMG *, PetscInt, Vec, Vec);
+PETSC_INTERN PetscErrorCode PffMGSmoothFixed_Private(PffMG *, PetscInt, Vec, Vec, PetscInt);

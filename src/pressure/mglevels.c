@@ -1,0 +1,307 @@
+/* pffmg hierarchy: multiresolution Galerkin coarsening (PF-FLIP Sec. 6.1-6.2, Algorithm 1, Eq. 14).
+
+   Multigrid levels L are separate from the MSBG resolution levels l (Fig. 10): at level L, block b
+   has resolution max(l_b, L), so a block without finer cells than L is shared unchanged, and a block
+   coarsened from L-1 to L merges its cells 2x2x2. The prolongation P from L to L-1 is piecewise
+   constant (unsmoothed aggregation, Shao et al. 2022), R = P^T, and the level operator is the
+   Galerkin product A_L = P^T A_{L-1} P (Eq. 14). For our face operator A = sum_f c_f g_f g_f^T this
+   is again a face operator whose coarse face coefficients are the sums of the fine face coefficients
+   across each coarse face -- Algorithm 1's loop over the 2x2 fine faces, including the coarse-fine
+   faces with their Delta_g scaling, which our level-0 coefficients already carry (faces.c). It is
+   computed with MatPtAP, numerically once per set-up, symbolically once per grid. The hierarchy
+   stops when every block is one cell (L = log2 n0); that level is solved by a PETSc KSP.
+
+   Each level also keeps what the block smoother needs: per block its cell count and rows, the
+   rows split into red and black cells, the relevant blocks per block colour, and CSR views of the
+   local and off-rank parts of A_L with a ghost scatter for the off-rank columns. */
+#include "mgimpl.h"
+
+static PetscInt ResolutionAt(PetscInt l, PetscInt L) { return PetscMax(l, L); }
+
+/* Face neighbour gid of block ijk along axis a, side s (0: lower, 1: upper), or -1. */
+static PetscInt FaceNeighbour(const PetscInt nb[3], const PetscBool periodic[3], const PetscInt ijk[3], PetscInt f)
+{
+  PetscInt dir[3] = {0, 0, 0};
+  dir[f / 2]      = (f % 2) ? 1 : -1;
+  return PffRasterNeighbour(nb, periodic, ijk, dir);
+}
+
+static PetscErrorCode BuildLevelLayout(PffMG *mg, PetscInt L)
+{
+  PffMGLevel        *lv = &mg->lev[L];
+  PetscInt           nb[3], n0, nlevels;
+  const PetscInt    *level;
+  const PetscMPIInt *owner;
+  PetscBool          periodic[3];
+  PetscInt           rstart = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetRaster(mg->grid, nb, &level, &owner));
+  PetscCall(PffGridGetSizes(mg->grid, &n0, &nlevels, NULL, NULL, periodic));
+  lv->L = L;
+  PetscCall(PetscMalloc4(mg->nlocal, &lv->n, mg->nlocal + 1, &lv->start, mg->nlocal, &lv->split, mg->nlocal,
+                         &lv->relevant));
+  PetscCall(PetscMalloc1(mg->nlocal, &lv->colourList));
+  lv->start[0] = 0;
+  for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(mg->grid, lb, &info));
+    lv->n[lb]         = n0 >> ResolutionAt(info.level, L);
+    lv->start[lb + 1] = lv->start[lb] + lv->n[lb] * lv->n[lb] * lv->n[lb];
+  }
+  lv->nrows = lv->start[mg->nlocal];
+  PetscCallMPI(MPI_Exscan(&lv->nrows, &rstart, 1, MPIU_INT, MPI_SUM, mg->comm));
+  lv->rstart = rstart;
+
+  /* red cells (i + j + k even) first, then black, per block */
+  PetscCall(PetscMalloc1(lv->nrows, &lv->order));
+  for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
+    const PetscInt n = lv->n[lb];
+    PetscInt       q = lv->start[lb];
+    for (PetscInt c = 0; c < 2; c++) {
+      for (PetscInt k = 0; k < n; k++)
+        for (PetscInt j = 0; j < n; j++)
+          for (PetscInt i = (j + k + c) % 2; i < n; i += 2) lv->order[q++] = lv->start[lb] + i + n * (j + n * k);
+      if (c == 0) lv->split[lb] = q;
+    }
+  }
+
+  /* relevant blocks (Algorithm 2's initial list): resolution L, and the blocks at L+1 that touch one */
+  lv->ncolour[0] = lv->ncolour[1] = 0;
+  for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(mg->grid, lb, &info));
+    const PetscInt r = ResolutionAt(info.level, L);
+    PetscBool      rel = (PetscBool)(r == L);
+    if (!rel && r == L + 1)
+      for (PetscInt f = 0; f < 6 && !rel; f++) {
+        const PetscInt g = FaceNeighbour(nb, periodic, info.ijk, f);
+        if (g >= 0 && level[g] >= 0 && ResolutionAt(level[g], L) == L) rel = PETSC_TRUE;
+      }
+    lv->relevant[lb] = rel;
+    if (rel) lv->ncolour[(info.ijk[0] + info.ijk[1] + info.ijk[2]) % 2]++;
+  }
+  {
+    PetscInt q[2] = {0, lv->ncolour[0]};
+    for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
+      PffBlockInfo info;
+      if (!lv->relevant[lb]) continue;
+      PetscCall(PffGridGetBlockInfo(mg->grid, lb, &info));
+      const PetscInt c        = (info.ijk[0] + info.ijk[1] + info.ijk[2]) % 2;
+      lv->colourList[q[c]++] = lb;
+    }
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Piecewise-constant prolongation from level L+1 to level L. */
+static PetscErrorCode BuildProlongation(PffMG *mg, PetscInt L)
+{
+  PffMGLevel *f = &mg->lev[L], *c = &mg->lev[L + 1];
+
+  PetscFunctionBeginUser;
+  PetscCall(MatCreateAIJ(mg->comm, f->nrows, c->nrows, PETSC_DETERMINE, PETSC_DETERMINE, 1, NULL, 0, NULL, &f->P));
+  for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
+    const PetscInt nf = f->n[lb], nc = c->n[lb], s = nf / nc; /* s = 1 (shared block) or 2 */
+    for (PetscInt k = 0; k < nf; k++)
+      for (PetscInt j = 0; j < nf; j++)
+        for (PetscInt i = 0; i < nf; i++) {
+          const PetscInt row = f->rstart + f->start[lb] + i + nf * (j + nf * k);
+          const PetscInt col = c->rstart + c->start[lb] + i / s + nc * (j / s + nc * (k / s));
+          PetscCall(MatSetValue(f->P, row, col, 1.0, INSERT_VALUES));
+        }
+  }
+  PetscCall(MatAssemblyBegin(f->P, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(f->P, MAT_FINAL_ASSEMBLY));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Ghost scatter for the off-rank columns of A_L (fixed for the life of the pattern). */
+static PetscErrorCode BuildGhosts(PffMG *mg, PffMGLevel *lv)
+{
+  PetscBool isMPI, isSeq;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscObjectBaseTypeCompare((PetscObject)lv->A, MATMPIAIJ, &isMPI));
+  PetscCall(PetscObjectBaseTypeCompare((PetscObject)lv->A, MATSEQAIJ, &isSeq));
+  PetscCheck(isMPI || isSeq, mg->comm, PETSC_ERR_SUP,
+             "pffmg: the pressure operator must be an assembled AIJ matrix (-pressure_pc_type pffmg)");
+  if (isMPI) {
+    IS is;
+    PetscCall(MatMPIAIJGetSeqAIJ(lv->A, &lv->Ad, &lv->Ao, &lv->colmap));
+    PetscCall(MatGetSize(lv->Ao, NULL, &lv->nghost));
+    PetscCall(ISCreateGeneral(PETSC_COMM_SELF, lv->nghost, lv->colmap, PETSC_USE_POINTER, &is));
+    PetscCall(VecCreateSeq(PETSC_COMM_SELF, lv->nghost, &lv->ghost));
+    PetscCall(VecScatterCreate(lv->r, is, lv->ghost, NULL, &lv->scatter));
+    PetscCall(ISDestroy(&is));
+  } else {
+    lv->Ad     = lv->A;
+    lv->Ao     = NULL;
+    lv->nghost = 0;
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* CSR pointers and the inverse diagonal of A_L, after every numeric update. */
+static PetscErrorCode RefreshLevelArrays(PffMG *mg, PffMGLevel *lv)
+{
+  PetscInt  nr;
+  PetscBool done;
+
+  PetscFunctionBeginUser;
+  if (lv->ai) PetscCall(MatRestoreRowIJ(lv->Ad, 0, PETSC_FALSE, PETSC_FALSE, NULL, &lv->ai, &lv->aj, NULL));
+  if (lv->bi) PetscCall(MatRestoreRowIJ(lv->Ao, 0, PETSC_FALSE, PETSC_FALSE, NULL, &lv->bi, &lv->bj, NULL));
+  PetscCall(MatGetRowIJ(lv->Ad, 0, PETSC_FALSE, PETSC_FALSE, &nr, &lv->ai, &lv->aj, &done));
+  PetscCheck(done && nr == lv->nrows, PETSC_COMM_SELF, PETSC_ERR_PLIB, "pffmg: no CSR access to the level operator");
+  {
+    const PetscScalar *a; /* host memory: the pointer stays valid after the restore (which clears it) */
+    PetscCall(MatSeqAIJGetArrayRead(lv->Ad, &a));
+    lv->aa = a;
+    PetscCall(MatSeqAIJRestoreArrayRead(lv->Ad, &a));
+  }
+  if (lv->Ao) {
+    PetscCall(MatGetRowIJ(lv->Ao, 0, PETSC_FALSE, PETSC_FALSE, &nr, &lv->bi, &lv->bj, &done));
+    PetscCheck(done && nr == lv->nrows, PETSC_COMM_SELF, PETSC_ERR_PLIB, "pffmg: no CSR access to the level operator");
+    const PetscScalar *a;
+    PetscCall(MatSeqAIJGetArrayRead(lv->Ao, &a));
+    lv->ba = a;
+    PetscCall(MatSeqAIJRestoreArrayRead(lv->Ao, &a));
+  }
+  if (lv->idiag == NULL) PetscCall(PetscMalloc1(lv->nrows, &lv->idiag));
+  for (PetscInt i = 0; i < lv->nrows; i++) {
+    PetscScalar d = 0;
+    for (PetscInt k = lv->ai[i]; k < lv->ai[i + 1]; k++)
+      if (lv->aj[k] == i) d = lv->aa[k];
+    lv->idiag[i] = d != 0 ? 1.0 / d : 0.0;
+  }
+  (void)mg;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
+{
+  PetscInt n0, nb[3];
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetSizes(mg->grid, &n0, NULL, NULL, NULL, NULL));
+  PetscCall(PffGridGetRaster(mg->grid, nb, NULL, NULL));
+  PetscCall(PffGridGetLocalBlocks(mg->grid, &mg->nlocal));
+  mg->nraster = nb[0] * nb[1] * nb[2];
+  mg->nlevels = 1;
+  while ((n0 >> (mg->nlevels - 1)) > 1 && mg->nlevels < mg->opt.maxLevels) mg->nlevels++;
+  PetscCall(PetscCalloc1(mg->nlevels, &mg->lev));
+  for (PetscInt L = 0; L < mg->nlevels; L++) PetscCall(BuildLevelLayout(mg, L));
+  for (PetscInt L = 0; L + 1 < mg->nlevels; L++) {
+    PetscCall(BuildProlongation(mg, L));
+    PetscCall(MatCreateVecs(mg->lev[L].P, &mg->lev[L + 1].x, &mg->lev[L].r));
+    PetscCall(VecDuplicate(mg->lev[L + 1].x, &mg->lev[L + 1].b));
+  }
+  if (mg->nlevels > 1) PetscCall(VecDuplicate(mg->lev[mg->nlevels - 1].x, &mg->lev[mg->nlevels - 1].r));
+  PetscCall(PetscMalloc5(6 * mg->nlocal, &mg->nbr, mg->nraster, &mg->flags, mg->nlocal, &mg->bres, 6 * mg->nlocal,
+                         &mg->face, mg->nlocal, &mg->list));
+  PetscCall(PetscArrayzero(mg->flags, mg->nraster));
+  PetscCall(PetscMalloc2(mg->nlocal, &mg->gid, mg->nlocal, &mg->colour));
+  {
+    PetscInt           nbv[3];
+    const PetscInt    *level;
+    const PetscMPIInt *owner;
+    PetscBool          periodic[3];
+    PetscCall(PffGridGetRaster(mg->grid, nbv, &level, &owner));
+    PetscCall(PffGridGetSizes(mg->grid, NULL, NULL, NULL, NULL, periodic));
+    for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
+      PffBlockInfo info;
+      PetscCall(PffGridGetBlockInfo(mg->grid, lb, &info));
+      mg->gid[lb]    = info.gid;
+      mg->colour[lb] = (unsigned char)((info.ijk[0] + info.ijk[1] + info.ijk[2]) % 2);
+      for (PetscInt f = 0; f < 6; f++) {
+        const PetscInt g = FaceNeighbour(nbv, periodic, info.ijk, f);
+        PetscInt       l = -1;
+        if (g >= 0 && level[g] >= 0) {
+          PetscCall(PffGridGetLocalIndex(mg->grid, g, &l));
+          if (l < 0) l = -2 - g;
+        }
+        mg->nbr[6 * lb + f] = l;
+      }
+    }
+  }
+  mg->built = PETSC_TRUE;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Numeric set-up: the Galerkin operators of every level from the current A (same pattern each
+   step), the pin of the coarsest operator when A is singular, the coarse solver's factorisation. */
+PetscErrorCode PffMGUpdateOperators_Private(PffMG *mg, Mat A)
+{
+  MatNullSpace nsp;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatGetNullSpace(A, &nsp));
+  mg->singular = (PetscBool)(nsp != NULL);
+  if (mg->lev[0].A != A) {
+    PetscCall(PetscObjectReference((PetscObject)A));
+    PetscCall(MatDestroy(&mg->lev[0].A));
+    mg->lev[0].A = A;
+    PetscCall(VecScatterDestroy(&mg->lev[0].scatter));
+    PetscCall(VecDestroy(&mg->lev[0].ghost));
+    if (mg->lev[0].r == NULL) PetscCall(MatCreateVecs(A, NULL, &mg->lev[0].r));
+    PetscCall(BuildGhosts(mg, &mg->lev[0]));
+  }
+  PetscCall(RefreshLevelArrays(mg, &mg->lev[0]));
+  for (PetscInt L = 1; L < mg->nlevels; L++) {
+    PffMGLevel *lv = &mg->lev[L];
+    if (lv->A == NULL) {
+      PetscCall(MatPtAP(mg->lev[L - 1].A, mg->lev[L - 1].P, MAT_INITIAL_MATRIX, 1.5, &lv->A));
+      PetscCall(BuildGhosts(mg, lv));
+    } else PetscCall(MatPtAP(mg->lev[L - 1].A, mg->lev[L - 1].P, MAT_REUSE_MATRIX, 1.5, &lv->A));
+    PetscCall(RefreshLevelArrays(mg, lv));
+  }
+  {
+    PffMGLevel *c = &mg->lev[mg->nlevels - 1];
+    Mat         Ac;
+    if (mg->nlevels == 1 || !mg->singular) Ac = c->A;
+    else {
+      /* A_c + d e_0 e_0^T: for a rhs orthogonal to the constants its solution is the singular
+         system's up to a constant, whatever d > 0 (the constant is removed by the Krylov method) */
+      PetscCall(MatDuplicate(c->A, MAT_COPY_VALUES, &Ac));
+      if (c->rstart == 0 && c->nrows > 0) {
+        const PetscScalar d = c->idiag[0] != 0 ? 1.0 / c->idiag[0] : 1.0;
+        PetscCall(MatSetValue(Ac, 0, 0, d, ADD_VALUES));
+      }
+      PetscCall(MatAssemblyBegin(Ac, MAT_FINAL_ASSEMBLY));
+      PetscCall(MatAssemblyEnd(Ac, MAT_FINAL_ASSEMBLY));
+    }
+    PetscCall(KSPSetOperators(mg->coarse, Ac, Ac));
+    if (Ac != c->A) PetscCall(MatDestroy(&Ac));
+    PetscCall(KSPSetUp(mg->coarse));
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffMGDestroyLevels_Private(PffMG *mg)
+{
+  PetscFunctionBeginUser;
+  for (PetscInt L = 0; L < mg->nlevels && mg->lev; L++) {
+    PffMGLevel *lv = &mg->lev[L];
+    if (lv->ai) PetscCall(MatRestoreRowIJ(lv->Ad, 0, PETSC_FALSE, PETSC_FALSE, NULL, &lv->ai, &lv->aj, NULL));
+    if (lv->bi) PetscCall(MatRestoreRowIJ(lv->Ao, 0, PETSC_FALSE, PETSC_FALSE, NULL, &lv->bi, &lv->bj, NULL));
+    PetscCall(MatDestroy(&lv->A));
+    PetscCall(MatDestroy(&lv->P));
+    PetscCall(VecDestroy(&lv->x));
+    PetscCall(VecDestroy(&lv->b));
+    PetscCall(VecDestroy(&lv->r));
+    PetscCall(VecDestroy(&lv->ghost));
+    PetscCall(VecScatterDestroy(&lv->scatter));
+    PetscCall(PetscFree4(lv->n, lv->start, lv->split, lv->relevant));
+    PetscCall(PetscFree(lv->colourList));
+    PetscCall(PetscFree(lv->order));
+    PetscCall(PetscFree(lv->idiag));
+  }
+  PetscCall(PetscFree(mg->lev));
+  if (mg->built) {
+    PetscCall(PetscFree5(mg->nbr, mg->flags, mg->bres, mg->face, mg->list));
+    PetscCall(PetscFree2(mg->gid, mg->colour));
+  }
+  mg->nlevels = 0;
+  mg->built   = PETSC_FALSE;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}

@@ -1,0 +1,259 @@
+/* pffmg smoothers (PF-FLIP Sec. 6.3-6.4, Algorithm 2).
+
+   Two-stage red-black hybrid Gauss-Seidel: the blocks of one colour ((x_b + y_b + z_b) mod 2) are
+   relaxed in parallel while the other colour is frozen, so a block reads its face neighbours in
+   place and no second buffer is needed; inside a block the cells are relaxed in place, red cells
+   then black, each update delta = omega (b_j - A_j x) / a_jj with omega = 6/7. Off-rank neighbours
+   are read from a ghost copy refreshed once per block colour (one exchange per half-sweep).
+
+   Adaptive relaxation (Algorithm 2): a list of active blocks, initially the relevant ones of the
+   level; an active block is relaxed repeatedly until its largest update falls by 1/3 (or k_max
+   sweeps), and stays active when its effective residual -- the largest |delta| a_jj of its cells,
+   which equalises the air and water phases -- exceeds theta; a face neighbour joins when the
+   effective residual on the shared border exceeds theta (across ranks too). theta is the mean plus
+   two standard deviations of log10 of the per-block maxima of the initial effective residual
+   omega |b - A x|. The loop ends after a fixed number of steps; the result is not a symmetric
+   operator, which is why the Krylov method is flexible CG. */
+#include "mgimpl.h"
+
+const char *const PffMGSmootherTypes[] = {"rbgs", "jacobi", "PffMGSmootherType", "PFF_MG_SMOOTHER_", NULL};
+
+static PetscErrorCode UpdateGhosts(PffMGLevel *lv, Vec x)
+{
+  PetscFunctionBeginUser;
+  if (lv->scatter == NULL) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(VecScatterBegin(lv->scatter, x, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecScatterEnd(lv->scatter, x, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Relaxes rows order[q0..q1) in place; R (or NULL) receives |delta| a_jj per row, indexed from the
+   block's first row. Returns the largest |delta| a_jj. */
+static inline PetscReal RelaxRows(const PffMGLevel *lv, PetscInt q0, PetscInt q1, PetscInt row0, const PetscScalar *b,
+                                  PetscScalar *x, const PetscScalar *g, PetscReal omega, PetscReal *R)
+{
+  PetscReal rmax = 0;
+  for (PetscInt q = q0; q < q1; q++) {
+    const PetscInt i = lv->order[q];
+    PetscScalar    s = b[i];
+    for (PetscInt k = lv->ai[i]; k < lv->ai[i + 1]; k++) s -= lv->aa[k] * x[lv->aj[k]];
+    if (g)
+      for (PetscInt k = lv->bi[i]; k < lv->bi[i + 1]; k++) s -= lv->ba[k] * g[lv->bj[k]];
+    x[i] += omega * s * lv->idiag[i];
+    const PetscReal eff = lv->idiag[i] != 0 ? PetscAbsScalar(omega * s) : 0.0;
+    if (R) R[i - row0] = eff;
+    rmax = PetscMax(rmax, eff);
+  }
+  return rmax;
+}
+
+/* One in-place red-black sweep over the cells of local block lb. */
+static inline PetscReal RelaxBlock(const PffMGLevel *lv, PetscInt lb, const PetscScalar *b, PetscScalar *x,
+                                   const PetscScalar *g, PetscReal omega, PetscReal *R)
+{
+  const PetscReal r0 = RelaxRows(lv, lv->start[lb], lv->split[lb], lv->start[lb], b, x, g, omega, R);
+  const PetscReal r1 = RelaxRows(lv, lv->split[lb], lv->start[lb + 1], lv->start[lb], b, x, g, omega, R);
+  return PetscMax(r0, r1);
+}
+
+/* Largest R over the cells of face f (0..5: -x, +x, -y, +y, -z, +z) of an n^3 block. */
+static PetscReal FaceMax(const PetscReal *R, PetscInt n, PetscInt f)
+{
+  const PetscInt a = f / 2, layer = (f % 2) ? n - 1 : 0;
+  PetscReal      m = 0;
+  for (PetscInt v = 0; v < n; v++)
+    for (PetscInt u = 0; u < n; u++) {
+      PetscInt c[3];
+      c[a]           = layer;
+      c[(a + 1) % 3] = u;
+      c[(a + 2) % 3] = v;
+      m              = PetscMax(m, R[c[0] + n * (c[1] + n * c[2])]);
+    }
+  return m;
+}
+
+static PetscErrorCode SmoothJacobi(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, PetscInt sweeps)
+{
+  PetscFunctionBeginUser;
+  for (PetscInt s = 0; s < sweeps; s++) {
+    PetscScalar       *xa;
+    const PetscScalar *ra;
+    PetscCall(MatMult(lv->A, x, lv->r));
+    PetscCall(VecAYPX(lv->r, -1.0, b));
+    PetscCall(VecGetArray(x, &xa));
+    PetscCall(VecGetArrayRead(lv->r, &ra));
+    for (PetscInt c = 0; c < 2; c++)
+      for (PetscInt q = (c == 0 ? 0 : lv->ncolour[0]); q < (c == 0 ? lv->ncolour[0] : lv->ncolour[0] + lv->ncolour[1]);
+           q++) {
+        const PetscInt lb = lv->colourList[q];
+        for (PetscInt i = lv->start[lb]; i < lv->start[lb + 1]; i++) xa[i] += mg->opt.omega * ra[i] * lv->idiag[i];
+        mg->stats.blockRelaxations++;
+        mg->stats.cellUpdates += lv->start[lb + 1] - lv->start[lb];
+      }
+    PetscCall(VecRestoreArrayRead(lv->r, &ra));
+    PetscCall(VecRestoreArray(x, &xa));
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* sweeps full hybrid red-black sweeps over the relevant blocks of level L. */
+PetscErrorCode PffMGSmoothFixed_Private(PffMG *mg, PetscInt L, Vec b, Vec x, PetscInt sweeps)
+{
+  PffMGLevel *lv = &mg->lev[L];
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscLogEventBegin(PFF_MGSmooth, 0, 0, 0, 0));
+  if (mg->opt.smoother == PFF_MG_SMOOTHER_JACOBI) {
+    PetscCall(SmoothJacobi(mg, lv, b, x, sweeps));
+    PetscCall(PetscLogEventEnd(PFF_MGSmooth, 0, 0, 0, 0));
+    PetscFunctionReturn(PETSC_SUCCESS);
+  }
+  for (PetscInt s = 0; s < sweeps; s++)
+    for (PetscInt c = 0; c < 2; c++) {
+      const PetscInt     q0 = c == 0 ? 0 : lv->ncolour[0], q1 = c == 0 ? lv->ncolour[0] : lv->ncolour[0] + lv->ncolour[1];
+      PetscScalar       *xa;
+      const PetscScalar *ba, *ga = NULL;
+      PetscInt64         cells = 0;
+      PetscCall(UpdateGhosts(lv, x));
+      PetscCall(VecGetArray(x, &xa));
+      PetscCall(VecGetArrayRead(b, &ba));
+      if (lv->ghost) PetscCall(VecGetArrayRead(lv->ghost, &ga));
+#pragma omp parallel for reduction(+ : cells) schedule(dynamic, 1)
+      for (PetscInt q = q0; q < q1; q++) {
+        const PetscInt lb = lv->colourList[q];
+        (void)RelaxBlock(lv, lb, ba, xa, ga, mg->opt.omega, NULL);
+        cells += lv->start[lb + 1] - lv->start[lb];
+      }
+      if (lv->ghost) PetscCall(VecRestoreArrayRead(lv->ghost, &ga));
+      PetscCall(VecRestoreArrayRead(b, &ba));
+      PetscCall(VecRestoreArray(x, &xa));
+      mg->stats.blockRelaxations += q1 - q0;
+      mg->stats.cellUpdates += cells;
+    }
+  PetscCall(PetscLogEventEnd(PFF_MGSmooth, 0, 0, 0, 0));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* theta of Algorithm 2: 10^(mean + thetaSigmas sd) of log10 of the blocks' initial effective
+   residuals r0 (the largest omega |b_j - A_j x| a block saw in its first sweep), over all ranks. */
+static PetscErrorCode Threshold(PffMG *mg, const PetscReal *r0, PetscInt n, PetscReal *theta)
+{
+  PetscReal sum[3] = {0, 0, 0};
+
+  PetscFunctionBeginUser;
+  for (PetscInt q = 0; q < n; q++)
+    if (r0[q] > 0) {
+      const PetscReal lg = PetscLog10Real(r0[q]);
+      sum[0] += 1;
+      sum[1] += lg;
+      sum[2] += lg * lg;
+    }
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, sum, 3, MPIU_REAL, MPI_SUM, mg->comm));
+  if (sum[0] == 0) *theta = PETSC_MAX_REAL; /* nothing to relax */
+  else {
+    const PetscReal mean = sum[1] / sum[0], var = PetscMax(0.0, sum[2] / sum[0] - mean * mean);
+    *theta = PetscPowReal(10.0, mean + mg->opt.thetaSigmas * PetscSqrtReal(var));
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* One adaptive step over the active list, one block colour at a time: relax each block (repeated
+   block-local sweeps), keep its final effective residual in bres and its border maxima in face;
+   r0 (or NULL) receives the first sweep's maximum per list entry. */
+static PetscErrorCode RelaxActive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, PetscInt nactive, PetscReal *r0, PetscReal *R)
+{
+  PetscFunctionBeginUser;
+  for (PetscInt c = 0; c < 2; c++) {
+    PetscScalar       *xa;
+    const PetscScalar *ba, *ga = NULL;
+    PetscCall(UpdateGhosts(lv, x));
+    PetscCall(VecGetArray(x, &xa));
+    PetscCall(VecGetArrayRead(b, &ba));
+    if (lv->ghost) PetscCall(VecGetArrayRead(lv->ghost, &ga));
+    for (PetscInt q = 0; q < nactive; q++) {
+      const PetscInt lb = mg->list[q];
+      if (mg->colour[lb] != c) continue;
+      const PetscReal first = RelaxBlock(lv, lb, ba, xa, ga, mg->opt.omega, R);
+      PetscReal       r     = first;
+      PetscInt        k     = 1;
+      if (mg->opt.blockSweeps && first > 0)
+        do {
+          r = RelaxBlock(lv, lb, ba, xa, ga, mg->opt.omega, R);
+          k++;
+        } while (!(r < first / 3 || k >= mg->opt.blockSweepsMax));
+      if (r0) r0[q] = first;
+      mg->bres[lb] = r;
+      for (PetscInt f = 0; f < 6; f++) mg->face[6 * lb + f] = r > 0 ? FaceMax(R, lv->n[lb], f) : 0.0;
+      mg->stats.blockRelaxations += k;
+      mg->stats.cellUpdates += (PetscInt64)k * (lv->start[lb + 1] - lv->start[lb]);
+    }
+    if (lv->ghost) PetscCall(VecRestoreArrayRead(lv->ghost, &ga));
+    PetscCall(VecRestoreArrayRead(b, &ba));
+    PetscCall(VecRestoreArray(x, &xa));
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode SmoothAdaptive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x)
+{
+  PetscReal      theta = 0, *R, *r0;
+  PetscInt       n0;
+  PetscMPIInt    size;
+  unsigned char *next;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(mg->comm, &size));
+  PetscCall(PffGridGetSizes(mg->grid, &n0, NULL, NULL, NULL, NULL));
+  PetscCall(PetscCalloc1(mg->nlocal, &next));
+  PetscCall(PetscMalloc2(n0 * n0 * n0, &R, mg->nlocal, &r0));
+  for (PetscInt q = 0; q < lv->ncolour[0] + lv->ncolour[1]; q++) next[lv->colourList[q]] = 1;
+  for (PetscInt it = 0; it < mg->opt.adaptiveSteps; it++) {
+    PetscInt nactive = 0, nglobal;
+    /* the active list in local (Morton) order, for coherent memory access */
+    for (PetscInt lb = 0; lb < mg->nlocal; lb++)
+      if (next[lb]) mg->list[nactive++] = lb;
+    PetscCall(PetscArrayzero(next, mg->nlocal));
+    PetscCallMPI(MPI_Allreduce(&nactive, &nglobal, 1, MPIU_INT, MPI_SUM, mg->comm));
+    if (nglobal == 0) break;
+    PetscCall(RelaxActive(mg, lv, b, x, nactive, it == 0 ? r0 : NULL, R));
+    if (it == 0) PetscCall(Threshold(mg, r0, nactive, &theta));
+    for (PetscInt q = 0; q < nactive; q++) {
+      const PetscInt lb = mg->list[q];
+      if (mg->bres[lb] <= theta) continue;
+      next[lb] = 1;
+      for (PetscInt f = 0; f < 6; f++) {
+        const PetscInt nb = mg->nbr[6 * lb + f];
+        if (nb == -1 || mg->face[6 * lb + f] <= theta) continue;
+        if (nb >= 0) {
+          if (lv->relevant[nb]) next[nb] = 1;
+        } else mg->flags[-2 - nb] = 1; /* another rank's block: reduced below */
+      }
+    }
+    if (size > 1) {
+      PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, mg->flags, (PetscMPIInt)mg->nraster, MPI_UNSIGNED_CHAR, MPI_MAX, mg->comm));
+      for (PetscInt lb = 0; lb < mg->nlocal; lb++)
+        if (mg->flags[mg->gid[lb]] && lv->relevant[lb]) next[lb] = 1;
+      PetscCall(PetscArrayzero(mg->flags, mg->nraster));
+    }
+    mg->stats.adaptiveSteps++;
+  }
+  PetscCall(PetscFree2(R, r0));
+  PetscCall(PetscFree(next));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Pre- or post-smoothing of level L as configured (adaptive or fixed sweeps). */
+PetscErrorCode PffMGSmooth_Private(PffMG *mg, PetscInt L, Vec b, Vec x)
+{
+  PffMGLevel *lv = &mg->lev[L];
+
+  PetscFunctionBeginUser;
+  if (!mg->opt.adaptive || mg->opt.smoother == PFF_MG_SMOOTHER_JACOBI) {
+    PetscCall(PffMGSmoothFixed_Private(mg, L, b, x, mg->opt.sweeps));
+    PetscFunctionReturn(PETSC_SUCCESS);
+  }
+  PetscCall(PetscLogEventBegin(PFF_MGSmooth, 0, 0, 0, 0));
+  PetscCall(SmoothAdaptive(mg, lv, b, x));
+  PetscCall(PetscLogEventEnd(PFF_MGSmooth, 0, 0, 0, 0));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}

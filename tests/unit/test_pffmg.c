@@ -1,0 +1,326 @@
+/* The adaptive multigrid preconditioner pffmg (PF-FLIP Sec. 6) on uniform and graded 3-level grids:
+   - Galerkin: every level operator equals P^T A P formed by explicit matrix products, and on a uniform
+     grid with beta = 1 a coarse face carries the sum of its four fine face coefficients (Algorithm 1);
+   - the smoother (fixed hybrid red-black sweeps and adaptive relaxation) lowers the energy norm of a
+     random error on every level;
+   - FCG + pffmg converges at rtol 1e-8 on a bubbly problem (nine bubbles, density ratio 1000), closed
+     box, with an iteration count that differs from a one-rank solve of the same problem by at most 3;
+   - adaptive relaxation relaxes fewer blocks than fixed sweeps when the residual is localised.
+   Sample run: mpiexec -n 4 ./test_pffmg     prints one line per check on rank 0. */
+#include "pfftest.h"
+
+typedef struct {
+  PetscInt          uCh, betaCh, openCh, pCh;
+  PetscReal         ratio, side;
+  const PffTestCtx *t;
+} Bubbly;
+
+static PetscBool InBubble(const Bubbly *c, const PetscReal x[3])
+{
+  for (PetscInt b = 0; b < 9; b++) {
+    PetscReal r2 = 0;
+    for (int a = 0; a < 3; a++) {
+      const PetscReal centre = b == 8 ? 0.5 : ((b >> a) & 1 ? 0.75 : 0.25);
+      r2 += PetscSqr(x[a] / c->side - centre);
+    }
+    if (r2 < 0.01) return PETSC_TRUE;
+  }
+  return PETSC_FALSE;
+}
+
+static PetscReal BetaFn(const PetscReal x[3], PetscInt comp, void *vctx)
+{
+  const Bubbly *c = (const Bubbly *)vctx;
+  (void)comp;
+  return c->ratio > 0 && InBubble(c, x) ? c->ratio : 1.0;
+}
+
+static PetscReal OneFn(const PetscReal x[3], PetscInt comp, void *vctx)
+{
+  (void)x, (void)comp, (void)vctx;
+  return 1.0;
+}
+
+static PetscReal ZeroFn(const PetscReal x[3], PetscInt comp, void *vctx)
+{
+  (void)x, (void)comp, (void)vctx;
+  return 0.0;
+}
+
+static PetscReal RandomFn(const PetscReal x[3], PetscInt comp, void *vctx)
+{
+  const Bubbly *c = (const Bubbly *)vctx;
+  uint64_t      q[3];
+  if (PetscAbsReal(x[comp] - c->t->origin[comp]) < 1e-3 * c->t->h0) return 0; /* closed lower wall */
+  for (int a = 0; a < 3; a++) q[a] = (uint64_t)llround((x[a] - c->t->origin[a]) / (0.25 * c->t->h0));
+  return (PetscReal)(PffTestKey(17, q[0] + 1000003ULL * (uint64_t)comp, q[1], q[2]) >> 11) / 9007199254740992.0 - 0.5;
+}
+
+/* A closed unit box of N^3 finest cells, blocks of n0, uniform or graded over 3 levels. */
+static PetscErrorCode CreateCase(MPI_Comm comm, PetscInt N, PetscInt n0, PetscBool graded, PetscReal ratio,
+                                 PffTestCtx *t, Bubbly *c)
+{
+  const PetscInt  nb[3]     = {N / n0, N / n0, N / n0};
+  const PetscBool per[3]    = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
+  const PetscReal origin[3] = {0, 0, 0};
+
+  PetscFunctionBeginUser;
+  PetscCall(PffTestCreateGrid(comm, nb, per, origin, 1.0 / (PetscReal)N, n0, graded ? 3 : 1, graded ? -1 : 0, 0, 5, t));
+  c->t     = t;
+  c->ratio = ratio;
+  c->side  = 1.0;
+  PetscCall(PffGridAddChannel(t->grid, "u", PFF_CHANNEL_FACE, 1, &c->uCh));
+  PetscCall(PffGridAddChannel(t->grid, "beta", PFF_CHANNEL_FACE, 1, &c->betaCh));
+  PetscCall(PffGridAddChannel(t->grid, "open", PFF_CHANNEL_FACE, 1, &c->openCh));
+  PetscCall(PffGridAddChannel(t->grid, "p", PFF_CHANNEL_CELL, 1, &c->pCh));
+  PetscCall(PffGridFillChannel(t->grid, c->betaCh, BetaFn, c));
+  PetscCall(PffGridFillChannel(t->grid, c->openCh, OneFn, c));
+  PetscCall(PffGridFillChannel(t->grid, c->pCh, ZeroFn, c));
+  PetscCall(PffGridFillChannel(t->grid, c->uCh, RandomFn, c));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode CreatePressure(PffTestCtx *t, Bubbly *c, PetscReal rtol, PffPressure *ps)
+{
+  KSP ksp;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscOptionsSetValue(NULL, "-pressure_pc_type", "pffmg"));
+  PetscCall(PffPressureCreate(t->grid, ps));
+  PetscCall(PffPressureSetFromOptions(*ps));
+  PetscCall(PffPressureSetUp(*ps));
+  PetscCall(PffPressureSetCoefficients(*ps, c->betaCh, c->openCh));
+  PetscCall(PffPressureGetKSP(*ps, &ksp));
+  PetscCall(KSPSetTolerances(ksp, rtol, 1e-50, PETSC_DEFAULT, 500));
+  PetscCall(KSPSetUp(ksp));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* A_L = P^T A_{L-1} P by explicit products on every level; the uniform beta = 1 face sums. */
+static PetscErrorCode TestGalerkin(PetscBool graded)
+{
+  PffTestCtx  t;
+  Bubbly      c;
+  PffPressure ps;
+  PffMGStats  st;
+
+  PetscFunctionBeginUser;
+  PetscCall(CreateCase(PETSC_COMM_WORLD, 32, 8, graded, graded ? 1e3 : 0, &t, &c));
+  PetscCall(CreatePressure(&t, &c, 1e-8, &ps));
+  PetscCall(PffPressureMGGetStats(ps, &st));
+  PetscCheck(st.levels == 4, PETSC_COMM_WORLD, PETSC_ERR_PLIB, "galerkin: %" PetscInt_FMT " levels, expected 4",
+             st.levels);
+  for (PetscInt L = 1; L < st.levels; L++) {
+    Mat       Af, P, Ac, AP, PtAP;
+    PetscReal nrm, err;
+    PetscCall(PffPressureMGGetLevel(ps, L - 1, &Af, &P));
+    PetscCall(PffPressureMGGetLevel(ps, L, &Ac, NULL));
+    PetscCall(MatMatMult(Af, P, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &AP));
+    PetscCall(MatTransposeMatMult(P, AP, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &PtAP));
+    PetscCall(MatNorm(PtAP, NORM_FROBENIUS, &nrm));
+    PetscCall(MatAXPY(PtAP, -1.0, Ac, DIFFERENT_NONZERO_PATTERN));
+    PetscCall(MatNorm(PtAP, NORM_FROBENIUS, &err));
+    PetscCheck(err <= 1e-12 * nrm, PETSC_COMM_WORLD, PETSC_ERR_PLIB,
+               "galerkin: level %" PetscInt_FMT " differs from P^T A P by %g (norm %g)", L, (double)err, (double)nrm);
+    PetscCall(MatDestroy(&AP));
+    PetscCall(MatDestroy(&PtAP));
+  }
+  if (!graded) {
+    /* level 1 of a 32^3 grid in 8^3 blocks: 16^3 cells of size 2h; the interior coarse cell (5, 6, 7) of
+       block (0,0,0)... in global terms cell (5, 6, 7) lies in block (1, 1, 1), local (1, 2, 3) */
+    Mat                A1;
+    PetscInt           gid = 1 + 4 * (1 + 4 * 1), lb, ncols;
+    const PetscInt    *cols;
+    const PetscScalar *vals;
+    PetscCall(PffPressureMGGetLevel(ps, 1, &A1, NULL));
+    PetscCall(PffGridGetLocalIndex(t.grid, gid, &lb));
+    if (lb >= 0) {
+      PetscInt64 first0, rstart0;
+      PetscInt   row = -1, rstart1;
+      PetscCall(PffGridGetCellNumbering(t.grid, gid, &first0, NULL, &rstart0, NULL));
+      PetscCall(MatGetOwnershipRange(A1, &rstart1, NULL));
+      /* level-1 rows of the owned blocks are 4^3 per block in local order */
+      row = rstart1 + 64 * lb + 1 + 4 * (2 + 4 * 3);
+      PetscCall(MatGetRow(A1, row, &ncols, &cols, &vals));
+      const PetscReal h = 1.0 / 32, cf = 4 * h; /* four fine faces of coefficient h beta */
+      PetscInt        nnz = 0;
+      for (PetscInt k = 0; k < ncols; k++) {
+        if (vals[k] == 0) continue;
+        nnz++;
+        const PetscReal expect = cols[k] == row ? 6 * cf : -cf;
+        PetscCheck(PetscAbsScalar(vals[k] - expect) <= 1e-12 * cf, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+                   "galerkin: level-1 entry (%" PetscInt_FMT ", %" PetscInt_FMT ") = %g, expected %g", row, cols[k],
+                   (double)PetscRealPart(vals[k]), (double)expect);
+      }
+      PetscCheck(nnz == 7, PETSC_COMM_SELF, PETSC_ERR_PLIB, "galerkin: level-1 row has %" PetscInt_FMT " entries, not 7",
+                 nnz);
+      PetscCall(MatRestoreRow(A1, row, &ncols, &cols, &vals));
+    }
+  }
+  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "galerkin %s: %" PetscInt_FMT " levels equal P^T A P%s\n",
+                        graded ? "graded" : "uniform", st.levels, graded ? "" : ", coarse faces = sum of 4 fine"));
+  PetscCall(PffPressureDestroy(&ps));
+  PetscCall(PffGridDestroy(&t.grid));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* e^T A e of a random e falls under fixed sweeps and under adaptive relaxation on every level but the coarsest. */
+static PetscErrorCode TestSmoother(PetscBool graded)
+{
+  PffTestCtx  t;
+  Bubbly      c;
+  PffPressure ps;
+  PffMGStats  st;
+
+  PetscFunctionBeginUser;
+  PetscCall(CreateCase(PETSC_COMM_WORLD, 32, 8, graded, 1e3, &t, &c));
+  PetscCall(CreatePressure(&t, &c, 1e-8, &ps));
+  PetscCall(PffPressureMGGetStats(ps, &st));
+  for (PetscInt L = 0; L + 1 < st.levels; L++) {
+    Mat         A;
+    Vec         x, b, Ax;
+    PetscRandom rnd;
+    for (PetscInt mode = 0; mode < 2; mode++) {
+      PetscScalar e0, e1;
+      PetscCall(PffPressureMGGetLevel(ps, L, &A, NULL));
+      PetscCall(MatCreateVecs(A, &x, &b));
+      PetscCall(VecDuplicate(x, &Ax));
+      PetscCall(PetscRandomCreate(PETSC_COMM_WORLD, &rnd));
+      PetscCall(PetscRandomSetSeed(rnd, 7 + (unsigned long)L));
+      PetscCall(PetscRandomSeed(rnd));
+      PetscCall(VecSetRandom(x, rnd));
+      PetscCall(VecSet(b, 0.0));
+      PetscCall(MatMult(A, x, Ax));
+      PetscCall(VecDot(x, Ax, &e0));
+      PetscCall(PffPressureMGSmooth(ps, L, b, x, mode == 0 ? 1 : 0));
+      PetscCall(MatMult(A, x, Ax));
+      PetscCall(VecDot(x, Ax, &e1));
+      PetscCheck(PetscRealPart(e1) < 0.9 * PetscRealPart(e0), PETSC_COMM_WORLD, PETSC_ERR_PLIB,
+                 "smoother (%s) on level %" PetscInt_FMT ": energy %g -> %g", mode == 0 ? "fixed" : "adaptive", L,
+                 (double)PetscRealPart(e0), (double)PetscRealPart(e1));
+      PetscCall(PetscPrintf(PETSC_COMM_WORLD, "smoother %s level %" PetscInt_FMT " %-8s: energy ratio %.3f\n",
+                            graded ? "graded " : "uniform", L, mode == 0 ? "fixed" : "adaptive",
+                            (double)(PetscRealPart(e1) / PetscRealPart(e0))));
+      PetscCall(PetscRandomDestroy(&rnd));
+      PetscCall(VecDestroy(&x));
+      PetscCall(VecDestroy(&b));
+      PetscCall(VecDestroy(&Ax));
+    }
+  }
+  PetscCall(PffPressureDestroy(&ps));
+  PetscCall(PffGridDestroy(&t.grid));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode Solve(MPI_Comm comm, PetscBool graded, PetscInt *its, PetscReal *rnorm)
+{
+  PffTestCtx       t;
+  Bubbly           c;
+  PffPressure      ps;
+  PffPressureStats st;
+
+  PetscFunctionBeginUser;
+  PetscInt N = 32, n0 = 8;
+  PetscCall(PetscOptionsGetInt(NULL, NULL, "-xn", &N, NULL));
+  PetscCall(PetscOptionsGetInt(NULL, NULL, "-xn0", &n0, NULL));
+  PetscCall(CreateCase(comm, N, n0, graded, 1e3, &t, &c));
+  PetscCall(CreatePressure(&t, &c, 1e-8, &ps));
+  PetscCall(PffPressureProject(ps, c.uCh, 1.0, -1, c.pCh, &st));
+  PetscCheck(st.reason > 0, comm, PETSC_ERR_NOT_CONVERGED, "solve: FCG + pffmg did not converge: %s after %" PetscInt_FMT,
+             KSPConvergedReasons[st.reason], st.its);
+  PetscCall(PetscPrintf(comm, "XTIME setup %.3f solve %.3f\n", st.setupTime, st.solveTime));
+  *its   = st.its;
+  *rnorm = st.rnorm;
+  PetscCall(PffPressureDestroy(&ps));
+  PetscCall(PffGridDestroy(&t.grid));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode TestSolve(PetscBool graded)
+{
+  PetscInt  its, its1;
+  PetscReal rn, rn1;
+
+  PetscFunctionBeginUser;
+  PetscCall(Solve(PETSC_COMM_WORLD, graded, &its, &rn));
+  PetscCall(Solve(PETSC_COMM_SELF, graded, &its1, &rn1));
+  PetscCheck(rn <= 1e-8 && rn1 <= 1e-8, PETSC_COMM_WORLD, PETSC_ERR_PLIB, "solve: residual %g / %g above 1e-8",
+             (double)rn, (double)rn1);
+  PetscCheck(PetscAbs(its - its1) <= 3, PETSC_COMM_WORLD, PETSC_ERR_PLIB,
+             "solve: %" PetscInt_FMT " iterations on all ranks, %" PetscInt_FMT " on one", its, its1);
+  PetscCheck(its <= 40, PETSC_COMM_WORLD, PETSC_ERR_PLIB, "solve: %" PetscInt_FMT " iterations (more than 40)", its);
+  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "solve %s bubbly 32^3 ratio 1e3: converged (rtol 1e-8), its within 3 of one rank's\n",
+                        graded ? "graded " : "uniform"));
+  PetscCall(PetscInfo(NULL, "solve: its %" PetscInt_FMT " (one rank %" PetscInt_FMT ")\n", its, its1));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* b nonzero in one block: adaptive relaxation relaxes fewer blocks than two fixed sweeps. */
+static PetscErrorCode TestAdaptive(void)
+{
+  PffTestCtx  t;
+  Bubbly      c;
+  PffPressure ps;
+  PffMGStats  sa, sf;
+  Mat         A;
+  Vec         x, b;
+  PetscInt    rstart;
+
+  PetscFunctionBeginUser;
+  PetscCall(CreateCase(PETSC_COMM_WORLD, 32, 8, PETSC_FALSE, 1e3, &t, &c));
+  PetscCall(CreatePressure(&t, &c, 1e-8, &ps));
+  PetscCall(PffPressureMGGetLevel(ps, 0, &A, NULL));
+  PetscCall(MatCreateVecs(A, &x, &b));
+  PetscCall(VecSet(b, 0.0));
+  PetscCall(MatGetOwnershipRange(A, &rstart, NULL));
+  if (rstart == 0) {
+    PetscCall(VecSetValue(b, 3 + 8 * (4 + 8 * 5), 1.0, INSERT_VALUES));
+    PetscCall(VecSetValue(b, 4 + 8 * (4 + 8 * 5), -1.0, INSERT_VALUES));
+  }
+  PetscCall(VecAssemblyBegin(b));
+  PetscCall(VecAssemblyEnd(b));
+  for (PetscInt mode = 0; mode < 2; mode++) {
+    PetscCall(VecSet(x, 0.0));
+    PetscCall(PffPressureMGResetStats(ps));
+    PetscCall(PffPressureMGSmooth(ps, 0, b, x, mode == 0 ? 0 : 2));
+    PetscCall(PffPressureMGGetStats(ps, mode == 0 ? &sa : &sf));
+  }
+  PetscCheck(sa.blockRelaxations < sf.blockRelaxations, PETSC_COMM_WORLD, PETSC_ERR_PLIB,
+             "adaptive: %" PetscInt64_FMT " block relaxations, fixed sweeps %" PetscInt64_FMT, sa.blockRelaxations,
+             sf.blockRelaxations);
+  PetscCall(PetscPrintf(PETSC_COMM_WORLD,
+                        "adaptive: localised residual, %" PetscInt64_FMT " block relaxations against %" PetscInt64_FMT
+                        " for 2 fixed sweeps\n",
+                        sa.blockRelaxations, sf.blockRelaxations));
+  PetscCall(VecDestroy(&x));
+  PetscCall(VecDestroy(&b));
+  PetscCall(PffPressureDestroy(&ps));
+  PetscCall(PffGridDestroy(&t.grid));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+int main(int argc, char **argv)
+{
+  PetscCall(PetscInitialize(&argc, &argv, NULL, NULL));
+  PetscCall(PffInitializePackage());
+  {
+    PetscBool x = PETSC_FALSE;
+    PetscCall(PetscOptionsGetBool(NULL, NULL, "-xsolve", &x, NULL));
+    if (x) {
+      PetscInt  its; PetscReal rn;
+      PetscCall(Solve(PETSC_COMM_WORLD, PETSC_FALSE, &its, &rn));
+      PetscCall(PetscPrintf(PETSC_COMM_WORLD, "XSOLVE its %d rn %g\n", (int)its, (double)rn));
+      PetscCall(PetscFinalize());
+      return 0;
+    }
+  }
+  PetscCall(TestGalerkin(PETSC_FALSE));
+  PetscCall(TestGalerkin(PETSC_TRUE));
+  PetscCall(TestSmoother(PETSC_FALSE));
+  PetscCall(TestSmoother(PETSC_TRUE));
+  PetscCall(TestSolve(PETSC_FALSE));
+  PetscCall(TestSolve(PETSC_TRUE));
+  PetscCall(TestAdaptive());
+  PetscCall(PetscFinalize());
+  return 0;
+}
