@@ -22,7 +22,8 @@
 #define PFF_MG_OMEGA_DEFAULT (6.0 / 7.0)
 #define PFF_MG_THETA_SIGMAS_DEFAULT 2.0
 #define PFF_MG_MAX_LEVELS_DEFAULT 16
-#define PFF_MG_CORRECTION_DEFAULT 2.0
+#define PFF_MG_CORRECTION_DEFAULT 1.0
+#define PFF_MG_RESCALE_DEFAULT PETSC_TRUE
 
 static PetscErrorCode PffMGGetContext(PC pc, PffMG **mg)
 {
@@ -101,14 +102,14 @@ static PetscErrorCode PffMGView(PC pc, PetscViewer viewer)
   PetscCall(PCShellGetContext(pc, &mg));
   PetscCall(PetscObjectTypeCompare((PetscObject)viewer, PETSCVIEWERASCII, &ascii));
   if (!ascii) PetscFunctionReturn(PETSC_SUCCESS);
-  PetscCall(PetscViewerASCIIPrintf(viewer,
-                                   "pffmg: %" PetscInt_FMT " levels, smoother %s, adaptive relaxation %s (%" PetscInt_FMT
-                                   " steps, theta = mean + %g sd), block sweeps %s (max %" PetscInt_FMT
-                                   "), fixed sweeps %" PetscInt_FMT ", omega %g\n",
-                                   mg->nlevels, PffMGSmootherTypes[mg->opt.smoother], mg->opt.adaptive ? "on" : "off",
-                                   mg->opt.adaptiveSteps, (double)mg->opt.thetaSigmas,
-                                   mg->opt.blockSweeps ? "adaptive" : "one", mg->opt.blockSweepsMax, mg->opt.sweeps,
-                                   (double)mg->opt.omega));
+  PetscCall(PetscViewerASCIIPrintf(
+      viewer,
+      "pffmg: %" PetscInt_FMT " levels, smoother %s, adaptive relaxation %s (%" PetscInt_FMT
+      " steps, theta = mean + %g sd), block sweeps %s (max %" PetscInt_FMT "), fixed sweeps %" PetscInt_FMT
+      ", omega %g\n",
+      mg->nlevels, PffMGSmootherTypes[mg->opt.smoother], mg->opt.adaptive ? "on" : "off", mg->opt.adaptiveSteps,
+      (double)mg->opt.thetaSigmas, mg->opt.blockSweeps ? "adaptive" : "one", mg->opt.blockSweepsMax, mg->opt.sweeps,
+      (double)mg->opt.omega));
   for (PetscInt L = 0; L < mg->nlevels; L++) {
     PetscInt N = 0;
     if (mg->lev[L].A) PetscCall(MatGetSize(mg->lev[L].A, &N, NULL));
@@ -155,6 +156,7 @@ static PetscErrorCode PCCreate_PffMG(PC pc)
   mg->opt.thetaSigmas    = PFF_MG_THETA_SIGMAS_DEFAULT;
   mg->opt.maxLevels      = PFF_MG_MAX_LEVELS_DEFAULT;
   mg->opt.correction     = PFF_MG_CORRECTION_DEFAULT;
+  mg->opt.rescale        = PFF_MG_RESCALE_DEFAULT;
   PetscCall(KSPCreate(mg->comm, &mg->coarse));
   PetscCall(PCGetOptionsPrefix(pc, &prefix));
   PetscCall(KSPSetOptionsPrefix(mg->coarse, prefix));
@@ -203,27 +205,31 @@ PetscErrorCode PffPressureMGSetFromOptions_Private(PC pc, PffGrid grid)
   mg->grid = grid;
   PetscCall(PCGetOptionsPrefix(pc, &prefix));
   PetscOptionsBegin(mg->comm, prefix, "Adaptive multigrid preconditioner (pffmg)", "PC");
-  PetscCall(PetscOptionsEnum("-pffmg_smoother", "pffmg smoother: two-stage red-black hybrid Gauss-Seidel or weighted Jacobi",
-                             "PffPressureMG", PffMGSmootherTypes, (PetscEnum)mg->opt.smoother,
-                             (PetscEnum *)&mg->opt.smoother, NULL));
-  PetscCall(PetscOptionsBool("-pffmg_adaptive", "Adaptive relaxation (Algorithm 2) instead of fixed sweeps", "PffPressureMG",
-                             mg->opt.adaptive, &mg->opt.adaptive, NULL));
+  PetscCall(PetscOptionsEnum(
+      "-pffmg_smoother", "pffmg smoother: two-stage red-black hybrid Gauss-Seidel or weighted Jacobi", "PffPressureMG",
+      PffMGSmootherTypes, (PetscEnum)mg->opt.smoother, (PetscEnum *)&mg->opt.smoother, NULL));
+  PetscCall(PetscOptionsBool("-pffmg_adaptive", "Adaptive relaxation (Algorithm 2) instead of fixed sweeps",
+                             "PffPressureMG", mg->opt.adaptive, &mg->opt.adaptive, NULL));
   PetscCall(PetscOptionsBool("-pffmg_block_sweeps", "Repeat block-local sweeps until the update falls by 1/3",
                              "PffPressureMG", mg->opt.blockSweeps, &mg->opt.blockSweeps, NULL));
-  PetscCall(PetscOptionsBoundedInt("-pffmg_block_sweeps_max", "Most block-local sweeps per visit (k_max)", "PffPressureMG",
-                                   mg->opt.blockSweepsMax, &mg->opt.blockSweepsMax, NULL, 1));
+  PetscCall(PetscOptionsBoundedInt("-pffmg_block_sweeps_max", "Most block-local sweeps per visit (k_max)",
+                                   "PffPressureMG", mg->opt.blockSweepsMax, &mg->opt.blockSweepsMax, NULL, 1));
   PetscCall(PetscOptionsBoundedInt("-pffmg_adaptive_steps", "Adaptive relaxation steps per smoothing (N_iter,max)",
                                    "PffPressureMG", mg->opt.adaptiveSteps, &mg->opt.adaptiveSteps, NULL, 1));
-  PetscCall(PetscOptionsBoundedInt("-pffmg_sweeps", "Pre- and post-sweeps when adaptive relaxation is off", "PffPressureMG",
-                                   mg->opt.sweeps, &mg->opt.sweeps, NULL, 1));
+  PetscCall(PetscOptionsBoundedInt("-pffmg_sweeps", "Pre- and post-sweeps when adaptive relaxation is off",
+                                   "PffPressureMG", mg->opt.sweeps, &mg->opt.sweeps, NULL, 1));
   PetscCall(PetscOptionsReal("-pffmg_omega", "Relaxation weight omega (6/7 is optimal in 3D)", "PffPressureMG",
                              mg->opt.omega, &mg->opt.omega, NULL));
   PetscCall(PetscOptionsReal("-pffmg_theta_sigmas", "theta = 10^(mean + this x sd) of log10 block residual maxima",
                              "PffPressureMG", mg->opt.thetaSigmas, &mg->opt.thetaSigmas, NULL));
   PetscCall(PetscOptionsBoundedInt("-pffmg_max_levels", "Most multigrid levels (the last is solved directly)",
                                    "PffPressureMG", mg->opt.maxLevels, &mg->opt.maxLevels, NULL, 1));
-  PetscCall(PetscOptionsReal("-pffmg_correction", "Scale of the coarse-grid correction (piecewise-constant Galerkin is twice too stiff)",
+  PetscCall(PetscOptionsReal("-pffmg_correction",
+                             "Scale of the coarse-grid correction (piecewise-constant Galerkin is twice too stiff)",
                              "PffPressureMG", mg->opt.correction, &mg->opt.correction, NULL));
+  PetscCall(PetscOptionsBool("-pffmg_rescale",
+                             "Coarse coefficients consistent with the coarse discretisation (false: plain P^T A P)",
+                             "PffPressureMG", mg->opt.rescale, &mg->opt.rescale, NULL));
   PetscOptionsEnd();
   PetscCheck(mg->opt.omega > 0 && mg->opt.omega < 2, mg->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-pressure_pffmg_omega %g is invalid: must lie in (0, 2)", (double)mg->opt.omega);
@@ -290,7 +296,9 @@ PetscErrorCode PffPressureMGSmooth(PffPressure ps, PetscInt L, Vec b, Vec x, Pet
   PetscCall(PffPressureGetMG(ps, &mg));
   PetscCheck(L >= 0 && L + 1 < mg->nlevels, ps->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "pffmg: level %" PetscInt_FMT " has no smoother (%" PetscInt_FMT " levels)", L, mg->nlevels);
-  if (sweeps > 0) PetscCall(PffMGSmoothFixed_Private(mg, L, b, x, sweeps));
-  else PetscCall(PffMGSmooth_Private(mg, L, b, x));
+  if (sweeps > 0)
+    PetscCall(PffMGSmoothFixed_Private(mg, L, b, x, sweeps));
+  else
+    PetscCall(PffMGSmooth_Private(mg, L, b, x));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

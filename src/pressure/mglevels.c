@@ -16,7 +16,10 @@
    local and off-rank parts of A_L with a ghost scatter for the off-rank columns. */
 #include "mgimpl.h"
 
-static PetscInt ResolutionAt(PetscInt l, PetscInt L) { return PetscMax(l, L); }
+static PetscInt ResolutionAt(PetscInt l, PetscInt L)
+{
+  return PetscMax(l, L);
+}
 
 /* Face neighbour gid of block ijk along axis a, side s (0: lower, 1: upper), or -1. */
 static PetscInt FaceNeighbour(const PetscInt nb[3], const PetscBool periodic[3], const PetscInt ijk[3], PetscInt f)
@@ -39,8 +42,8 @@ static PetscErrorCode BuildLevelLayout(PffMG *mg, PetscInt L)
   PetscCall(PffGridGetRaster(mg->grid, nb, &level, &owner));
   PetscCall(PffGridGetSizes(mg->grid, &n0, &nlevels, NULL, NULL, periodic));
   lv->L = L;
-  PetscCall(PetscMalloc4(mg->nlocal, &lv->n, mg->nlocal + 1, &lv->start, mg->nlocal, &lv->split, mg->nlocal,
-                         &lv->relevant));
+  PetscCall(
+      PetscMalloc4(mg->nlocal, &lv->n, mg->nlocal + 1, &lv->start, mg->nlocal, &lv->split, mg->nlocal, &lv->relevant));
   PetscCall(PetscMalloc1(mg->nlocal, &lv->colourList));
   lv->start[0] = 0;
   for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
@@ -71,7 +74,7 @@ static PetscErrorCode BuildLevelLayout(PffMG *mg, PetscInt L)
   for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(mg->grid, lb, &info));
-    const PetscInt r = ResolutionAt(info.level, L);
+    const PetscInt r   = ResolutionAt(info.level, L);
     PetscBool      rel = (PetscBool)(r == L);
     if (!rel && r == L + 1)
       for (PetscInt f = 0; f < 6 && !rel; f++) {
@@ -87,7 +90,7 @@ static PetscErrorCode BuildLevelLayout(PffMG *mg, PetscInt L)
       PffBlockInfo info;
       if (!lv->relevant[lb]) continue;
       PetscCall(PffGridGetBlockInfo(mg->grid, lb, &info));
-      const PetscInt c        = (info.ijk[0] + info.ijk[1] + info.ijk[2]) % 2;
+      const PetscInt c       = (info.ijk[0] + info.ijk[1] + info.ijk[2]) % 2;
       lv->colourList[q[c]++] = lb;
     }
   }
@@ -178,6 +181,63 @@ static PetscErrorCode RefreshLevelArrays(PffMG *mg, PffMGLevel *lv)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Piecewise-constant aggregation makes P^T A P twice as stiff as the same operator discretised on
+   the coarse cells (four fine faces of weight h beta become one of 4 h beta, where 2 h beta is
+   consistent), and 4/3 as stiff on a face between a merged block and a block that was already at
+   the coarse resolution (the Delta_g = 3/4 distance of the coarse-fine face). We read Algorithm 1's
+   resolution-transition factors as this rescaling: each off-diagonal entry of A_L is multiplied by
+   1/2 between two merged cells, 3/4 between a merged and a shared cell, 1 between shared cells;
+   boundary terms (diagonal minus off-diagonal sum, e.g. Dirichlet walls) by 1/2 on merged cells;
+   the diagonal is rebuilt so that rows keep their sums. The result stays symmetric. */
+static PetscErrorCode RescaleCoarse(PffMG *mg, PetscInt L)
+{
+  PffMGLevel        *lv = &mg->lev[L], *f = &mg->lev[L - 1];
+  PetscScalar       *fl, *aa, *ba = NULL;
+  const PetscScalar *gf = NULL;
+
+  PetscFunctionBeginUser;
+  PetscCall(VecGetArrayWrite(lv->r, &fl));
+  for (PetscInt lb = 0; lb < mg->nlocal; lb++)
+    for (PetscInt i = lv->start[lb]; i < lv->start[lb + 1]; i++) fl[i] = lv->n[lb] < f->n[lb] ? 1.0 : 0.0;
+  PetscCall(VecRestoreArrayWrite(lv->r, &fl));
+  if (lv->scatter) {
+    PetscCall(VecScatterBegin(lv->scatter, lv->r, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(VecScatterEnd(lv->scatter, lv->r, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(VecGetArrayRead(lv->ghost, &gf));
+  }
+  PetscCall(VecGetArrayRead(lv->r, (const PetscScalar **)&fl));
+  PetscCall(MatSeqAIJGetArray(lv->Ad, &aa));
+  if (lv->Ao) PetscCall(MatSeqAIJGetArray(lv->Ao, &ba));
+  for (PetscInt i = 0; i < lv->nrows; i++) {
+    const PetscBool mi     = (PetscBool)(fl[i] != 0);
+    PetscScalar     offOld = 0, offNew = 0;
+    PetscInt        kd = -1;
+    for (PetscInt k = lv->ai[i]; k < lv->ai[i + 1]; k++) {
+      if (lv->aj[k] == i) {
+        kd = k;
+        continue;
+      }
+      const PetscBool mj = (PetscBool)(fl[lv->aj[k]] != 0);
+      offOld += aa[k];
+      aa[k] *= mi && mj ? 0.5 : (mi || mj ? 0.75 : 1.0);
+      offNew += aa[k];
+    }
+    if (lv->Ao)
+      for (PetscInt k = lv->bi[i]; k < lv->bi[i + 1]; k++) {
+        const PetscBool mj = (PetscBool)(gf[lv->bj[k]] != 0);
+        offOld += ba[k];
+        ba[k] *= mi && mj ? 0.5 : (mi || mj ? 0.75 : 1.0);
+        offNew += ba[k];
+      }
+    if (kd >= 0) aa[kd] = (mi ? 0.5 : 1.0) * (aa[kd] + offOld) - offNew;
+  }
+  if (lv->Ao) PetscCall(MatSeqAIJRestoreArray(lv->Ao, &ba));
+  PetscCall(MatSeqAIJRestoreArray(lv->Ad, &aa));
+  PetscCall(VecRestoreArrayRead(lv->r, (const PetscScalar **)&fl));
+  if (gf) PetscCall(VecRestoreArrayRead(lv->ghost, &gf));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
 {
   PetscInt n0, nb[3];
@@ -252,13 +312,19 @@ PetscErrorCode PffMGUpdateOperators_Private(PffMG *mg, Mat A)
     if (lv->A == NULL) {
       PetscCall(MatPtAP(mg->lev[L - 1].A, mg->lev[L - 1].P, MAT_INITIAL_MATRIX, 1.5, &lv->A));
       PetscCall(BuildGhosts(mg, lv));
-    } else PetscCall(MatPtAP(mg->lev[L - 1].A, mg->lev[L - 1].P, MAT_REUSE_MATRIX, 1.5, &lv->A));
+    } else
+      PetscCall(MatPtAP(mg->lev[L - 1].A, mg->lev[L - 1].P, MAT_REUSE_MATRIX, 1.5, &lv->A));
     PetscCall(RefreshLevelArrays(mg, lv));
+    if (mg->opt.rescale) {
+      PetscCall(RescaleCoarse(mg, L));
+      PetscCall(RefreshLevelArrays(mg, lv));
+    }
   }
   {
     PffMGLevel *c = &mg->lev[mg->nlevels - 1];
     Mat         Ac;
-    if (mg->nlevels == 1 || !mg->singular) Ac = c->A;
+    if (mg->nlevels == 1 || !mg->singular)
+      Ac = c->A;
     else {
       /* A_c + d e_0 e_0^T: for a rhs orthogonal to the constants its solution is the singular
          system's up to a constant, whatever d > 0 (the constant is removed by the Krylov method) */

@@ -110,8 +110,8 @@ PetscErrorCode PffMGSmoothFixed_Private(PffMG *mg, PetscInt L, Vec b, Vec x, Pet
   }
   for (PetscInt s = 0; s < sweeps; s++)
     for (PetscInt c = 0; c < 2; c++) {
-      const PetscInt     q0 = c == 0 ? 0 : lv->ncolour[0], q1 = c == 0 ? lv->ncolour[0] : lv->ncolour[0] + lv->ncolour[1];
-      PetscScalar       *xa;
+      const PetscInt q0 = c == 0 ? 0 : lv->ncolour[0], q1 = c == 0 ? lv->ncolour[0] : lv->ncolour[0] + lv->ncolour[1];
+      PetscScalar   *xa;
       const PetscScalar *ba, *ga = NULL;
       PetscInt64         cells = 0;
       PetscCall(UpdateGhosts(lv, x));
@@ -149,7 +149,8 @@ static PetscErrorCode Threshold(PffMG *mg, const PetscReal *r0, PetscInt n, Pets
       sum[2] += lg * lg;
     }
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, sum, 3, MPIU_REAL, MPI_SUM, mg->comm));
-  if (sum[0] == 0) *theta = PETSC_MAX_REAL; /* nothing to relax */
+  if (sum[0] == 0)
+    *theta = PETSC_MAX_REAL; /* nothing to relax */
   else {
     const PetscReal mean = sum[1] / sum[0], var = PetscMax(0.0, sum[2] / sum[0] - mean * mean);
     *theta = PetscPowReal(10.0, mean + mg->opt.thetaSigmas * PetscSqrtReal(var));
@@ -160,7 +161,8 @@ static PetscErrorCode Threshold(PffMG *mg, const PetscReal *r0, PetscInt n, Pets
 /* One adaptive step over the active list, one block colour at a time: relax each block (repeated
    block-local sweeps), keep its final effective residual in bres and its border maxima in face;
    r0 (or NULL) receives the first sweep's maximum per list entry. */
-static PetscErrorCode RelaxActive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, PetscInt nactive, PetscReal *r0, PetscReal *R)
+static PetscErrorCode RelaxActive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, PetscInt nactive, PetscReal *r0,
+                                  PetscReal *R)
 {
   PetscFunctionBeginUser;
   for (PetscInt c = 0; c < 2; c++) {
@@ -176,8 +178,7 @@ static PetscErrorCode RelaxActive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, Petsc
       const PetscReal first = RelaxBlock(lv, lb, ba, xa, ga, mg->opt.omega, R);
       PetscReal       r     = first;
       PetscInt        k     = 1;
-      if (mg->opt.blockSweeps && first > 0)
-        do {
+      if (mg->opt.blockSweeps && first > 0) do {
           r = RelaxBlock(lv, lb, ba, xa, ga, mg->opt.omega, R);
           k++;
         } while (!(r < first / 3 || k >= mg->opt.blockSweepsMax));
@@ -226,11 +227,13 @@ static PetscErrorCode SmoothAdaptive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x)
         if (nb == -1 || mg->face[6 * lb + f] <= theta) continue;
         if (nb >= 0) {
           if (lv->relevant[nb]) next[nb] = 1;
-        } else mg->flags[-2 - nb] = 1; /* another rank's block: reduced below */
+        } else
+          mg->flags[-2 - nb] = 1; /* another rank's block: reduced below */
       }
     }
     if (size > 1) {
-      PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, mg->flags, (PetscMPIInt)mg->nraster, MPI_UNSIGNED_CHAR, MPI_MAX, mg->comm));
+      PetscCallMPI(
+          MPI_Allreduce(MPI_IN_PLACE, mg->flags, (PetscMPIInt)mg->nraster, MPI_UNSIGNED_CHAR, MPI_MAX, mg->comm));
       for (PetscInt lb = 0; lb < mg->nlocal; lb++)
         if (mg->flags[mg->gid[lb]] && lv->relevant[lb]) next[lb] = 1;
       PetscCall(PetscArrayzero(mg->flags, mg->nraster));

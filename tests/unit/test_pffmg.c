@@ -1,6 +1,8 @@
 /* The adaptive multigrid preconditioner pffmg (PF-FLIP Sec. 6) on uniform and graded 3-level grids:
-   - Galerkin: every level operator equals P^T A P formed by explicit matrix products, and on a uniform
-     grid with beta = 1 a coarse face carries the sum of its four fine face coefficients (Algorithm 1);
+   - Galerkin: without rescaling every level operator equals P^T A P formed by explicit matrix products,
+     and on a uniform grid with beta = 1 a coarse face carries the sum of its four fine face coefficients
+     (Algorithm 1); rescaled (the default) it carries the coarse discretisation's coefficient; every level
+     is symmetric with zero row sums;
    - the smoother (fixed hybrid red-black sweeps and adaptive relaxation) lowers the energy norm of a
      random error on every level;
    - FCG + pffmg converges at rtol 1e-8 on a bubbly problem (nine bubbles, density ratio 1000), closed
@@ -96,70 +98,100 @@ static PetscErrorCode CreatePressure(PffTestCtx *t, Bubbly *c, PetscReal rtol, P
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* A_L = P^T A_{L-1} P by explicit products on every level; the uniform beta = 1 face sums. */
+/* Level-1 row of the coarse cell at global coarse position (5, 6, 7) of a uniform 32^3 grid in 8^3 blocks
+   (block (1, 1, 1), local cell (1, 2, 3)) with beta = 1: 7 entries, off-diagonals -cf, diagonal 6 cf. */
+static PetscErrorCode CheckUniformRow(PffTestCtx *t, Mat A1, PetscReal cf)
+{
+  const PetscInt gid = 1 + 4 * (1 + 4 * 1);
+  PetscInt       lb;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetLocalIndex(t->grid, gid, &lb));
+  if (lb >= 0) {
+    PetscInt           rstart1, ncols, nnz = 0;
+    const PetscInt    *cols;
+    const PetscScalar *vals;
+    PetscCall(MatGetOwnershipRange(A1, &rstart1, NULL));
+    const PetscInt row = rstart1 + 64 * lb + 1 + 4 * (2 + 4 * 3); /* 4^3 level-1 cells per owned block */
+    PetscCall(MatGetRow(A1, row, &ncols, &cols, &vals));
+    for (PetscInt k = 0; k < ncols; k++) {
+      if (vals[k] == 0) continue;
+      nnz++;
+      const PetscReal expect = cols[k] == row ? 6 * cf : -cf;
+      PetscCheck(PetscAbsScalar(vals[k] - expect) <= 1e-12 * cf, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+                 "galerkin: level-1 entry (%" PetscInt_FMT ", %" PetscInt_FMT ") = %g, expected %g", row, cols[k],
+                 (double)PetscRealPart(vals[k]), (double)expect);
+    }
+    PetscCheck(nnz == 7, PETSC_COMM_SELF, PETSC_ERR_PLIB, "galerkin: level-1 row has %" PetscInt_FMT " entries, not 7",
+               nnz);
+    PetscCall(MatRestoreRow(A1, row, &ncols, &cols, &vals));
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* -pressure_pffmg_rescale 0: every level equals P^T A P by explicit products, and on a uniform grid with beta = 1
+   a coarse face carries the sum 4 h of its four fine faces (Algorithm 1). Rescaled (the default): the coarse face
+   carries 2 h = (2h) beta, the coefficient of the coarse discretisation, and every level stays symmetric with
+   zero row sums (closed box). */
 static PetscErrorCode TestGalerkin(PetscBool graded)
 {
-  PffTestCtx  t;
-  Bubbly      c;
-  PffPressure ps;
-  PffMGStats  st;
+  PffTestCtx      t;
+  Bubbly          c;
+  const PetscReal h = 1.0 / 32;
 
   PetscFunctionBeginUser;
   PetscCall(CreateCase(PETSC_COMM_WORLD, 32, 8, graded, graded ? 1e3 : 0, &t, &c));
-  PetscCall(CreatePressure(&t, &c, 1e-8, &ps));
-  PetscCall(PffPressureMGGetStats(ps, &st));
-  PetscCheck(st.levels == 4, PETSC_COMM_WORLD, PETSC_ERR_PLIB, "galerkin: %" PetscInt_FMT " levels, expected 4",
-             st.levels);
-  for (PetscInt L = 1; L < st.levels; L++) {
-    Mat       Af, P, Ac, AP, PtAP;
-    PetscReal nrm, err;
-    PetscCall(PffPressureMGGetLevel(ps, L - 1, &Af, &P));
-    PetscCall(PffPressureMGGetLevel(ps, L, &Ac, NULL));
-    PetscCall(MatMatMult(Af, P, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &AP));
-    PetscCall(MatTransposeMatMult(P, AP, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &PtAP));
-    PetscCall(MatNorm(PtAP, NORM_FROBENIUS, &nrm));
-    PetscCall(MatAXPY(PtAP, -1.0, Ac, DIFFERENT_NONZERO_PATTERN));
-    PetscCall(MatNorm(PtAP, NORM_FROBENIUS, &err));
-    PetscCheck(err <= 1e-12 * nrm, PETSC_COMM_WORLD, PETSC_ERR_PLIB,
-               "galerkin: level %" PetscInt_FMT " differs from P^T A P by %g (norm %g)", L, (double)err, (double)nrm);
-    PetscCall(MatDestroy(&AP));
-    PetscCall(MatDestroy(&PtAP));
-  }
-  if (!graded) {
-    /* level 1 of a 32^3 grid in 8^3 blocks: 16^3 cells of size 2h; the interior coarse cell (5, 6, 7) of
-       block (0,0,0)... in global terms cell (5, 6, 7) lies in block (1, 1, 1), local (1, 2, 3) */
-    Mat                A1;
-    PetscInt           gid = 1 + 4 * (1 + 4 * 1), lb, ncols;
-    const PetscInt    *cols;
-    const PetscScalar *vals;
-    PetscCall(PffPressureMGGetLevel(ps, 1, &A1, NULL));
-    PetscCall(PffGridGetLocalIndex(t.grid, gid, &lb));
-    if (lb >= 0) {
-      PetscInt64 first0, rstart0;
-      PetscInt   row = -1, rstart1;
-      PetscCall(PffGridGetCellNumbering(t.grid, gid, &first0, NULL, &rstart0, NULL));
-      PetscCall(MatGetOwnershipRange(A1, &rstart1, NULL));
-      /* level-1 rows of the owned blocks are 4^3 per block in local order */
-      row = rstart1 + 64 * lb + 1 + 4 * (2 + 4 * 3);
-      PetscCall(MatGetRow(A1, row, &ncols, &cols, &vals));
-      const PetscReal h = 1.0 / 32, cf = 4 * h; /* four fine faces of coefficient h beta */
-      PetscInt        nnz = 0;
-      for (PetscInt k = 0; k < ncols; k++) {
-        if (vals[k] == 0) continue;
-        nnz++;
-        const PetscReal expect = cols[k] == row ? 6 * cf : -cf;
-        PetscCheck(PetscAbsScalar(vals[k] - expect) <= 1e-12 * cf, PETSC_COMM_SELF, PETSC_ERR_PLIB,
-                   "galerkin: level-1 entry (%" PetscInt_FMT ", %" PetscInt_FMT ") = %g, expected %g", row, cols[k],
-                   (double)PetscRealPart(vals[k]), (double)expect);
+  for (PetscInt rescale = 0; rescale < 2; rescale++) {
+    PffPressure ps;
+    PffMGStats  st;
+    PetscCall(PetscOptionsSetValue(NULL, "-pressure_pffmg_rescale", rescale ? "1" : "0"));
+    PetscCall(CreatePressure(&t, &c, 1e-8, &ps));
+    PetscCall(PffPressureMGGetStats(ps, &st));
+    PetscCheck(st.levels == 4, PETSC_COMM_WORLD, PETSC_ERR_PLIB, "galerkin: %" PetscInt_FMT " levels, expected 4",
+               st.levels);
+    for (PetscInt L = 1; L < st.levels; L++) {
+      Mat       Af, P, Ac, AP, PtAP;
+      Vec       one, r;
+      PetscReal nrm, err, rsum;
+      PetscBool sym;
+      PetscCall(PffPressureMGGetLevel(ps, L - 1, &Af, &P));
+      PetscCall(PffPressureMGGetLevel(ps, L, &Ac, NULL));
+      PetscCall(MatIsSymmetric(Ac, 1e-12, &sym));
+      PetscCheck(sym, PETSC_COMM_WORLD, PETSC_ERR_PLIB, "galerkin: level %" PetscInt_FMT " is not symmetric", L);
+      PetscCall(MatCreateVecs(Ac, &one, &r));
+      PetscCall(VecSet(one, 1.0));
+      PetscCall(MatMult(Ac, one, r));
+      PetscCall(VecNorm(r, NORM_INFINITY, &rsum));
+      PetscCall(MatNorm(Ac, NORM_INFINITY, &nrm));
+      PetscCheck(rsum <= 1e-12 * nrm, PETSC_COMM_WORLD, PETSC_ERR_PLIB,
+                 "galerkin: level %" PetscInt_FMT " row sums up to %g (norm %g)", L, (double)rsum, (double)nrm);
+      PetscCall(VecDestroy(&one));
+      PetscCall(VecDestroy(&r));
+      if (!rescale) {
+        PetscCall(MatMatMult(Af, P, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &AP));
+        PetscCall(MatTransposeMatMult(P, AP, MAT_INITIAL_MATRIX, PETSC_DEFAULT, &PtAP));
+        PetscCall(MatNorm(PtAP, NORM_FROBENIUS, &nrm));
+        PetscCall(MatAXPY(PtAP, -1.0, Ac, DIFFERENT_NONZERO_PATTERN));
+        PetscCall(MatNorm(PtAP, NORM_FROBENIUS, &err));
+        PetscCheck(err <= 1e-12 * nrm, PETSC_COMM_WORLD, PETSC_ERR_PLIB,
+                   "galerkin: level %" PetscInt_FMT " differs from P^T A P by %g (norm %g)", L, (double)err,
+                   (double)nrm);
+        PetscCall(MatDestroy(&AP));
+        PetscCall(MatDestroy(&PtAP));
       }
-      PetscCheck(nnz == 7, PETSC_COMM_SELF, PETSC_ERR_PLIB, "galerkin: level-1 row has %" PetscInt_FMT " entries, not 7",
-                 nnz);
-      PetscCall(MatRestoreRow(A1, row, &ncols, &cols, &vals));
     }
+    if (!graded) {
+      Mat A1;
+      PetscCall(PffPressureMGGetLevel(ps, 1, &A1, NULL));
+      PetscCall(CheckUniformRow(&t, A1, rescale ? 2 * h : 4 * h));
+    }
+    PetscCall(PetscPrintf(PETSC_COMM_WORLD, "galerkin %s %s: %" PetscInt_FMT " levels symmetric, zero row sums%s\n",
+                          graded ? "graded " : "uniform", rescale ? "rescaled" : "plain   ", st.levels,
+                          rescale ? (graded ? "" : ", coarse face 2h")
+                                  : (graded ? ", equal P^T A P" : ", equal P^T A P, coarse face = sum of 4 fine")));
+    PetscCall(PffPressureDestroy(&ps));
   }
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "galerkin %s: %" PetscInt_FMT " levels equal P^T A P%s\n",
-                        graded ? "graded" : "uniform", st.levels, graded ? "" : ", coarse faces = sum of 4 fine"));
-  PetscCall(PffPressureDestroy(&ps));
+  PetscCall(PetscOptionsClearValue(NULL, "-pressure_pffmg_rescale"));
   PetscCall(PffGridDestroy(&t.grid));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -220,15 +252,11 @@ static PetscErrorCode Solve(MPI_Comm comm, PetscBool graded, PetscInt *its, Pets
   PffPressureStats st;
 
   PetscFunctionBeginUser;
-  PetscInt N = 32, n0 = 8;
-  PetscCall(PetscOptionsGetInt(NULL, NULL, "-xn", &N, NULL));
-  PetscCall(PetscOptionsGetInt(NULL, NULL, "-xn0", &n0, NULL));
-  PetscCall(CreateCase(comm, N, n0, graded, 1e3, &t, &c));
+  PetscCall(CreateCase(comm, 32, 8, graded, 1e3, &t, &c));
   PetscCall(CreatePressure(&t, &c, 1e-8, &ps));
   PetscCall(PffPressureProject(ps, c.uCh, 1.0, -1, c.pCh, &st));
-  PetscCheck(st.reason > 0, comm, PETSC_ERR_NOT_CONVERGED, "solve: FCG + pffmg did not converge: %s after %" PetscInt_FMT,
-             KSPConvergedReasons[st.reason], st.its);
-  PetscCall(PetscPrintf(comm, "XTIME setup %.3f solve %.3f\n", st.setupTime, st.solveTime));
+  PetscCheck(st.reason > 0, comm, PETSC_ERR_NOT_CONVERGED,
+             "solve: FCG + pffmg did not converge: %s after %" PetscInt_FMT, KSPConvergedReasons[st.reason], st.its);
   *its   = st.its;
   *rnorm = st.rnorm;
   PetscCall(PffPressureDestroy(&ps));
@@ -249,7 +277,8 @@ static PetscErrorCode TestSolve(PetscBool graded)
   PetscCheck(PetscAbs(its - its1) <= 3, PETSC_COMM_WORLD, PETSC_ERR_PLIB,
              "solve: %" PetscInt_FMT " iterations on all ranks, %" PetscInt_FMT " on one", its, its1);
   PetscCheck(its <= 40, PETSC_COMM_WORLD, PETSC_ERR_PLIB, "solve: %" PetscInt_FMT " iterations (more than 40)", its);
-  PetscCall(PetscPrintf(PETSC_COMM_WORLD, "solve %s bubbly 32^3 ratio 1e3: converged (rtol 1e-8), its within 3 of one rank's\n",
+  PetscCall(PetscPrintf(PETSC_COMM_WORLD,
+                        "solve %s bubbly 32^3 ratio 1e3: converged (rtol 1e-8), its within 3 of one rank's\n",
                         graded ? "graded " : "uniform"));
   PetscCall(PetscInfo(NULL, "solve: its %" PetscInt_FMT " (one rank %" PetscInt_FMT ")\n", its, its1));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -303,17 +332,6 @@ int main(int argc, char **argv)
 {
   PetscCall(PetscInitialize(&argc, &argv, NULL, NULL));
   PetscCall(PffInitializePackage());
-  {
-    PetscBool x = PETSC_FALSE;
-    PetscCall(PetscOptionsGetBool(NULL, NULL, "-xsolve", &x, NULL));
-    if (x) {
-      PetscInt  its; PetscReal rn;
-      PetscCall(Solve(PETSC_COMM_WORLD, PETSC_FALSE, &its, &rn));
-      PetscCall(PetscPrintf(PETSC_COMM_WORLD, "XSOLVE its %d rn %g\n", (int)its, (double)rn));
-      PetscCall(PetscFinalize());
-      return 0;
-    }
-  }
   PetscCall(TestGalerkin(PETSC_FALSE));
   PetscCall(TestGalerkin(PETSC_TRUE));
   PetscCall(TestSmoother(PETSC_FALSE));
