@@ -194,6 +194,17 @@ PetscErrorCode PffPressureMGIsActive_Private(PC pc, PetscBool *active)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Hands the grid to the PC (kept when already set). */
+PetscErrorCode PffPressureMGSetGrid_Private(PC pc, PffGrid grid)
+{
+  PffMG *mg;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffMGGetContext(pc, &mg));
+  if (mg->grid == NULL) mg->grid = grid;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /* Options of pffmg under the pressure KSP's prefix; also hands the grid to the PC. */
 PetscErrorCode PffPressureMGSetFromOptions_Private(PC pc, PffGrid grid)
 {

@@ -11,7 +11,7 @@ const char *const PffPressureAssemblyTypes[] = {"ptap", "direct", "PffPressureAs
                                                 NULL};
 
 #define PFF_PRESSURE_KSP_TYPE_DEFAULT KSPFCG
-#define PFF_PRESSURE_PC_TYPE_DEFAULT PCGAMG
+#define PFF_PRESSURE_PC_TYPE_DEFAULT "pffmg"
 #define PFF_PRESSURE_RTOL_DEFAULT 1e-4
 #define PFF_PRESSURE_ASSEMBLY_DEFAULT PFF_PRESSURE_ASSEMBLY_PTAP
 
@@ -161,6 +161,14 @@ PetscErrorCode PffPressureSetCoefficients(PffPressure ps, PetscInt chBeta, Petsc
   PetscCall(PetscLogEventBegin(PFF_PressAssemble, 0, 0, 0, 0));
   PetscCall(PffPressureAssemble_Private(ps, chBeta, chOpen));
   PetscCall(KSPSetOperators(ps->ksp, ps->A, ps->A));
+  {
+    /* pffmg needs the grid also when it was chosen by PCSetType rather than by options */
+    PC        pc;
+    PetscBool mg;
+    PetscCall(KSPGetPC(ps->ksp, &pc));
+    PetscCall(PffPressureMGIsActive_Private(pc, &mg));
+    if (mg) PetscCall(PffPressureMGSetGrid_Private(pc, ps->grid));
+  }
   ps->coefficientsSet = PETSC_TRUE;
   PetscCall(PetscLogEventEnd(PFF_PressAssemble, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);
