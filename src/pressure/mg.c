@@ -24,6 +24,7 @@
 #define PFF_MG_MAX_LEVELS_DEFAULT 16
 #define PFF_MG_CORRECTION_DEFAULT 1.0
 #define PFF_MG_RESCALE_DEFAULT PETSC_TRUE
+#define PFF_MG_KCYCLE_DEFAULT 2
 
 static PetscErrorCode PffMGGetContext(PC pc, PffMG **mg)
 {
@@ -54,10 +55,65 @@ static PetscErrorCode VCycle(PffMG *mg, PetscInt L, Vec b, Vec x)
   PetscCall(MatMult(lv->A, x, lv->r));
   PetscCall(VecAYPX(lv->r, -1.0, b));
   PetscCall(MatMultTranspose(lv->P, lv->r, c->b));
-  PetscCall(VCycle(mg, L + 1, c->b, c->x));
+  if (c->kcycle)
+    PetscCall(KSPSolve(c->kcycle, c->b, c->x));
+  else
+    PetscCall(VCycle(mg, L + 1, c->b, c->x));
   if (mg->opt.correction != 1.0) PetscCall(VecScale(c->x, mg->opt.correction));
   PetscCall(MatMultAdd(lv->P, c->x, x, x));
   PetscCall(PffMGSmooth_Private(mg, L, b, x));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+typedef struct {
+  PffMG   *mg;
+  PetscInt L;
+} PffMGKCycle;
+
+static PetscErrorCode PffMGKCycleApply(PC pc, Vec b, Vec x)
+{
+  PffMGKCycle *k;
+
+  PetscFunctionBeginUser;
+  PetscCall(PCShellGetContext(pc, &k));
+  PetscCall(VCycle(k->mg, k->L, b, x));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffMGKCycleDestroy(PC pc)
+{
+  PffMGKCycle *k;
+
+  PetscFunctionBeginUser;
+  PetscCall(PCShellGetContext(pc, &k));
+  PetscCall(PetscFree(k));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* K-cycle (Notay & Vassilevski): the correction on level L is two flexible-CG steps preconditioned by
+   the cycle of that level, which keeps aggregation multigrid's convergence independent of the depth. */
+PetscErrorCode PffMGSetUpKCycle_Private(PffMG *mg, PetscInt L)
+{
+  PffMGLevel  *lv = &mg->lev[L];
+  PffMGKCycle *k;
+  PC           pc;
+
+  PetscFunctionBeginUser;
+  if (lv->kcycle == NULL) {
+    PetscCall(KSPCreate(mg->comm, &lv->kcycle));
+    PetscCall(KSPSetType(lv->kcycle, KSPFCG));
+    PetscCall(KSPSetNormType(lv->kcycle, KSP_NORM_NONE));
+    PetscCall(KSPSetTolerances(lv->kcycle, 0.0, 0.0, PETSC_DEFAULT, mg->opt.kcycleIts));
+    PetscCall(KSPGetPC(lv->kcycle, &pc));
+    PetscCall(PCSetType(pc, PCSHELL));
+    PetscCall(PetscNew(&k));
+    k->mg = mg;
+    k->L  = L;
+    PetscCall(PCShellSetContext(pc, k));
+    PetscCall(PCShellSetApply(pc, PffMGKCycleApply));
+    PetscCall(PCShellSetDestroy(pc, PffMGKCycleDestroy));
+  }
+  PetscCall(KSPSetOperators(lv->kcycle, lv->A, lv->A));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -88,6 +144,8 @@ static PetscErrorCode PffMGSetUp(PC pc)
   if (mg->built && mg->lev[0].A != NULL && mg->lev[0].A != A) PetscCall(PffMGDestroyLevels_Private(mg));
   if (!mg->built) PetscCall(PffMGBuildLevels_Private(mg));
   PetscCall(PffMGUpdateOperators_Private(mg, A));
+  for (PetscInt L = 1; L + 1 < mg->nlevels; L++)
+    if (mg->opt.kcycleIts > 0) PetscCall(PffMGSetUpKCycle_Private(mg, L));
   mg->stats.levels = mg->nlevels;
   PetscCall(PetscLogEventEnd(PFF_MGSetUp, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -157,6 +215,7 @@ static PetscErrorCode PCCreate_PffMG(PC pc)
   mg->opt.maxLevels      = PFF_MG_MAX_LEVELS_DEFAULT;
   mg->opt.correction     = PFF_MG_CORRECTION_DEFAULT;
   mg->opt.rescale        = PFF_MG_RESCALE_DEFAULT;
+  mg->opt.kcycleIts      = PFF_MG_KCYCLE_DEFAULT;
   PetscCall(KSPCreate(mg->comm, &mg->coarse));
   PetscCall(PCGetOptionsPrefix(pc, &prefix));
   PetscCall(KSPSetOptionsPrefix(mg->coarse, prefix));
@@ -194,14 +253,14 @@ PetscErrorCode PffPressureMGIsActive_Private(PC pc, PetscBool *active)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Hands the grid to the PC (kept when already set). */
+/* Hands the grid to the PC and reads its options, unless PffPressureSetFromOptions did already. */
 PetscErrorCode PffPressureMGSetGrid_Private(PC pc, PffGrid grid)
 {
   PffMG *mg;
 
   PetscFunctionBeginUser;
   PetscCall(PffMGGetContext(pc, &mg));
-  if (mg->grid == NULL) mg->grid = grid;
+  if (!mg->optionsRead) PetscCall(PffPressureMGSetFromOptions_Private(pc, grid));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -241,10 +300,13 @@ PetscErrorCode PffPressureMGSetFromOptions_Private(PC pc, PffGrid grid)
   PetscCall(PetscOptionsBool("-pffmg_rescale",
                              "Coarse coefficients consistent with the coarse discretisation (false: plain P^T A P)",
                              "PffPressureMG", mg->opt.rescale, &mg->opt.rescale, NULL));
+  PetscCall(PetscOptionsBoundedInt("-pffmg_kcycle", "Flexible-CG steps per coarse correction (K-cycle); 0: V-cycle",
+                                   "PffPressureMG", mg->opt.kcycleIts, &mg->opt.kcycleIts, NULL, 0));
   PetscOptionsEnd();
   PetscCheck(mg->opt.omega > 0 && mg->opt.omega < 2, mg->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-pressure_pffmg_omega %g is invalid: must lie in (0, 2)", (double)mg->opt.omega);
   PetscCall(KSPSetFromOptions(mg->coarse));
+  mg->optionsRead = PETSC_TRUE;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

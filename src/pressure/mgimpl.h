@@ -21,6 +21,7 @@ typedef struct {
   PetscReal         thetaSigmas; /* theta = mean + thetaSigmas * std of log10 of the block maxima */
   PetscInt          maxLevels;
   PetscReal         correction; /* coarse-grid correction scale */
+  PetscInt          kcycleIts;  /* flexible-CG steps per coarse correction, 0: V-cycle */
   PetscBool         rescale;    /* rediscretisation-consistent coarse coefficients (mglevels.c) */
 } PffMGOptions;
 
@@ -30,6 +31,7 @@ typedef struct {
   PetscInt   L;
   Mat        A;             /* level operator; level 0: the pressure module's, referenced */
   Mat        P;             /* prolongation from level L+1 (piecewise constant), NULL on the coarsest */
+  KSP        kcycle;        /* K-cycle solver of this level's correction, or NULL */
   Vec        x, b, r;       /* work (x, b unused on level 0, which works on the PC's vectors) */
   PetscInt   nrows, rstart; /* owned rows, first global row */
   PetscInt  *n;             /* [nlocal] cells per axis of each block at this level */
@@ -58,6 +60,7 @@ typedef struct {
   KSP          coarse;   /* coarsest-level solver, options prefix pressure_pffmg_coarse_ */
   PetscBool    singular; /* A has the constants as null space: the coarsest operator is pinned */
   PetscBool    built;    /* hierarchy structure exists (coefficients are refreshed each set-up) */
+  PetscBool    optionsRead;
   /* per-block scratch for adaptive relaxation */
   PetscInt      *nbr;     /* [6 nlocal] local face neighbour (or -1: none, wall, or remote -2 - gid) */
   PetscInt       nraster; /* blocks in the raster */

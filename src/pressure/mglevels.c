@@ -350,6 +350,7 @@ PetscErrorCode PffMGDestroyLevels_Private(PffMG *mg)
     PffMGLevel *lv = &mg->lev[L];
     if (lv->ai) PetscCall(MatRestoreRowIJ(lv->Ad, 0, PETSC_FALSE, PETSC_FALSE, NULL, &lv->ai, &lv->aj, NULL));
     if (lv->bi) PetscCall(MatRestoreRowIJ(lv->Ao, 0, PETSC_FALSE, PETSC_FALSE, NULL, &lv->bi, &lv->bj, NULL));
+    PetscCall(KSPDestroy(&lv->kcycle));
     PetscCall(MatDestroy(&lv->A));
     PetscCall(MatDestroy(&lv->P));
     PetscCall(VecDestroy(&lv->x));

@@ -161,16 +161,21 @@ PetscErrorCode PffPressureSetCoefficients(PffPressure ps, PetscInt chBeta, Petsc
   PetscCall(PetscLogEventBegin(PFF_PressAssemble, 0, 0, 0, 0));
   PetscCall(PffPressureAssemble_Private(ps, chBeta, chOpen));
   PetscCall(KSPSetOperators(ps->ksp, ps->A, ps->A));
-  {
-    /* pffmg needs the grid also when it was chosen by PCSetType rather than by options */
-    PC        pc;
-    PetscBool mg;
-    PetscCall(KSPGetPC(ps->ksp, &pc));
-    PetscCall(PffPressureMGIsActive_Private(pc, &mg));
-    if (mg) PetscCall(PffPressureMGSetGrid_Private(pc, ps->grid));
-  }
   ps->coefficientsSet = PETSC_TRUE;
   PetscCall(PetscLogEventEnd(PFF_PressAssemble, 0, 0, 0, 0));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* pffmg needs the grid, also when it was chosen by PCSetType rather than by options. */
+static PetscErrorCode PffPressureAttachMG(PffPressure ps)
+{
+  PC        pc;
+  PetscBool mg;
+
+  PetscFunctionBeginUser;
+  PetscCall(KSPGetPC(ps->ksp, &pc));
+  PetscCall(PffPressureMGIsActive_Private(pc, &mg));
+  if (mg) PetscCall(PffPressureMGSetGrid_Private(pc, ps->grid));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -233,6 +238,7 @@ PetscErrorCode PffPressureProject(PffPressure ps, PetscInt chU, PetscReal dt, Pe
 
   PetscCall(PffPressureChannelToVec_Private(ps, chP, PFF_CHANNEL_CELL, ps->p));
   PetscCall(PetscTime(&t0));
+  PetscCall(PffPressureAttachMG(ps));
   PetscCall(KSPSetUp(ps->ksp));
   PetscCall(PffPressureApplySubPCDefault(ps));
   PetscCall(KSPSetUpOnBlocks(ps->ksp));

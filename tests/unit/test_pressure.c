@@ -429,7 +429,7 @@ static PetscErrorCode Bench(PetscInt N)
   const PetscInt  n0 = 16, nb[3] = {N / n0, N / n0, N / n0};
   const PetscBool per[3]    = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
   const PetscReal origin[3] = {0, 0, 0};
-  const PCType    pcs[4]    = {PCGAMG, PCHYPRE, PCBJACOBI, PCJACOBI};
+  const PCType    pcs[5]    = {"pffmg", PCGAMG, PCHYPRE, PCBJACOBI, PCJACOBI};
   PffTestCtx      t;
   Case            c;
   PetscMPIInt     size;
@@ -439,7 +439,9 @@ static PetscErrorCode Bench(PetscInt N)
   PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
   PetscCall(PffTestCreateGrid(PETSC_COMM_WORLD, nb, per, origin, 1.0 / (PetscReal)N, n0, 1, 0, 0, 3, &t));
   PetscCall(CaseSetUp(&t, 4, &c));
-  for (PetscInt k = 0; k < 4; k++) {
+  PetscInt npcs = 5;
+  PetscCall(PetscOptionsGetInt(NULL, NULL, "-bench_npcs", &npcs, NULL));
+  for (PetscInt k = 0; k < npcs; k++) {
     PffPressure    ps;
     KSP            ksp;
     PC             pc;
