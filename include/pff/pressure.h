@@ -19,8 +19,8 @@
    face rows are 3 * (global cell) + d for the lower d-face of the cell, so 3 face rows per owned cell
    (rows of wall and inactive-neighbour faces exist but are always closed). docs/pressure.md has more.
 
-   The operator sits behind a small interface (apply, diagonal, face coefficients per level) so that
-   the custom multigrid (its own module, later) can replace the assembled matrix as a PCSHELL. */
+   The operator sits behind a small interface (apply, diagonal, face coefficients per level); the
+   adaptive multigrid preconditioner pffmg (below) builds its hierarchy from the assembled A. */
 #pragma once
 
 #include <pff/grid.h>
@@ -45,7 +45,7 @@ typedef struct {
 
 /* Life cycle. Create borrows grid (set up). SetFromOptions reads the KSP with options prefix
    "pressure_": -pressure_ksp_type (default fcg), -pressure_ksp_rtol (default 1e-4, on the true residual:
-   the norm type defaults to unpreconditioned), -pressure_pc_type gamg|hypre|bjacobi|jacobi (default gamg;
+   the norm type defaults to unpreconditioned), -pressure_pc_type pffmg|gamg|hypre|bjacobi|jacobi (default pffmg;
    bjacobi uses ICC(0) on its blocks unless -pressure_sub_pc_type is given), -pressure_assembly
    ptap|direct (how A is assembled, default ptap), and every other PETSc KSP/PC option under that prefix. */
 PETSC_EXTERN PetscErrorCode PffPressureCreate(PffGrid grid, PffPressure *ps);
@@ -91,7 +91,9 @@ PETSC_EXTERN PetscErrorCode PffPressureGetKSP(PffPressure ps, KSP *ksp);
    red-black hybrid Gauss-Seidel, default, or weighted Jacobi), -pffmg_adaptive (adaptive relaxation,
    Algorithm 2, default true), -pffmg_block_sweeps (repeat block-local sweeps until the update falls by 1/3,
    default true), -pffmg_block_sweeps_max (4), -pffmg_adaptive_steps (10), -pffmg_sweeps (fixed pre/post
-   sweeps without adaptivity, 2), -pffmg_omega (6/7), -pffmg_theta_sigmas (2), -pffmg_max_levels, and
+   sweeps without adaptivity, 2), -pffmg_omega (6/7), -pffmg_theta_sigmas (2), -pffmg_max_levels, -pffmg_rescale (coarse coefficients
+   consistent with the coarse discretisation, default true), -pffmg_kcycle (flexible-CG steps per coarse
+   correction, default 2; 0 = V-cycle), -pffmg_correction (coarse-correction scale, 1), and
    the coarsest-level KSP under pressure_pffmg_coarse_ (default preonly + redundant LU). The functions
    below need pffmg as the PC and a KSPSetUp or solve before them. */
 typedef struct {
