@@ -25,6 +25,7 @@
 #define PFF_MG_CORRECTION_DEFAULT 1.0
 #define PFF_MG_RESCALE_DEFAULT PETSC_TRUE
 #define PFF_MG_KCYCLE_DEFAULT 2
+#define PFF_MG_COARSE_MAX_DEFAULT 4096
 
 static PetscErrorCode PffMGGetContext(PC pc, PffMG **mg)
 {
@@ -216,6 +217,7 @@ static PetscErrorCode PCCreate_PffMG(PC pc)
   mg->opt.correction     = PFF_MG_CORRECTION_DEFAULT;
   mg->opt.rescale        = PFF_MG_RESCALE_DEFAULT;
   mg->opt.kcycleIts      = PFF_MG_KCYCLE_DEFAULT;
+  mg->opt.coarseMax      = PFF_MG_COARSE_MAX_DEFAULT;
   PetscCall(KSPCreate(mg->comm, &mg->coarse));
   PetscCall(PCGetOptionsPrefix(pc, &prefix));
   PetscCall(KSPSetOptionsPrefix(mg->coarse, prefix));
@@ -302,6 +304,9 @@ PetscErrorCode PffPressureMGSetFromOptions_Private(PC pc, PffGrid grid)
                              "PffPressureMG", mg->opt.rescale, &mg->opt.rescale, NULL));
   PetscCall(PetscOptionsBoundedInt("-pffmg_kcycle", "Flexible-CG steps per coarse correction (K-cycle); 0: V-cycle",
                                    "PffPressureMG", mg->opt.kcycleIts, &mg->opt.kcycleIts, NULL, 0));
+  PetscCall(PetscOptionsBoundedInt("-pffmg_coarse_max",
+                                   "Uniform coarse levels below the block raster until at most this many cells",
+                                   "PffPressureMG", mg->opt.coarseMax, &mg->opt.coarseMax, NULL, 1));
   PetscOptionsEnd();
   PetscCheck(mg->opt.omega > 0 && mg->opt.omega < 2, mg->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-pressure_pffmg_omega %g is invalid: must lie in (0, 2)", (double)mg->opt.omega);

@@ -20,6 +20,7 @@ typedef struct {
   PetscReal         omega;
   PetscReal         thetaSigmas; /* theta = mean + thetaSigmas * std of log10 of the block maxima */
   PetscInt          maxLevels;
+  PetscInt          coarseMax;  /* add uniform levels below the raster until at most this many cells */
   PetscReal         correction; /* coarse-grid correction scale */
   PetscInt          kcycleIts;  /* flexible-CG steps per coarse correction, 0: V-cycle */
   PetscBool         rescale;    /* rediscretisation-consistent coarse coefficients (mglevels.c) */
@@ -29,6 +30,9 @@ typedef struct {
    fastest at the block's resolution at this level. */
 typedef struct {
   PetscInt   L;
+  PetscBool  uniform;       /* below the block raster: units are uniform coarse cells, not blocks */
+  PetscInt   nblk;          /* units (blocks, or coarse cells on uniform levels) */
+  PetscInt  *coord;         /* [3 nblk] unit coordinates on uniform levels (block coordinates >> (L - Lr)) */
   Mat        A;             /* level operator; level 0: the pressure module's, referenced */
   Mat        P;             /* prolongation from level L+1 (piecewise constant), NULL on the coarsest */
   KSP        kcycle;        /* K-cycle solver of this level's correction, or NULL */

@@ -53,6 +53,7 @@ static PetscErrorCode BuildLevelLayout(PffMG *mg, PetscInt L)
     lv->start[lb + 1] = lv->start[lb] + lv->n[lb] * lv->n[lb] * lv->n[lb];
   }
   lv->nrows = lv->start[mg->nlocal];
+  lv->nblk  = mg->nlocal;
   PetscCallMPI(MPI_Exscan(&lv->nrows, &rstart, 1, MPIU_INT, MPI_SUM, mg->comm));
   lv->rstart = rstart;
 
@@ -116,6 +117,142 @@ static PetscErrorCode BuildProlongation(PffMG *mg, PetscInt L)
   }
   PetscCall(MatAssemblyBegin(f->P, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(f->P, MAT_FINAL_ASSEMBLY));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Uniform levels below the block raster (Sec. 6.2): level Lr + k merges the one-cell blocks of level Lr
+   in groups of (2^k)^3 by raster coordinates. A coarse cell belongs to the rank that owns its first
+   active block in Morton order; the replicated raster gives every rank the whole numbering without
+   communication. Blocks in Morton order have nondecreasing group keys (Morton key >> 3k), so the
+   groups are runs of that order. */
+typedef struct {
+  PetscInt  n;      /* groups */
+  uint64_t *key;    /* [n] Morton keys of the groups, increasing */
+  PetscInt *global; /* [n] global row of each group */
+} PffMGGroups;
+
+static PetscErrorCode BuildGroups(PffMG *mg, PetscInt k, PffMGGroups *g, PffMGLevel *lv)
+{
+  PetscInt           nb[3], nactive, ns = 0, nown = 0;
+  const PetscInt    *gids;
+  const PetscInt    *level;
+  const PetscMPIInt *owner;
+  PetscMPIInt        rank, size;
+  PetscInt          *count, *ord;
+  PetscMPIInt       *gowner;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(mg->comm, &rank));
+  PetscCallMPI(MPI_Comm_size(mg->comm, &size));
+  PetscCall(PffGridGetRaster(mg->grid, nb, &level, &owner));
+  PetscCall(PffGridGetMortonOrder(mg->grid, &nactive, &gids));
+  PetscCall(PetscMalloc2(nactive, &g->key, nactive, &g->global));
+  PetscCall(PetscMalloc3(nactive, &gowner, size + 1, &count, nactive, &ord));
+  PetscCall(PetscArrayzero(count, size + 1));
+  for (PetscInt q = 0; q < nactive; q++) {
+    const PetscInt gid = gids[q], ijk[3] = {gid % nb[0], (gid / nb[0]) % nb[1], gid / (nb[0] * nb[1])};
+    const uint64_t key = PffMortonEncode((uint32_t)(ijk[0] >> k), (uint32_t)(ijk[1] >> k), (uint32_t)(ijk[2] >> k));
+    if (ns > 0 && g->key[ns - 1] == key) continue;
+    PetscCheck(ns == 0 || key > g->key[ns - 1], PETSC_COMM_SELF, PETSC_ERR_PLIB,
+               "pffmg: blocks are not in Morton order");
+    g->key[ns] = key;
+    gowner[ns] = owner[gid];
+    ord[ns]    = count[owner[gid]]++;
+    ns++;
+  }
+  g->n = ns;
+  {
+    PetscInt off = 0;
+    for (PetscMPIInt r = 0; r < size; r++) {
+      const PetscInt c = count[r];
+      count[r]         = off;
+      off += c;
+    }
+  }
+  for (PetscInt q = 0; q < ns; q++) g->global[q] = count[gowner[q]] + ord[q];
+  if (lv) {
+    for (PetscInt q = 0; q < ns; q++)
+      if (gowner[q] == rank) nown++;
+    lv->nblk   = nown;
+    lv->nrows  = nown;
+    lv->rstart = count[rank];
+    PetscCall(PetscMalloc1(3 * nown, &lv->coord));
+    nown = 0;
+    for (PetscInt q = 0; q < ns; q++)
+      if (gowner[q] == rank) {
+        uint32_t x[3];
+        PffMortonDecode(g->key[q], &x[0], &x[1], &x[2]);
+        for (int a = 0; a < 3; a++) lv->coord[3 * nown + a] = (PetscInt)x[a];
+        nown++;
+      }
+  }
+  PetscCall(PetscFree3(gowner, count, ord));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode BuildUniformLevel(PffMG *mg, PetscInt L, PetscInt k)
+{
+  PffMGLevel *lv = &mg->lev[L];
+  PffMGGroups g;
+
+  PetscFunctionBeginUser;
+  lv->L       = L;
+  lv->uniform = PETSC_TRUE;
+  PetscCall(BuildGroups(mg, k, &g, lv));
+  PetscCall(PetscFree2(g.key, g.global));
+  PetscCall(PetscMalloc4(lv->nblk, &lv->n, lv->nblk + 1, &lv->start, lv->nblk, &lv->split, lv->nblk, &lv->relevant));
+  PetscCall(PetscMalloc2(lv->nblk, &lv->colourList, lv->nrows, &lv->order));
+  lv->ncolour[0] = lv->ncolour[1] = 0;
+  for (PetscInt q = 0; q < lv->nblk; q++) {
+    lv->n[q]        = 1;
+    lv->start[q]    = q;
+    lv->split[q]    = q + 1;
+    lv->order[q]    = q;
+    lv->relevant[q] = PETSC_TRUE;
+    lv->ncolour[(lv->coord[3 * q] + lv->coord[3 * q + 1] + lv->coord[3 * q + 2]) % 2]++;
+  }
+  lv->start[lv->nblk] = lv->nblk;
+  {
+    PetscInt c[2] = {0, lv->ncolour[0]};
+    for (PetscInt q = 0; q < lv->nblk; q++)
+      lv->colourList[c[(lv->coord[3 * q] + lv->coord[3 * q + 1] + lv->coord[3 * q + 2]) % 2]++] = q;
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Piecewise-constant prolongation from uniform level L+1 = Lr + k to level L (the one-cell blocks of
+   level Lr when k = 1). */
+static PetscErrorCode BuildUniformProlongation(PffMG *mg, PetscInt L, PetscInt k)
+{
+  PffMGLevel *f = &mg->lev[L], *c = &mg->lev[L + 1];
+  PffMGGroups g;
+
+  PetscFunctionBeginUser;
+  PetscCall(BuildGroups(mg, k, &g, NULL));
+  PetscCall(MatCreateAIJ(mg->comm, f->nrows, c->nrows, PETSC_DETERMINE, PETSC_DETERMINE, 1, NULL, 1, NULL, &f->P));
+  for (PetscInt q = 0; q < f->nblk; q++) {
+    PetscInt x[3], lo = 0, hi = g.n - 1;
+    if (f->uniform)
+      for (int a = 0; a < 3; a++) x[a] = f->coord[3 * q + a] >> 1;
+    else {
+      PffBlockInfo info;
+      PetscCall(PffGridGetBlockInfo(mg->grid, q, &info));
+      for (int a = 0; a < 3; a++) x[a] = info.ijk[a] >> 1;
+    }
+    const uint64_t key = PffMortonEncode((uint32_t)x[0], (uint32_t)x[1], (uint32_t)x[2]);
+    while (lo < hi) {
+      const PetscInt mid = (lo + hi) / 2;
+      if (g.key[mid] < key)
+        lo = mid + 1;
+      else
+        hi = mid;
+    }
+    PetscCheck(g.key[lo] == key, PETSC_COMM_SELF, PETSC_ERR_PLIB, "pffmg: coarse group not found");
+    PetscCall(MatSetValue(f->P, f->rstart + f->start[q], g.global[lo], 1.0, INSERT_VALUES));
+  }
+  PetscCall(MatAssemblyBegin(f->P, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(f->P, MAT_FINAL_ASSEMBLY));
+  PetscCall(PetscFree2(g.key, g.global));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -197,8 +334,9 @@ static PetscErrorCode RescaleCoarse(PffMG *mg, PetscInt L)
 
   PetscFunctionBeginUser;
   PetscCall(VecGetArrayWrite(lv->r, &fl));
-  for (PetscInt lb = 0; lb < mg->nlocal; lb++)
-    for (PetscInt i = lv->start[lb]; i < lv->start[lb + 1]; i++) fl[i] = lv->n[lb] < f->n[lb] ? 1.0 : 0.0;
+  for (PetscInt lb = 0; lb < lv->nblk; lb++)
+    for (PetscInt i = lv->start[lb]; i < lv->start[lb + 1]; i++)
+      fl[i] = lv->uniform || lv->n[lb] < f->n[lb] ? 1.0 : 0.0;
   PetscCall(VecRestoreArrayWrite(lv->r, &fl));
   if (lv->scatter) {
     PetscCall(VecScatterBegin(lv->scatter, lv->r, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
@@ -246,13 +384,30 @@ PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
   PetscCall(PffGridGetSizes(mg->grid, &n0, NULL, NULL, NULL, NULL));
   PetscCall(PffGridGetRaster(mg->grid, nb, NULL, NULL));
   PetscCall(PffGridGetLocalBlocks(mg->grid, &mg->nlocal));
-  mg->nraster = nb[0] * nb[1] * nb[2];
-  mg->nlevels = 1;
-  while ((n0 >> (mg->nlevels - 1)) > 1 && mg->nlevels < mg->opt.maxLevels) mg->nlevels++;
-  PetscCall(PetscCalloc1(mg->nlevels, &mg->lev));
-  for (PetscInt L = 0; L < mg->nlevels; L++) PetscCall(BuildLevelLayout(mg, L));
+  mg->nraster           = nb[0] * nb[1] * nb[2];
+  PetscInt nblockLevels = 1, nmax;
+  while ((n0 >> (nblockLevels - 1)) > 1 && nblockLevels < mg->opt.maxLevels) nblockLevels++;
+  nmax = mg->opt.maxLevels;
+  PetscCall(PetscCalloc1(nmax, &mg->lev));
+  mg->nlevels = nblockLevels;
+  for (PetscInt L = 0; L < nblockLevels; L++) PetscCall(BuildLevelLayout(mg, L));
+  if ((n0 >> (nblockLevels - 1)) == 1) {
+    /* uniform levels below the raster while the coarsest level is too large for the direct solve */
+    for (PetscInt k = 1; mg->nlevels < nmax; k++) {
+      PetscInt nrows = mg->lev[mg->nlevels - 1].nrows, nglobal, ncoarse;
+      PetscCallMPI(MPI_Allreduce(&nrows, &nglobal, 1, MPIU_INT, MPI_SUM, mg->comm));
+      if (nglobal <= mg->opt.coarseMax) break;
+      PetscCall(BuildUniformLevel(mg, mg->nlevels, k));
+      PetscCallMPI(MPI_Allreduce(&mg->lev[mg->nlevels].nrows, &ncoarse, 1, MPIU_INT, MPI_SUM, mg->comm));
+      mg->nlevels++;
+      if (ncoarse == nglobal) break;
+    }
+  }
   for (PetscInt L = 0; L + 1 < mg->nlevels; L++) {
-    PetscCall(BuildProlongation(mg, L));
+    if (mg->lev[L + 1].uniform)
+      PetscCall(BuildUniformProlongation(mg, L, L + 1 - (nblockLevels - 1)));
+    else
+      PetscCall(BuildProlongation(mg, L));
     PetscCall(MatCreateVecs(mg->lev[L].P, &mg->lev[L + 1].x, &mg->lev[L].r));
     PetscCall(VecDuplicate(mg->lev[L + 1].x, &mg->lev[L + 1].b));
   }
@@ -359,8 +514,13 @@ PetscErrorCode PffMGDestroyLevels_Private(PffMG *mg)
     PetscCall(VecDestroy(&lv->ghost));
     PetscCall(VecScatterDestroy(&lv->scatter));
     PetscCall(PetscFree4(lv->n, lv->start, lv->split, lv->relevant));
-    PetscCall(PetscFree(lv->colourList));
-    PetscCall(PetscFree(lv->order));
+    if (lv->uniform)
+      PetscCall(PetscFree2(lv->colourList, lv->order));
+    else {
+      PetscCall(PetscFree(lv->colourList));
+      PetscCall(PetscFree(lv->order));
+    }
+    PetscCall(PetscFree(lv->coord));
     PetscCall(PetscFree(lv->idiag));
   }
   PetscCall(PetscFree(mg->lev));

@@ -251,7 +251,7 @@ PetscErrorCode PffMGSmooth_Private(PffMG *mg, PetscInt L, Vec b, Vec x)
   PffMGLevel *lv = &mg->lev[L];
 
   PetscFunctionBeginUser;
-  if (!mg->opt.adaptive || mg->opt.smoother == PFF_MG_SMOOTHER_JACOBI) {
+  if (!mg->opt.adaptive || mg->opt.smoother == PFF_MG_SMOOTHER_JACOBI || lv->uniform) {
     PetscCall(PffMGSmoothFixed_Private(mg, L, b, x, mg->opt.sweeps));
     PetscFunctionReturn(PETSC_SUCCESS);
   }
