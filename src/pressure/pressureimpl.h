@@ -41,8 +41,11 @@ struct _n_PffPressure {
   Mat          G;      /* gradient: 3 ncells x ncells rows, (G p)_f = (p_upper - sum w_c p_c) / d_f */
   Mat          W;      /* diag(M_f beta_f open_f) on the face rows, for MatPtAP */
   Mat          A;      /* G^T W G */
-  MatNullSpace nullsp; /* constants */
+  MatNullSpace nullsp; /* constants (or the connected cells), NULL when a Dirichlet wall makes A definite */
   KSP          ksp;
+
+  PetscBool dirichlet[6]; /* p = 0 on wall -x, +x, -y, +y, -z, +z (at the wall face, half a cell out) */
+  Vec       dirdiag;      /* cell Vec: the Dirichlet terms sum 2 h beta added to diag(A) */
 
   Vec p, b, vcell, vol, diag;             /* cell Vecs: pressure, rhs, work, cell volumes, diag(A) */
   Vec uf, wf, mface, beta, open, coef, w; /* face Vecs: velocity, work, M_f, beta_f, open_f, coefficient, W */
@@ -75,6 +78,7 @@ static inline PetscInt PffPressureGradientRow(PffPressure ps, PetscInt r, PetscI
 PETSC_INTERN PetscErrorCode PffPressureBuildFaces_Private(PffPressure);
 PETSC_INTERN PetscErrorCode PffPressureBuildGradient_Private(PffPressure);
 PETSC_INTERN PetscErrorCode PffPressureAssemble_Private(PffPressure, PetscInt, PetscInt);
+PETSC_INTERN PetscBool      PffPressureHasDirichlet_Private(PffPressure);
 PETSC_INTERN PetscErrorCode PffPressureChannelToVec_Private(PffPressure, PetscInt, PffChannelKind, Vec);
 PETSC_INTERN PetscErrorCode PffPressureVecToChannel_Private(PffPressure, Vec, PffChannelKind, PetscInt);
 PETSC_INTERN PetscErrorCode PffPressureMaxDivergenceVec_Private(PffPressure, Vec, PetscReal *);
