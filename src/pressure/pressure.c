@@ -47,34 +47,41 @@ PetscErrorCode PffPressureCreate(PffGrid grid, PffPressure *ps)
 
 PetscErrorCode PffPressureSetFromOptions(PffPressure ps)
 {
+  char     *names[7] = {NULL};
+  PetscInt  nnames   = 7;
+  PetscBool set, walls[6] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
+
   PetscFunctionBeginUser;
   PetscOptionsBegin(ps->comm, NULL, "Pressure projection", "PffPressure");
   PetscCall(PetscOptionsEnum("-pressure_assembly", "Assembly of A = G^T W G", "PffPressureSetCoefficients",
                              PffPressureAssemblyTypes, (PetscEnum)ps->assembly, (PetscEnum *)&ps->assembly, NULL));
-  {
-    char     *names[7] = {NULL};
-    PetscInt  nnames   = 7;
-    PetscBool set, walls[6] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
-    PetscCall(PetscOptionsStringArray("-pressure_dirichlet_walls",
-                                      "Walls with p = 0: none or a list of xmin,xmax,ymin,ymax,zmin,zmax",
-                                      "PffPressureSetDirichletWalls", names, &nnames, &set));
-    if (set) {
-      for (PetscInt q = 0; q < nnames; q++) {
-        PetscBool none, found = PETSC_FALSE;
-        PetscCall(PetscStrcasecmp(names[q], "none", &none));
-        for (PetscInt w = 0; w < 6 && !none && !found; w++) {
-          PetscCall(PetscStrcasecmp(names[q], PffWallNames[w], &found));
-          if (found) walls[w] = PETSC_TRUE;
-        }
-        PetscCheck(none || found, ps->comm, PETSC_ERR_ARG_UNKNOWN_TYPE,
-                   "pressure: -pressure_dirichlet_walls: unknown wall '%s' (use none or xmin,xmax,ymin,ymax,zmin,zmax)",
-                   names[q]);
-      }
-      for (PetscInt q = 0; q < nnames; q++) PetscCall(PetscFree(names[q]));
-      PetscCall(PffPressureSetDirichletWalls(ps, walls));
-    }
-  }
+  PetscCall(PetscOptionsStringArray("-pressure_dirichlet_walls",
+                                    "Walls with p = 0: none or a list of xmin,xmax,ymin,ymax,zmin,zmax",
+                                    "PffPressureSetDirichletWalls", names, &nnames, &set));
   PetscOptionsEnd();
+  /* parsed after the options block, so that a bad name leaves the options object closed */
+  if (set) {
+    PetscInt bad = -1;
+    for (PetscInt q = 0; q < nnames; q++) {
+      PetscBool none, found = PETSC_FALSE;
+      PetscCall(PetscStrcasecmp(names[q], "none", &none));
+      for (PetscInt w = 0; w < 6 && !none && !found; w++) {
+        PetscCall(PetscStrcasecmp(names[q], PffWallNames[w], &found));
+        if (found) walls[w] = PETSC_TRUE;
+      }
+      if (!none && !found && bad < 0) bad = q;
+    }
+    if (bad >= 0) {
+      char name[64];
+      PetscCall(PetscStrncpy(name, names[bad], sizeof(name)));
+      for (PetscInt q = 0; q < nnames; q++) PetscCall(PetscFree(names[q]));
+      SETERRQ(ps->comm, PETSC_ERR_ARG_UNKNOWN_TYPE,
+              "pressure: -pressure_dirichlet_walls: unknown wall '%s' (use none or xmin,xmax,ymin,ymax,zmin,zmax)",
+              name);
+    }
+    for (PetscInt q = 0; q < nnames; q++) PetscCall(PetscFree(names[q]));
+    PetscCall(PffPressureSetDirichletWalls(ps, walls));
+  }
   PetscCall(KSPSetFromOptions(ps->ksp));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -1,3 +1,6 @@
 # pressure: operator (symmetry, row sums, the 7-point limit), projection with every PC on uniform and
 # graded grids (closed and periodic), partition independence, hydrostatic balance. At 1, 2 and 4 ranks.
 pff_add_unit(test_pressure RANKS 1 2 4)
+# pressure with Dirichlet walls: symmetric, definite (no null space), exact for p = distance to the wall on
+# uniform and graded grids, CG on a nonzero-mean rhs, partition independence, bad input. At 1, 2 and 4 ranks.
+pff_add_unit(test_pressure_dirichlet RANKS 1 2 4)
