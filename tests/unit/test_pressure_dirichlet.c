@@ -233,7 +233,7 @@ static PetscErrorCode TestExact(void)
       PffPressure    ps;
       Mat            A, Acopy;
       Vec            pex, bex, ap, x;
-      PetscReal      berr, bscale, perr, emin, mean, dnorm;
+      PetscReal      berr, bscale, perr, emin, mean, dnorm, anorm;
       PetscInt       its, nglob;
       char           what[64];
 
@@ -252,15 +252,17 @@ static PetscErrorCode TestExact(void)
         const PetscReal hw = t.h0 * (g ? (w % 2 ? 4.0 : 1.0) : 1.0);
         PetscCall(CheckOperator(ps, what, 2.0 / hw));
       }
-      /* a second assembly gives the same A (no accumulation of the diagonal terms) */
+      /* a second assembly gives the same A (the diagonal terms are not accumulated) */
       PetscCall(PffPressureGetOperator(ps, &A));
+      PetscCall(MatNorm(A, NORM_INFINITY, &anorm));
       PetscCall(MatDuplicate(A, MAT_COPY_VALUES, &Acopy));
       PetscCall(PffPressureSetCoefficients(ps, c.betaCh, c.openCh));
       PetscCall(PffPressureGetOperator(ps, &A));
       PetscCall(MatAXPY(Acopy, -1.0, A, SAME_NONZERO_PATTERN));
       PetscCall(MatNorm(Acopy, NORM_INFINITY, &dnorm));
-      PetscCheck(dnorm == 0, PETSC_COMM_WORLD, PETSC_ERR_PLIB, "%s: a second SetCoefficients changed A by %g", what,
-                 (double)dnorm);
+      /* off-rank contributions of MatPtAP arrive in any order: equal up to rounding */
+      PetscCheck(dnorm <= 1e-14 * anorm, PETSC_COMM_WORLD, PETSC_ERR_PLIB,
+                 "%s: a second SetCoefficients changed A by %g", what, (double)dnorm);
       PetscCall(MatDestroy(&Acopy));
 
       PetscCall(MatCreateVecs(A, &pex, &bex));
