@@ -34,7 +34,7 @@
    with PetscTime inside the PressSolve log event; -log_view shows one stage per grid), relres =
    ||b - A p|| / ||b|| recomputed here from the module's A, b and p. A PC type that PETSc does not know
    prints "SKIP pc=<name> (not available)". The run fails (non-zero exit, after all PCs have run) when a
-   KSP did not converge or relres > 1.05 rtol. */
+   KSP did not converge or relres > 1.05 rtol, and when an option was not used (misspelt). */
 #include <pff.h>
 #include <omp.h>
 
@@ -375,6 +375,8 @@ int main(int argc, char **argv)
     for (PetscInt g = 0; g < 2; g++)
       if (o.grids[g]) PetscCall(BenchGrid(PETSC_COMM_WORLD, &o, o.n[i], g, stages[g], &nfail));
   for (PetscInt k = 0; k < o.npcs; k++) PetscCall(PetscFree(o.pcs[k]));
+  /* at the end, because PC-specific options (-pressure_pc_gamg_...) are read only when that PC runs */
+  PetscCall(PffOptionsCheckUnused(PETSC_COMM_WORLD));
   PetscCheck(nfail == 0, PETSC_COMM_WORLD, PETSC_ERR_NOT_CONVERGED,
              "bench: %" PetscInt_FMT " run(s) did not reach the relative residual %g (lines '# FAILED' above)", nfail,
              (double)o.rtol);
