@@ -186,8 +186,8 @@ static PetscErrorCode FillProblem(PffGrid grid, const BenchOptions *o, PetscInt 
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Whether PETSc (or a package registered before) knows PC type name: PCSetType on a scratch PC with
-   the error handler that only returns the code. */
+/* Whether PETSc (or a package registered before, e.g. by PffPressureCreate) knows PC type name:
+   PCSetType on a scratch PC with the error handler that only returns the code. */
 static PetscErrorCode PCTypeAvailable(MPI_Comm comm, const char *name, PetscBool *avail)
 {
   PC             pc;
@@ -252,9 +252,12 @@ static PetscErrorCode BenchGrid(MPI_Comm comm, const BenchOptions *o, PetscInt N
     char             ratio[32];
     PetscInt         nlocal;
 
+    /* PffPressureCreate first: the pressure module may register its own PC types there */
+    PetscCall(PffPressureCreate(grid, &ps));
     PetscCall(PCTypeAvailable(comm, o->pcs[k], &avail));
     if (!avail) {
       PetscCall(PetscPrintf(comm, "SKIP pc=%s (not available)\n", o->pcs[k]));
+      PetscCall(PffPressureDestroy(&ps));
       continue;
     }
     /* the problem again: the projection overwrote u, and every PC starts from p = 0 */
@@ -268,7 +271,6 @@ static PetscErrorCode BenchGrid(MPI_Comm comm, const BenchOptions *o, PetscInt N
       for (PetscInt q = 0; q < info.n * info.n * info.n; q++) pd[q] = 0;
     }
     PetscCall(PetscOptionsSetValue(NULL, "-pressure_pc_type", o->pcs[k]));
-    PetscCall(PffPressureCreate(grid, &ps));
     PetscCall(PffPressureSetDirichletWalls(ps, walls));
     PetscCall(PffPressureGetKSP(ps, &ksp));
     PetscCall(KSPSetTolerances(ksp, o->rtol, 0.0, PETSC_DEFAULT, o->maxit));
