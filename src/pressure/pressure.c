@@ -109,13 +109,6 @@ PetscErrorCode PffPressureGetDirichletWalls(PffPressure ps, PetscBool walls[6])
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscBool PffPressureHasDirichlet_Private(PffPressure ps)
-{
-  for (PetscInt w = 0; w < 6; w++)
-    if (ps->dirichlet[w]) return PETSC_TRUE;
-  return PETSC_FALSE;
-}
-
 PetscErrorCode PffPressureSetUp(PffPressure ps)
 {
   PetscScalar *vol, *m;

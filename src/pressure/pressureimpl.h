@@ -54,6 +54,14 @@ struct _n_PffPressure {
   PetscBool               subPCDefaultApplied;
 };
 
+/* Whether any wall is Dirichlet (then A is definite and has no null space). */
+static inline PetscBool PffPressureHasDirichlet_Private(PffPressure ps)
+{
+  for (PetscInt w = 0; w < 6; w++)
+    if (ps->dirichlet[w]) return PETSC_TRUE;
+  return PETSC_FALSE;
+}
+
 /* Columns and values of face row r of G: at most 5 (the cell, and 1 or 4 lower cells). */
 static inline PetscInt PffPressureGradientRow(PffPressure ps, PetscInt r, PetscInt cols[5], PetscScalar vals[5])
 {
@@ -78,7 +86,6 @@ static inline PetscInt PffPressureGradientRow(PffPressure ps, PetscInt r, PetscI
 PETSC_INTERN PetscErrorCode PffPressureBuildFaces_Private(PffPressure);
 PETSC_INTERN PetscErrorCode PffPressureBuildGradient_Private(PffPressure);
 PETSC_INTERN PetscErrorCode PffPressureAssemble_Private(PffPressure, PetscInt, PetscInt);
-PETSC_INTERN PetscBool      PffPressureHasDirichlet_Private(PffPressure);
 PETSC_INTERN PetscErrorCode PffPressureChannelToVec_Private(PffPressure, PetscInt, PffChannelKind, Vec);
 PETSC_INTERN PetscErrorCode PffPressureVecToChannel_Private(PffPressure, Vec, PffChannelKind, PetscInt);
 PETSC_INTERN PetscErrorCode PffPressureMaxDivergenceVec_Private(PffPressure, Vec, PetscReal *);
