@@ -13,7 +13,8 @@
      A = G^T diag(M_f beta_f open_f) G
    is symmetric positive semi-definite (definite when some boundary is open or the null space is
    removed) and equals the textbook 7-point stencil on a uniform grid. Faces with open_f = 0 (domain
-   walls, solids) carry no flux; periodic axes wrap.
+   walls, solids) carry no flux; periodic axes wrap. A Dirichlet wall (p = 0 at the wall face) adds
+   2 h beta to the diagonal of each cell beside it, which makes A definite.
 
    Numbering (the Vecs and Mats below): cell rows are PffGridGetCellNumbering's global cell numbers;
    face rows are 3 * (global cell) + d for the lower d-face of the cell, so 3 face rows per owned cell
@@ -47,12 +48,28 @@ typedef struct {
    "pressure_": -pressure_ksp_type (default fcg), -pressure_ksp_rtol (default 1e-4, on the true residual:
    the norm type defaults to unpreconditioned), -pressure_pc_type pffmg|gamg|hypre|bjacobi|jacobi (default pffmg;
    bjacobi uses ICC(0) on its blocks unless -pressure_sub_pc_type is given), -pressure_assembly
-   ptap|direct (how A is assembled, default ptap), and every other PETSc KSP/PC option under that prefix. */
+   ptap|direct (how A is assembled, default ptap), -pressure_dirichlet_walls none|<list of xmin,xmax,ymin,ymax,
+   zmin,zmax> (PffPressureSetDirichletWalls; default none), and every other PETSc KSP/PC option under that prefix. */
 PETSC_EXTERN PetscErrorCode PffPressureCreate(PffGrid grid, PffPressure *ps);
 PETSC_EXTERN PetscErrorCode PffPressureSetFromOptions(PffPressure ps);
 /* Builds the numbering, the face list and the gradient once per grid topology. Collective. */
 PETSC_EXTERN PetscErrorCode PffPressureSetUp(PffPressure ps);
 PETSC_EXTERN PetscErrorCode PffPressureDestroy(PffPressure *ps);
+
+/* Dirichlet walls: walls[w] = PETSC_TRUE sets p = 0 on domain wall w, in the order -x, +x, -y, +y,
+   -z, +z (option -pressure_dirichlet_walls). The value sits at the wall face, half a cell outside the
+   centre of the boundary cell, so each boundary cell of size h gets the one-sided face weight
+   c_D = A_f beta / d_f = h^2 beta / (h / 2) = 2 h beta on its diagonal. beta is the face channel value of
+   the cell's own lower face along the wall's axis: the wall face itself at a -wall, the opposite face of
+   the same cell at a +wall (which has no face storage). With any Dirichlet wall A is symmetric positive
+   definite and has no null space (MatGetNullSpace(A) gives NULL); the rhs is not projected. The wall face
+   stays closed in the face list: its u* does not enter the rhs and its velocity is not updated (a +wall
+   face has no storage, a -wall face keeps u = 0), so the outflow 2 dt beta p / h through it is implied by
+   p but not stored, and D u of the stored u is not zero in the boundary cells. Takes effect at the next
+   SetCoefficients. Errors on a periodic axis. Logically collective (same values on every rank). */
+PETSC_EXTERN PetscErrorCode PffPressureSetDirichletWalls(PffPressure ps, const PetscBool walls[6]);
+/* The Dirichlet walls in the order of PffPressureSetDirichletWalls. Not collective. */
+PETSC_EXTERN PetscErrorCode PffPressureGetDirichletWalls(PffPressure ps, PetscBool walls[6]);
 
 /* Face coefficients from face channels: chBeta = 1/rho (Eq. 9), chOpen = 1 for a fluid face and 0
    for a face in or on a solid (domain walls and faces to inactive blocks are closed regardless;
@@ -64,11 +81,11 @@ PETSC_EXTERN PetscErrorCode PffPressureSetCoefficients(PffPressure ps, PetscInt 
    the open faces of face channel chU (closed faces are set to zero), p into cell channel chP.
    chCdiv (cell channel, or -1) holds the volume-correction term c_div in 1/s. Where no boundary is
    open the constant null space is removed. The previous p is the initial guess. Collective. */
-/* No boundary condition opens the domain in this version (walls, solids and periodic axes only), so
-   the constants always span the null space: attached to A, removed from the rhs (a mean of c_div is
-   dropped). p is defined up to a constant. Non-convergence (e.g. KSP_DIVERGED_ITS) is reported in
-   stats->reason, not raised; KSP_DIVERGED_NANORINF and KSP_DIVERGED_PC_FAILED raise an error naming
-   the KSP and PC. The caller exchanges the halos of chU and chP afterwards. */
+/* Without Dirichlet walls (walls, solids and periodic axes only) the constants span the null space:
+   attached to A, removed from the rhs (a mean of c_div is dropped), and p is defined up to a constant.
+   With a Dirichlet wall A is definite, no null space is attached and the rhs is solved as it is. Non-convergence (e.g.
+   KSP_DIVERGED_ITS) is reported in stats->reason, not raised; KSP_DIVERGED_NANORINF and KSP_DIVERGED_PC_FAILED raise an
+   error naming the KSP and PC. The caller exchanges the halos of chU and chP afterwards. */
 PETSC_EXTERN PetscErrorCode PffPressureProject(PffPressure ps, PetscInt chU, PetscReal dt, PetscInt chCdiv,
                                                PetscInt chP, PffPressureStats *stats);
 
@@ -80,10 +97,15 @@ PETSC_EXTERN PetscErrorCode PffPressureMaxDivergence(PffPressure ps, PetscInt ch
    coefficients of the owned faces as a Vec in face numbering (3 per cell). The coefficient is the
    stencil weight c_f = M_f beta_f open_f / d_f^2 = A_f beta_f open_f / d_f (h beta on a uniform grid),
    so that A = sum_f c_f (e_upper - sum w e_lower)(...)^T; the 1/d_f^2 makes it agree with A = G^T
-   diag(M beta open) G, where G carries 1/d_f. (An earlier version of this comment said "/ d_f".) */
+   diag(M beta open) G, where G carries 1/d_f. (An earlier version of this comment said "/ d_f".)
+   A and diag include the Dirichlet wall terms; the face coefficients do not (those faces have no row):
+   GetDirichletDiagonal returns them as a cell Vec (sum of 2 h beta per cell, 0 away from Dirichlet
+   walls), so A = sum_f c_f (...)(...)^T + diag(dirichlet). MatGetNullSpace(A) tells whether A is
+   singular (constants, or the connected cells when solids isolate cells) or definite (NULL). */
 PETSC_EXTERN PetscErrorCode PffPressureGetOperator(PffPressure ps, Mat *A);
 PETSC_EXTERN PetscErrorCode PffPressureGetDiagonal(PffPressure ps, Vec *diag);
 PETSC_EXTERN PetscErrorCode PffPressureGetFaceCoefficients(PffPressure ps, Vec *coef);
+PETSC_EXTERN PetscErrorCode PffPressureGetDirichletDiagonal(PffPressure ps, Vec *dirdiag);
 PETSC_EXTERN PetscErrorCode PffPressureGetKSP(PffPressure ps, KSP *ksp);
 
 /* The adaptive multigrid preconditioner of PF-FLIP Sec. 6, -pressure_pc_type pffmg (a PCSHELL inside

@@ -7,7 +7,13 @@
    uniform grid it is the 7-point stencil with h beta_f per face. Two assemblies of the same matrix:
    MatPtAP with the diagonal face matrix (numeric phase only after the first call), or direct
    MatSetValues of the 2x2 / 5x5 face blocks into the fixed pattern (rows of other ranks through
-   the stash). -pressure_assembly picks one; docs/pressure.md has the timings. */
+   the stash). -pressure_assembly picks one; docs/pressure.md has the timings.
+
+   Dirichlet walls (p = 0 at the wall face, half a cell outside the boundary cell's centre) have no
+   face row: each adds its one-sided face weight c_D = A_f beta / d_f = h^2 beta / (h / 2) = 2 h beta
+   to the diagonal of the boundary cell, after either assembly. beta is the value of the cell's own
+   lower d-face in the face channel: at a -wall that is the wall face itself, at a +wall (whose face
+   has no storage) the opposite face of the same cell. A then stays symmetric and becomes definite. */
 #include "pressureimpl.h"
 
 /* Copies between a channel's owned values and a Vec in cell (or face, 3 per cell) numbering. */
@@ -91,16 +97,55 @@ static PetscErrorCode AssembleDirect(PffPressure ps)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Cells with every face closed (inside a solid) have an empty row: they get a unit diagonal, so
-   every preconditioner sees a definite block there, and the null space becomes the constant over the
-   connected cells only (the indicator of the non-empty rows). */
-static PetscErrorCode PffPressureIsolatedCells(PffPressure ps)
+/* dirdiag = sum over the Dirichlet walls that a cell touches of 2 h beta (see the top of the file).
+   Returns in *bad a local face row with a bad beta, or -1. */
+static PetscErrorCode PffPressureDirichletTerms(PffPressure ps, const PetscScalar *beta, PetscInt *bad)
+{
+  PetscInt     nb[3];
+  PetscScalar *dd;
+
+  PetscFunctionBeginUser;
+  *bad = -1;
+  PetscCall(VecSet(ps->dirdiag, 0.0));
+  if (!PffPressureHasDirichlet_Private(ps)) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PffGridGetRaster(ps->grid, nb, NULL, NULL));
+  PetscCall(VecGetArray(ps->dirdiag, &dd));
+  for (PetscInt lb = 0; lb < ps->nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(ps->grid, lb, &info));
+    const PetscInt n = info.n, c0 = ps->blockStart[lb];
+    for (PetscInt w = 0; w < 6; w++) {
+      const PetscInt d = w / 2, upper = w % 2;
+      if (!ps->dirichlet[w] || info.ijk[d] != (upper ? nb[d] - 1 : 0)) continue;
+      /* the layer c[d] = 0 or n - 1 of the block, the other two indices free */
+      for (PetscInt b = 0; b < n; b++)
+        for (PetscInt a = 0; a < n; a++) {
+          PetscInt       c[3] = {0, 0, 0}, e = 0;
+          const PetscInt ab[2] = {a, b};
+          for (PetscInt q = 0; q < 3; q++) c[q] = q == d ? (upper ? n - 1 : 0) : ab[e++];
+          const PetscInt  cell = c0 + c[0] + n * (c[1] + n * c[2]), r = 3 * cell + d;
+          const PetscReal bf = PetscRealPart(beta[r]);
+          if (!(bf > 0 && PetscIsNormalReal(bf))) *bad = r;
+          dd[cell] += 2 * info.h * bf;
+        }
+    }
+  }
+  PetscCall(VecRestoreArray(ps->dirdiag, &dd));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Cells with every face closed (inside a solid) and no Dirichlet term have an empty row: they get a
+   unit diagonal, so every preconditioner sees a definite block there. The null space is attached
+   afresh on every assembly: none when a Dirichlet wall exists (A is definite on the cells connected
+   to it), otherwise the constants, or the indicator of the non-empty rows when isolated cells exist. */
+static PetscErrorCode PffPressureNullSpace(PffPressure ps)
 {
   PetscScalar *d, *z;
   PetscInt     n, nisolated = 0;
   Vec          ind;
 
   PetscFunctionBeginUser;
+  PetscCall(MatNullSpaceDestroy(&ps->nullsp));
   PetscCall(VecGetLocalSize(ps->diag, &n));
   PetscCall(VecDuplicate(ps->diag, &ind));
   PetscCall(VecGetArray(ps->diag, &d));
@@ -114,20 +159,24 @@ static PetscErrorCode PffPressureIsolatedCells(PffPressure ps)
   PetscCall(VecRestoreArray(ps->diag, &d));
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nisolated, 1, MPIU_INT, MPI_SUM, ps->comm));
   if (nisolated > 0) {
-    Vec       one;
-    PetscReal nrm;
+    Vec one;
     PetscCall(VecDuplicate(ind, &one));
     PetscCall(VecSet(one, 1.0));
     PetscCall(VecAXPY(one, -1.0, ind)); /* 1 on the empty rows */
     PetscCall(MatDiagonalSet(ps->A, one, ADD_VALUES));
     PetscCall(VecAXPY(ps->diag, 1.0, one));
     PetscCall(VecDestroy(&one));
+  }
+  if (PffPressureHasDirichlet_Private(ps)) {
+    /* nothing to attach */
+  } else if (nisolated > 0) {
+    PetscReal nrm;
     PetscCall(VecNorm(ind, NORM_2, &nrm));
     PetscCall(VecScale(ind, 1.0 / nrm));
-    PetscCall(MatNullSpaceDestroy(&ps->nullsp));
     PetscCall(MatNullSpaceCreate(ps->comm, PETSC_FALSE, 1, &ind, &ps->nullsp));
-    PetscCall(MatSetNullSpace(ps->A, ps->nullsp));
-  }
+  } else
+    PetscCall(MatNullSpaceCreate(ps->comm, PETSC_TRUE, 0, NULL, &ps->nullsp));
+  PetscCall(MatSetNullSpace(ps->A, ps->nullsp));
   PetscCall(VecDestroy(&ind));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -160,22 +209,33 @@ PetscErrorCode PffPressureAssemble_Private(PffPressure ps, PetscInt chBeta, Pets
     w[r]    = m[r] * beta[r] * open[r];
     coef[r] = open[r] != 0 ? w[r] / (ps->dface[r] * ps->dface[r]) : 0.0;
   }
+  if (bad < 0) {
+    PetscInt dbad;
+    PetscCall(PffPressureDirichletTerms(ps, beta, &dbad));
+    if (dbad >= 0) {
+      bad     = dbad;
+      badBeta = PetscRealPart(beta[dbad]);
+    }
+  }
   PetscCall(VecRestoreArrayRead(ps->mface, &m));
   PetscCall(VecRestoreArrayWrite(ps->coef, &coef));
   PetscCall(VecRestoreArrayWrite(ps->w, &w));
   PetscCall(VecRestoreArray(ps->open, &open));
   PetscCall(VecRestoreArray(ps->beta, &beta));
   PetscCall(MPIU_Allreduce(&bad, &gbad, 1, MPIU_INT, MPI_MAX, ps->comm));
-  PetscCheck(gbad < 0, ps->comm, PETSC_ERR_ARG_OUTOFRANGE,
-             "pressure: beta = 1/rho must be positive and finite on open faces; a rank found %g (%s)", (double)badBeta,
-             bad >= 0 ? "this rank" : "another rank");
+  PetscCheck(
+      gbad < 0, ps->comm, PETSC_ERR_ARG_OUTOFRANGE,
+      "pressure: beta = 1/rho must be positive and finite on open faces and beside Dirichlet walls; a rank found "
+      "%g (%s)",
+      (double)badBeta, bad >= 0 ? "this rank" : "another rank");
 
   if (ps->assembly == PFF_PRESSURE_ASSEMBLY_PTAP) {
     PetscCall(MatDiagonalSet(ps->W, ps->w, INSERT_VALUES));
     PetscCall(MatPtAP(ps->W, ps->G, MAT_REUSE_MATRIX, 2.0, &ps->A));
   } else
     PetscCall(AssembleDirect(ps));
+  if (PffPressureHasDirichlet_Private(ps)) PetscCall(MatDiagonalSet(ps->A, ps->dirdiag, ADD_VALUES));
   PetscCall(MatGetDiagonal(ps->A, ps->diag));
-  PetscCall(PffPressureIsolatedCells(ps));
+  PetscCall(PffPressureNullSpace(ps));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -2,9 +2,10 @@
 
    Stage "Pressure" of the time step: SetUp once per grid topology (face list, gradient G, the
    operator pattern, Vecs and the Krylov solver), SetCoefficients once per step (beta = 1/rho and the
-   open mask from face channels, A = G^T diag(M beta open) G), Project (rhs from V D u*, KSP solve,
-   u <- u* - dt beta G p). The scenes are closed boxes or periodic, so A is singular with the
-   constants as null space: it is attached to A and removed from the rhs. */
+   open mask from face channels, A = G^T diag(M beta open) G plus the Dirichlet wall terms), Project
+   (rhs from V D u*, KSP solve, u <- u* - dt beta G p). Closed boxes and periodic axes leave A singular
+   with the constants as null space: it is attached to A and removed from the rhs. A Dirichlet wall
+   (p = 0, PffPressureSetDirichletWalls) makes A definite, and then no null space is attached. */
 #include "pressureimpl.h"
 
 const char *const PffPressureAssemblyTypes[] = {"ptap", "direct", "PffPressureAssemblyType", "PFF_PRESSURE_ASSEMBLY_",
@@ -14,6 +15,9 @@ const char *const PffPressureAssemblyTypes[] = {"ptap", "direct", "PffPressureAs
 #define PFF_PRESSURE_PC_TYPE_DEFAULT "pffmg"
 #define PFF_PRESSURE_RTOL_DEFAULT 1e-4
 #define PFF_PRESSURE_ASSEMBLY_DEFAULT PFF_PRESSURE_ASSEMBLY_PTAP
+
+/* Names of the six domain walls in the order of PffPressureSetDirichletWalls. */
+static const char *const PffWallNames[6] = {"xmin", "xmax", "ymin", "ymax", "zmin", "zmax"};
 
 PetscErrorCode PffPressureCreate(PffGrid grid, PffPressure *ps)
 {
@@ -44,11 +48,41 @@ PetscErrorCode PffPressureCreate(PffGrid grid, PffPressure *ps)
 
 PetscErrorCode PffPressureSetFromOptions(PffPressure ps)
 {
+  char     *names[7] = {NULL};
+  PetscInt  nnames   = 7;
+  PetscBool set, walls[6] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
+
   PetscFunctionBeginUser;
   PetscOptionsBegin(ps->comm, NULL, "Pressure projection", "PffPressure");
   PetscCall(PetscOptionsEnum("-pressure_assembly", "Assembly of A = G^T W G", "PffPressureSetCoefficients",
                              PffPressureAssemblyTypes, (PetscEnum)ps->assembly, (PetscEnum *)&ps->assembly, NULL));
+  PetscCall(PetscOptionsStringArray("-pressure_dirichlet_walls",
+                                    "Walls with p = 0: none or a list of xmin,xmax,ymin,ymax,zmin,zmax",
+                                    "PffPressureSetDirichletWalls", names, &nnames, &set));
   PetscOptionsEnd();
+  /* parsed after the options block, so that a bad name leaves the options object closed */
+  if (set) {
+    PetscInt bad = -1;
+    for (PetscInt q = 0; q < nnames; q++) {
+      PetscBool none, found = PETSC_FALSE;
+      PetscCall(PetscStrcasecmp(names[q], "none", &none));
+      for (PetscInt w = 0; w < 6 && !none && !found; w++) {
+        PetscCall(PetscStrcasecmp(names[q], PffWallNames[w], &found));
+        if (found) walls[w] = PETSC_TRUE;
+      }
+      if (!none && !found && bad < 0) bad = q;
+    }
+    if (bad >= 0) {
+      char name[64];
+      PetscCall(PetscStrncpy(name, names[bad], sizeof(name)));
+      for (PetscInt q = 0; q < nnames; q++) PetscCall(PetscFree(names[q]));
+      SETERRQ(ps->comm, PETSC_ERR_ARG_UNKNOWN_TYPE,
+              "pressure: -pressure_dirichlet_walls: unknown wall '%s' (use none or xmin,xmax,ymin,ymax,zmin,zmax)",
+              name);
+    }
+    for (PetscInt q = 0; q < nnames; q++) PetscCall(PetscFree(names[q]));
+    PetscCall(PffPressureSetDirichletWalls(ps, walls));
+  }
   PetscCall(KSPSetFromOptions(ps->ksp));
   {
     PC        pc;
@@ -57,6 +91,29 @@ PetscErrorCode PffPressureSetFromOptions(PffPressure ps)
     PetscCall(PffPressureMGIsActive_Private(pc, &mg));
     if (mg) PetscCall(PffPressureMGSetFromOptions_Private(pc, ps->grid));
   }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureSetDirichletWalls(PffPressure ps, const PetscBool walls[6])
+{
+  PetscBool periodic[3];
+
+  PetscFunctionBeginUser;
+  PetscCheck(ps != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL object");
+  PetscCheck(walls != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL walls argument");
+  PetscCall(PffGridGetSizes(ps->grid, NULL, NULL, NULL, NULL, periodic));
+  for (PetscInt w = 0; w < 6; w++)
+    PetscCheck(!walls[w] || !periodic[w / 2], ps->comm, PETSC_ERR_ARG_INCOMP,
+               "pressure: Dirichlet wall %s on the periodic axis %c", PffWallNames[w], (char)('x' + w / 2));
+  for (PetscInt w = 0; w < 6; w++) ps->dirichlet[w] = walls[w] ? PETSC_TRUE : PETSC_FALSE;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureGetDirichletWalls(PffPressure ps, PetscBool walls[6])
+{
+  PetscFunctionBeginUser;
+  PetscCheck(ps != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL object");
+  for (PetscInt w = 0; w < 6; w++) walls[w] = ps->dirichlet[w];
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -74,6 +131,7 @@ PetscErrorCode PffPressureSetUp(PffPressure ps)
   PetscCall(VecDuplicate(ps->p, &ps->vcell));
   PetscCall(VecDuplicate(ps->p, &ps->vol));
   PetscCall(VecDuplicate(ps->p, &ps->diag));
+  PetscCall(VecDuplicate(ps->p, &ps->dirdiag));
   PetscCall(VecDuplicate(ps->uf, &ps->wf));
   PetscCall(VecDuplicate(ps->uf, &ps->mface));
   PetscCall(VecDuplicate(ps->uf, &ps->beta));
@@ -96,8 +154,6 @@ PetscErrorCode PffPressureSetUp(PffPressure ps)
   PetscCall(VecRestoreArrayWrite(ps->mface, &m));
   PetscCall(VecRestoreArrayWrite(ps->vol, &vol));
 
-  PetscCall(MatNullSpaceCreate(ps->comm, PETSC_TRUE, 0, NULL, &ps->nullsp));
-  PetscCall(MatSetNullSpace(ps->A, ps->nullsp));
   PetscCall(MatSetOption(ps->A, MAT_NEW_NONZERO_LOCATION_ERR, PETSC_TRUE));
   PetscCall(MatSetOption(ps->A, MAT_SYMMETRIC, PETSC_TRUE));
   PetscCall(MatSetOption(ps->A, MAT_SYMMETRY_ETERNAL, PETSC_TRUE));
@@ -128,6 +184,7 @@ PetscErrorCode PffPressureDestroy(PffPressure *ps)
   PetscCall(VecDestroy(&p->vcell));
   PetscCall(VecDestroy(&p->vol));
   PetscCall(VecDestroy(&p->diag));
+  PetscCall(VecDestroy(&p->dirdiag));
   PetscCall(VecDestroy(&p->uf));
   PetscCall(VecDestroy(&p->wf));
   PetscCall(VecDestroy(&p->mface));
@@ -234,7 +291,7 @@ PetscErrorCode PffPressureProject(PffPressure ps, PetscInt chU, PetscReal dt, Pe
   } else
     PetscCall(VecCopy(ps->vcell, ps->b));
   PetscCall(VecScale(ps->b, 1.0 / dt));
-  PetscCall(MatNullSpaceRemove(ps->nullsp, ps->b));
+  if (ps->nullsp) PetscCall(MatNullSpaceRemove(ps->nullsp, ps->b));
 
   PetscCall(PffPressureChannelToVec_Private(ps, chP, PFF_CHANNEL_CELL, ps->p));
   PetscCall(PetscTime(&t0));
@@ -309,6 +366,14 @@ PetscErrorCode PffPressureGetDiagonal(PffPressure ps, Vec *diag)
   PetscFunctionBeginUser;
   PetscCall(PffPressureCheckSetUp(ps, PETSC_TRUE));
   *diag = ps->diag;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureGetDirichletDiagonal(PffPressure ps, Vec *dirdiag)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffPressureCheckSetUp(ps, PETSC_TRUE));
+  *dirdiag = ps->dirdiag;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -41,8 +41,11 @@ struct _n_PffPressure {
   Mat          G;      /* gradient: 3 ncells x ncells rows, (G p)_f = (p_upper - sum w_c p_c) / d_f */
   Mat          W;      /* diag(M_f beta_f open_f) on the face rows, for MatPtAP */
   Mat          A;      /* G^T W G */
-  MatNullSpace nullsp; /* constants */
+  MatNullSpace nullsp; /* constants (or the connected cells), NULL when a Dirichlet wall makes A definite */
   KSP          ksp;
+
+  PetscBool dirichlet[6]; /* p = 0 on wall -x, +x, -y, +y, -z, +z (at the wall face, half a cell out) */
+  Vec       dirdiag;      /* cell Vec: the Dirichlet terms sum 2 h beta added to diag(A) */
 
   Vec p, b, vcell, vol, diag;             /* cell Vecs: pressure, rhs, work, cell volumes, diag(A) */
   Vec uf, wf, mface, beta, open, coef, w; /* face Vecs: velocity, work, M_f, beta_f, open_f, coefficient, W */
@@ -50,6 +53,14 @@ struct _n_PffPressure {
   PffPressureAssemblyType assembly;
   PetscBool               subPCDefaultApplied;
 };
+
+/* Whether any wall is Dirichlet (then A is definite and has no null space). */
+static inline PetscBool PffPressureHasDirichlet_Private(PffPressure ps)
+{
+  for (PetscInt w = 0; w < 6; w++)
+    if (ps->dirichlet[w]) return PETSC_TRUE;
+  return PETSC_FALSE;
+}
 
 /* Columns and values of face row r of G: at most 5 (the cell, and 1 or 4 lower cells). */
 static inline PetscInt PffPressureGradientRow(PffPressure ps, PetscInt r, PetscInt cols[5], PetscScalar vals[5])
