@@ -118,7 +118,7 @@ PetscErrorCode PffMGSmoothFixed_Private(PffMG *mg, PetscInt L, Vec b, Vec x, Pet
       PetscCall(VecGetArray(x, &xa));
       PetscCall(VecGetArrayRead(b, &ba));
       if (lv->ghost) PetscCall(VecGetArrayRead(lv->ghost, &ga));
-#pragma omp parallel for reduction(+ : cells) schedule(dynamic, 1)
+#pragma omp parallel for reduction(+ : cells) schedule(dynamic, 1) if (q1 - q0 >= 8)
       for (PetscInt q = q0; q < q1; q++) {
         const PetscInt lb = lv->colourList[q];
         (void)RelaxBlock(lv, lb, ba, xa, ga, mg->opt.omega, NULL);
