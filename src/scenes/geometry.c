@@ -7,9 +7,9 @@
      L = (union of the liquid regions) \ (union of the gas regions) \ (solids),
 
    so gas regions carve bubbles or cavities out of the liquid; everything outside L and the solids
-   is gas. The solids enter the solver through their
-   signed distance phi_s (negative inside), used to push particles out along grad phi_s after
-   advection and to mark solid faces for the pressure solve:
+   is gas. The solids enter the solver through their signed distance phi_s (negative inside), used
+   to push particles out along grad phi_s after advection and to mark solid faces for the pressure
+   solve:
 
      box:    q = |x - c| - s (c centre, s half sizes, per axis)
              phi = |max(q, 0)| + min(max_a q_a, 0)            (exact, inside and outside)
