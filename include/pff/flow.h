@@ -62,6 +62,9 @@ PETSC_EXTERN PetscErrorCode PffFlowSetTime(PffFlow flow, PetscReal t, PetscInt s
 PETSC_EXTERN PetscErrorCode PffFlowGetParticles(PffFlow flow, PffParticles *p);
 PETSC_EXTERN PetscErrorCode PffFlowGetGrid(PffFlow flow, PffGrid *grid);
 PETSC_EXTERN PetscErrorCode PffFlowGetDensities(PffFlow flow, PetscReal rho[PFF_PARTICLE_NTYPES]);
+/* Whether escaped gas particles are deleted (-flow_delete_bubbles); without deletion the
+   bubblesDeleted of PffFlowStepStats counts the candidates only. Not collective. */
+PETSC_EXTERN PetscErrorCode PffFlowGetDeleteBubbles(PffFlow flow, PetscBool *del);
 /* Channel indices: phi (cell), p (cell), u (face), vort (cell vorticity magnitude). */
 PETSC_EXTERN PetscErrorCode PffFlowGetChannels(PffFlow flow, PetscInt *phi, PetscInt *p, PetscInt *u, PetscInt *vort);
 /* Max |u| over owned faces and the liquid volume sum(phi_cell V_cell). Collective. */

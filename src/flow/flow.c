@@ -202,6 +202,13 @@ PetscErrorCode PffFlowGetDensities(PffFlow f, PetscReal rho[PFF_PARTICLE_NTYPES]
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+PetscErrorCode PffFlowGetDeleteBubbles(PffFlow f, PetscBool *del)
+{
+  PetscFunctionBeginUser;
+  *del = f->deleteBubbles;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffFlowGetChannels(PffFlow f, PetscInt *phi, PetscInt *p, PetscInt *u, PetscInt *vort)
 {
   PetscFunctionBeginUser;

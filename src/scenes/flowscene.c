@@ -59,6 +59,10 @@ static PetscErrorCode PffFlowSceneSetFromOptions(PffScene s)
                             fs->checkpointEvery, &fs->checkpointEvery, NULL));
   PetscCall(PetscOptionsString("-sim_restart", "Continue from this checkpoint (any rank count)", NULL, fs->restart,
                                fs->restart, sizeof(fs->restart), NULL));
+  PetscCall(PetscOptionsBool("-sim_check_particles",
+                             "Fail at the end unless the liquid particle count is unchanged and the gas count changed "
+                             "only by deleted bubbles (for tests)",
+                             NULL, fs->checkParticles, &fs->checkParticles, NULL));
   PetscOptionsEnd();
   if (fs->restart[0]) {
     PetscMPIInt rank;
@@ -104,6 +108,46 @@ static PetscErrorCode PffFlowSceneWriteFrame(PffFlowScene *fs, PetscInt frame)
     PetscCall(PffIOWriteFrameParticles(fs->grid, p, path, t, step, fs->scene->name));
   } else
     PetscCall(PffIOWriteFrame(fs->grid, path, t, step, fs->scene->name));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Global particle counts per type. Collective. */
+static PetscErrorCode PffFlowSceneCount(PffFlowScene *fs, PetscInt64 count[PFF_PARTICLE_NTYPES])
+{
+  PffParticles p;
+  PetscReal    rho[PFF_PARTICLE_NTYPES], mass[PFF_PARTICLE_NTYPES];
+
+  PetscFunctionBeginUser;
+  PetscCall(PffFlowGetParticles(fs->flow, &p));
+  PetscCall(PffFlowGetDensities(fs->flow, rho));
+  PetscCall(PffParticlesGetTotals(p, rho, count, mass));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The conservation line of every fluid run: particles are created only by the seed and removed only
+   by bubble deletion (Sec. 3.4), so the liquid count is constant and the gas count drops by the
+   deleted bubbles. Counts are exact; the liquid volume sum(phi V) is printed to 4 digits (its drift
+   comes from the phase field, not from lost particles). With -sim_check_particles a broken count
+   fails the run. Collective. */
+static PetscErrorCode PffFlowSceneConservation(PffFlowScene *fs)
+{
+  const PetscInt64 *c0 = fs->countStart, *c1 = fs->countEnd;
+  const PetscReal   drift = fs->volumeStart > 0 ? (fs->liquidVolume - fs->volumeStart) / fs->volumeStart : 0;
+  const PetscBool   ok    = (PetscBool)(c1[PFF_PARTICLE_LIQUID] == c0[PFF_PARTICLE_LIQUID] &&
+                                   c1[PFF_PARTICLE_AIR] == c0[PFF_PARTICLE_AIR] - fs->bubblesDeletedRun);
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscPrintf(fs->scene->comm,
+                        "conservation: liquid particles %" PetscInt64_FMT " (start %" PetscInt64_FMT
+                        ")  gas particles %" PetscInt64_FMT " (start %" PetscInt64_FMT ", %" PetscInt64_FMT
+                        " deleted as bubbles)  liquid volume drift %.2e  %s\n",
+                        c1[PFF_PARTICLE_LIQUID], c0[PFF_PARTICLE_LIQUID], c1[PFF_PARTICLE_AIR], c0[PFF_PARTICLE_AIR],
+                        fs->bubblesDeletedRun, (double)drift, ok ? "ok" : "BROKEN"));
+  PetscCheck(!fs->checkParticles || ok, fs->scene->comm, PETSC_ERR_PLIB,
+             "-sim_check_particles: particles were lost or created: liquid %" PetscInt64_FMT " -> %" PetscInt64_FMT
+             ", gas %" PetscInt64_FMT " -> %" PetscInt64_FMT " with %" PetscInt64_FMT " deleted as bubbles",
+             c0[PFF_PARTICLE_LIQUID], c1[PFF_PARTICLE_LIQUID], c0[PFF_PARTICLE_AIR], c1[PFF_PARTICLE_AIR],
+             fs->bubblesDeletedRun);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -156,6 +200,7 @@ static PetscErrorCode PffFlowSceneDiagRow(PffFlowScene *fs, PetscInt step, Petsc
   PetscCall(PffFlowGetDiagnostics(fs->flow, &umaxGrid, &vol));
   fs->umaxGrid     = umaxGrid;
   fs->liquidVolume = vol;
+  if (fs->volumeStart == 0) fs->volumeStart = vol;
   if (fs->ops.diagnose) PetscCall(fs->ops.diagnose(fs, t, extra, sizeof(extra)));
   if (fs->diag) {
     fprintf(fs->diag,
@@ -178,11 +223,14 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
   PetscReal        t, tEnd = fs->tEnd * fs->timeUnit, every = fs->outputInterval * fs->timeUnit, nextOut;
   PetscInt         step, frame = 0;
   PetscLogDouble   total[PFF_FLOW_NSTAGES] = {0}, stepTime = 0, tstart, tnow;
+  PetscBool        deleteBubbles;
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
   PetscCall(PffGridView(fs->grid, NULL));
   PetscCall(PffFlowSceneStart(fs));
+  PetscCall(PffFlowSceneCount(fs, fs->countStart));
+  PetscCall(PffFlowGetDeleteBubbles(fs->flow, &deleteBubbles));
   if (rank == 0) {
     char path[PETSC_MAX_PATH_LEN];
     PetscCall(PetscSNPrintf(path, sizeof(path), "%s/%s_diag.csv", s->outdir, s->name));
@@ -218,6 +266,7 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
     PetscCall(PffFlowGetTime(fs->flow, &t, &step));
     for (PetscInt k = 0; k < PFF_FLOW_NSTAGES; k++) total[k] += st.stageTime[k];
     stepTime += t1 - t0;
+    if (deleteBubbles) fs->bubblesDeletedRun += st.bubblesDeleted;
     PetscCall(PffFlowSceneDiagRow(fs, step, t - st.dt, &st, t1 - t0));
     PetscCall(PetscSNPrintf(extra, sizeof(extra),
                             "dt %.3e  CFL %.2f  particles %" PetscInt64_FMT "  ksp %" PetscInt_FMT
@@ -236,7 +285,9 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
   /* the state at the end time (the step rows carry the time at which each step's fields were made) */
   PetscCall(PetscMemzero(&st, sizeof(st)));
   PetscCall(PffFlowSceneDiagRow(fs, step, t, &st, 0));
+  PetscCall(PffFlowSceneCount(fs, fs->countEnd));
   if (fs->ops.finish) PetscCall(fs->ops.finish(fs));
+  PetscCall(PffFlowSceneConservation(fs));
   PetscCall(PetscPrintf(s->comm, "summary: %" PetscInt_FMT " steps  t %.6e  wall %.2f s  (%.3f s/step)\n", step,
                         (double)t, tnow - tstart, step ? stepTime / (double)step : 0.0));
   /* the slowest rank sets the pace: shares of the largest per-rank stage times */

@@ -31,10 +31,14 @@ struct _PffFlowScene {
 
   PetscReal tEnd, outputInterval, timeUnit;
   PetscInt  maxSteps, checkpointEvery;
-  PetscBool frames, frameParticles, restarted;
+  PetscBool frames, frameParticles, restarted, checkParticles;
   char      restart[PETSC_MAX_PATH_LEN];
   FILE     *diag;
   PetscReal umaxGrid, liquidVolume; /* of the latest diagnostics row (PffFlowGetDiagnostics) */
+  /* particle bookkeeping of this run (since the seed or the restart): counts per type at the start
+     and at the end, and the gas particles deleted as bubbles in between; set before ops.finish */
+  PetscInt64 countStart[PFF_PARTICLE_NTYPES], countEnd[PFF_PARTICLE_NTYPES], bubblesDeletedRun;
+  PetscReal  volumeStart; /* liquid volume of the first diagnostics row */
 };
 
 /* Sets option key to value when the user has not set it (scene defaults derived from physics). */

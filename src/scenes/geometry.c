@@ -1,9 +1,15 @@
-/* Scene geometry: liquid regions (initial condition) and solid obstacles (boundary), from options.
+/* Scene geometry: liquid regions and gas regions (initial condition) and solid obstacles (boundary),
+   from options.
 
-   A shape is a box [lo, hi], a sphere |x - c| <= r, or (liquid only) a half-space
-   (x - p) . n <= 0. Membership includes the boundary. The solids enter the solver through their
-   signed distance phi_s (negative inside), used to push particles out along grad phi_s after
-   advection and to mark solid faces for the pressure solve:
+   A shape is a box [lo, hi], a sphere |x - c| <= r, or (liquid and gas only) a half-space
+   (x - p) . n <= 0. Membership includes the boundary. The initial liquid is
+
+     L = (union of the liquid regions) \ (union of the gas regions) \ (solids),
+
+   so gas regions carve bubbles or cavities out of the liquid; everything outside L and the solids
+   is gas. The solids enter the solver through their signed distance phi_s (negative inside), used
+   to push particles out along grad phi_s after advection and to mark solid faces for the pressure
+   solve:
 
      box:    q = |x - c| - s (c centre, s half sizes, per axis)
              phi = |max(q, 0)| + min(max_a q_a, 0)            (exact, inside and outside)
@@ -28,8 +34,8 @@ typedef struct {
 
 struct _n_PffGeometry {
   MPI_Comm  comm;
-  PetscInt  nliquid, nsolid;
-  PffShape  liquid[PFF_GEOMETRY_MAX_REGIONS], solid[PFF_GEOMETRY_MAX_REGIONS];
+  PetscInt  nliquid, ngas, nsolid;
+  PffShape  liquid[PFF_GEOMETRY_MAX_REGIONS], gas[PFF_GEOMETRY_MAX_REGIONS], solid[PFF_GEOMETRY_MAX_REGIONS];
   PetscReal lo[3], hi[3];
 };
 
@@ -77,7 +83,12 @@ PetscInt PffGeometryNumLiquids(PffGeometry geo)
   return geo->nliquid;
 }
 
-/* Reads the parameters of region i of kind "liquid" or "solid" whose type is already in in->type. */
+PetscInt PffGeometryNumGas(PffGeometry geo)
+{
+  return geo->ngas;
+}
+
+/* Reads the parameters of region i of kind "liquid", "gas" or "solid" whose type is already in in->type. */
 static PetscErrorCode PffGeometryReadRegion(PetscOptionItems *PetscOptionsObject, const char *kind, PetscInt i,
                                             PetscBool liquid, PffShapeInput *in)
 {
@@ -96,9 +107,9 @@ static PetscErrorCode PffGeometryReadRegion(PetscOptionItems *PetscOptionsObject
     PetscCall(PetscSNPrintf(help, sizeof(help), "%s %" PetscInt_FMT ": radius", kind, i));
     PetscCall(PetscOptionsReal(key, help, "PffGeometrySetFromOptions", in->r, &in->r, &in->setr));
   } else {
-    PetscCall(PetscSNPrintf(help, sizeof(help), "%s %" PetscInt_FMT ": %s", kind, i,
-                            in->type == PFF_SHAPE_BOX ? "upper corner x,y,z"
-                                                      : "normal x,y,z, pointing away from the liquid"));
+    PetscCall(
+        PetscSNPrintf(help, sizeof(help), "%s %" PetscInt_FMT ": %s", kind, i,
+                      in->type == PFF_SHAPE_BOX ? "upper corner x,y,z" : "normal x,y,z, pointing out of the region"));
     in->nb = PFF_GEOMETRY_MAX_VALUES;
     PetscCall(PetscOptionsRealArray(key, help, "PffGeometrySetFromOptions", in->b, &in->nb, &in->setb));
   }
@@ -185,16 +196,23 @@ static PetscErrorCode PffGeometryCheckNumbering(MPI_Comm comm, const char *kind,
 
 PetscErrorCode PffGeometrySetFromOptions(PffGeometry geo, const PetscReal lo[3], const PetscReal hi[3])
 {
+  /* kinds in the order of -help: liquid regions, gas regions carved out of them, solids */
+  enum { LIQUID, GAS, SOLID, NKINDS };
+  const char *const kinds[NKINDS] = {"liquid", "gas", "solid"};
+  const char *const helps[NKINDS] = {
+      "Liquid region %" PetscInt_FMT ": box (lo, hi), sphere (center, radius) or halfspace (point, normal), with "
+      "velocity; regions are numbered 0, 1, ... without gaps",
+      "Gas region %" PetscInt_FMT ": box (lo, hi), sphere (center, radius) or halfspace (point, normal) carved out "
+      "of the liquid regions (a bubble); numbered 0, 1, ... without gaps",
+      "Solid obstacle %" PetscInt_FMT ": box (lo, hi) or sphere (center, radius) inside the domain; numbered 0, 1, "
+      "... without gaps"};
   PffShapeInput *in;
-  PetscInt       nliquid = 0, nsolid = 0;
-  const char    *kinds[2] = {"liquid", "solid"};
+  PetscInt       n[NKINDS] = {0, 0, 0};
 
   PetscFunctionBeginUser;
-  PetscCall(PetscCalloc1(2 * PFF_GEOMETRY_MAX_REGIONS, &in));
-  PetscOptionsBegin(geo->comm, NULL, "Scene geometry: liquid regions and solid obstacles", "PffGeometry");
-  for (int k = 0; k < 2; k++) {
-    const PetscBool liquid = (PetscBool)(k == 0);
-    PetscInt       *n      = liquid ? &nliquid : &nsolid;
+  PetscCall(PetscCalloc1(NKINDS * PFF_GEOMETRY_MAX_REGIONS, &in));
+  PetscOptionsBegin(geo->comm, NULL, "Scene geometry: liquid regions, gas regions and solid obstacles", "PffGeometry");
+  for (int k = 0; k < NKINDS; k++) {
     for (PetscInt i = 0; i < PFF_GEOMETRY_MAX_REGIONS; i++) {
       PffShapeInput *r = &in[k * PFF_GEOMETRY_MAX_REGIONS + i];
       char           key[64], help[256];
@@ -202,37 +220,33 @@ PetscErrorCode PffGeometrySetFromOptions(PffGeometry geo, const PetscReal lo[3],
       PetscEnum      type = (PetscEnum)PFF_SHAPE_BOX;
 
       PetscCall(PetscSNPrintf(key, sizeof(key), "-%s_%" PetscInt_FMT "_type", kinds[k], i));
-      PetscCall(PetscSNPrintf(help, sizeof(help),
-                              liquid ? "Liquid region %" PetscInt_FMT
-                                       ": box (lo, hi), sphere (center, radius) or halfspace (point, normal), with "
-                                       "velocity; regions are numbered 0, 1, ... without gaps"
-                                     : "Solid obstacle %" PetscInt_FMT
-                                       ": box (lo, hi) or sphere (center, radius) inside the domain; numbered 0, 1, "
-                                       "... without gaps",
-                              i));
-      PetscCall(PetscOptionsEnum(key, help, "PffGeometrySetFromOptions", liquid ? PffShapeTypes : PffSolidShapeTypes,
-                                 type, &type, &set));
+      PetscCall(PetscSNPrintf(help, sizeof(help), helps[k], i));
+      PetscCall(PetscOptionsEnum(key, help, "PffGeometrySetFromOptions",
+                                 k == SOLID ? PffSolidShapeTypes : PffShapeTypes, type, &type, &set));
       if (!set) break;
       r->type = (PetscInt)type;
-      PetscCall(PffGeometryReadRegion(PetscOptionsObject, kinds[k], i, liquid, r));
-      (*n)++;
+      PetscCall(PffGeometryReadRegion(PetscOptionsObject, kinds[k], i, (PetscBool)(k == LIQUID), r));
+      n[k]++;
     }
   }
   PetscOptionsEnd();
 
-  PetscCall(PffGeometryCheckNumbering(geo->comm, "liquid", nliquid));
-  PetscCall(PffGeometryCheckNumbering(geo->comm, "solid", nsolid));
+  for (int k = 0; k < NKINDS; k++) PetscCall(PffGeometryCheckNumbering(geo->comm, kinds[k], n[k]));
   for (int d = 0; d < 3; d++) {
     PetscCheck(hi[d] > lo[d], geo->comm, PETSC_ERR_ARG_OUTOFRANGE, "the domain is empty along %c: [%g, %g]", "xyz"[d],
                (double)lo[d], (double)hi[d]);
     geo->lo[d] = lo[d];
     geo->hi[d] = hi[d];
   }
-  for (PetscInt i = 0; i < nliquid; i++) PetscCall(PffGeometrySetRegion(geo, "liquid", i, &in[i], &geo->liquid[i]));
-  for (PetscInt i = 0; i < nsolid; i++) {
+  for (PetscInt i = 0; i < n[LIQUID]; i++)
+    PetscCall(PffGeometrySetRegion(geo, "liquid", i, &in[LIQUID * PFF_GEOMETRY_MAX_REGIONS + i], &geo->liquid[i]));
+  /* a gas region may reach beyond the domain: only the part inside removes liquid */
+  for (PetscInt i = 0; i < n[GAS]; i++)
+    PetscCall(PffGeometrySetRegion(geo, "gas", i, &in[GAS * PFF_GEOMETRY_MAX_REGIONS + i], &geo->gas[i]));
+  for (PetscInt i = 0; i < n[SOLID]; i++) {
     PffShape *s = &geo->solid[i];
     PetscReal slo[3], shi[3], tol = 0;
-    PetscCall(PffGeometrySetRegion(geo, "solid", i, &in[PFF_GEOMETRY_MAX_REGIONS + i], s));
+    PetscCall(PffGeometrySetRegion(geo, "solid", i, &in[SOLID * PFF_GEOMETRY_MAX_REGIONS + i], s));
     for (int d = 0; d < 3; d++) {
       slo[d] = s->type == PFF_SHAPE_BOX ? s->a[d] : s->a[d] - s->r;
       shi[d] = s->type == PFF_SHAPE_BOX ? s->b[d] : s->a[d] + s->r;
@@ -246,8 +260,9 @@ PetscErrorCode PffGeometrySetFromOptions(PffGeometry geo, const PetscReal lo[3],
                  i, (double)lo[0], (double)hi[0], (double)lo[1], (double)hi[1], (double)lo[2], (double)hi[2], "xyz"[d],
                  (double)slo[d], (double)shi[d]);
   }
-  geo->nliquid = nliquid;
-  geo->nsolid  = nsolid;
+  geo->nliquid = n[LIQUID];
+  geo->ngas    = n[GAS];
+  geo->nsolid  = n[SOLID];
   PetscCall(PetscFree(in));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -266,15 +281,24 @@ static inline PetscBool PffShapeContains(const PffShape *s, const PetscReal x[3]
   return PETSC_FALSE;
 }
 
+/* Index of the first gas region containing x, or -1. */
+static inline PetscInt PffGeometryGasAt(PffGeometry geo, const PetscReal x[3])
+{
+  for (PetscInt i = 0; i < geo->ngas; i++)
+    if (PffShapeContains(&geo->gas[i], x)) return i;
+  return -1;
+}
+
 PetscInt PffGeometryLiquidAt(PffGeometry geo, const PetscReal x[3], PetscReal v[3])
 {
+  if (v != NULL) v[0] = v[1] = v[2] = 0;
+  if (PffGeometryGasAt(geo, x) >= 0) return -1;
   for (PetscInt i = 0; i < geo->nliquid; i++) {
     if (!PffShapeContains(&geo->liquid[i], x)) continue;
     if (v != NULL)
       for (int d = 0; d < 3; d++) v[d] = geo->liquid[i].v[d];
     return i;
   }
-  if (v != NULL) v[0] = v[1] = v[2] = 0;
   return -1;
 }
 
@@ -329,17 +353,18 @@ PetscReal PffGeometrySolidDistance(const PetscReal x[3], PetscReal grad[3], void
 
 PetscErrorCode PffGeometryCheck(PffGeometry geo, PffGrid grid)
 {
-  const PetscInt nl = geo->nliquid, M = PFF_GEOMETRY_MAX_REGIONS;
-  PetscInt       found[PFF_GEOMETRY_MAX_REGIONS + 1], overlap, nlocal;
-  MPI_Comm       comm;
+  const PetscInt nl = geo->nliquid, ng = geo->ngas, M = PFF_GEOMETRY_MAX_REGIONS;
+  /* found[r]: liquid region r keeps a seed; found[nl + g]: gas region g removes one */
+  PetscInt found[2 * PFF_GEOMETRY_MAX_REGIONS], nlocal;
+  /* the overlapping pair (j, i), i < j, with the smallest j * M + i; M * M means none */
+  PetscInt overlap = M * M;
+  MPI_Comm comm;
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetComm(grid, &comm));
   PetscCall(PffGridGetLocalBlocks(grid, &nlocal));
-  for (PetscInt i = 0; i < nl; i++) found[i] = 0;
-  /* the overlapping pair (j, i), i < j, with the smallest j * M + i; M * M means none */
-  found[nl] = M * M;
-  for (PetscInt lb = 0; lb < nlocal; lb++) {
+  for (PetscInt i = 0; i < nl + ng; i++) found[i] = 0;
+  for (PetscInt lb = 0; lb < nlocal && nl > 0; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(grid, lb, &info));
     const PetscInt  ns = PFF_PARTICLES_PER_AXIS * info.n;
@@ -348,28 +373,42 @@ PetscErrorCode PffGeometryCheck(PffGeometry geo, PffGrid grid)
       for (PetscInt j = 0; j < ns; j++)
         for (PetscInt i = 0; i < ns; i++) {
           /* sub-cell points (c + 1/4) h and (c + 3/4) h: the particle lattice of PffParticlesSeed */
-          const PetscReal x[3]  = {info.lo[0] + ((PetscReal)i + 0.5) * hs, info.lo[1] + ((PetscReal)j + 0.5) * hs,
-                                   info.lo[2] + ((PetscReal)k + 0.5) * hs};
-          PetscInt        first = -1;
-          if (nl == 0 || PffGeometrySolidDistance(x, NULL, geo) < 0) continue;
+          const PetscReal x[3]   = {info.lo[0] + ((PetscReal)i + 0.5) * hs, info.lo[1] + ((PetscReal)j + 0.5) * hs,
+                                    info.lo[2] + ((PetscReal)k + 0.5) * hs};
+          const PetscBool gas    = (PetscBool)(PffGeometryGasAt(geo, x) >= 0);
+          PetscInt        first  = -1;
+          PetscBool       liquid = PETSC_FALSE;
+          if (PffGeometrySolidDistance(x, NULL, geo) < 0) continue;
           for (PetscInt r = 0; r < nl; r++) {
             if (!PffShapeContains(&geo->liquid[r], x)) continue;
+            liquid = PETSC_TRUE;
+            if (gas) continue; /* carved out: neither seeded nor ambiguous */
             found[r] = 1;
             if (first < 0)
               first = r;
             else
-              found[nl] = PetscMin(found[nl], r * M + first);
+              overlap = PetscMin(overlap, r * M + first);
           }
+          if (liquid && gas)
+            for (PetscInt g = 0; g < ng; g++)
+              if (PffShapeContains(&geo->gas[g], x)) found[nl + g] = 1;
         }
   }
-  PetscMPIInt mnl;
-  PetscCall(PetscMPIIntCast(nl, &mnl));
-  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, found, mnl, MPIU_INT, MPI_MAX, comm));
-  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &found[nl], 1, MPIU_INT, MPI_MIN, comm));
-  overlap = found[nl];
+  PetscMPIInt mn;
+  PetscCall(PetscMPIIntCast(nl + ng, &mn));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, found, mn, MPIU_INT, MPI_MAX, comm));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &overlap, 1, MPIU_INT, MPI_MIN, comm));
   for (PetscInt i = 0; i < nl; i++)
     PetscCheck(found[i], comm, PETSC_ERR_ARG_WRONG,
-               "-liquid_%" PetscInt_FMT ": the region contains no particle seed position (empty or inside a solid)", i);
+               "-liquid_%" PetscInt_FMT
+               ": the region contains no particle seed position (empty, inside a solid or removed by gas regions)",
+               i);
+  for (PetscInt g = 0; g < ng; g++)
+    PetscCheck(found[nl + g], comm, PETSC_ERR_ARG_WRONG,
+               "-gas_%" PetscInt_FMT
+               ": the region removes no liquid particle seed position (it lies outside the liquid regions, inside a "
+               "solid, or between seeds)",
+               g);
   if (overlap < M * M) {
     const PetscInt j = overlap / M, i = overlap % M;
     SETERRQ(comm, PETSC_ERR_ARG_INCOMP,
@@ -412,11 +451,14 @@ PetscErrorCode PffGeometryView(PffGeometry geo, PetscViewer viewer)
 {
   PetscFunctionBeginUser;
   if (viewer == NULL) viewer = PETSC_VIEWER_STDOUT_(geo->comm);
-  PetscCall(PetscViewerASCIIPrintf(viewer, "Geometry: %" PetscInt_FMT " liquid region%s, %" PetscInt_FMT " solid%s\n",
-                                   geo->nliquid, geo->nliquid == 1 ? "" : "s", geo->nsolid,
-                                   geo->nsolid == 1 ? "" : "s"));
+  PetscCall(PetscViewerASCIIPrintf(viewer,
+                                   "Geometry: %" PetscInt_FMT " liquid region%s, %" PetscInt_FMT
+                                   " gas region%s, %" PetscInt_FMT " solid%s\n",
+                                   geo->nliquid, geo->nliquid == 1 ? "" : "s", geo->ngas, geo->ngas == 1 ? "" : "s",
+                                   geo->nsolid, geo->nsolid == 1 ? "" : "s"));
   for (PetscInt i = 0; i < geo->nliquid; i++)
     PetscCall(PffGeometryViewShape(viewer, "liquid", i, &geo->liquid[i], PETSC_TRUE));
+  for (PetscInt i = 0; i < geo->ngas; i++) PetscCall(PffGeometryViewShape(viewer, "gas", i, &geo->gas[i], PETSC_FALSE));
   for (PetscInt i = 0; i < geo->nsolid; i++)
     PetscCall(PffGeometryViewShape(viewer, "solid", i, &geo->solid[i], PETSC_FALSE));
   PetscFunctionReturn(PETSC_SUCCESS);

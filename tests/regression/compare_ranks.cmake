@@ -1,7 +1,9 @@
-# Runs EXE with ARGS at each rank count in RANKS (each with -output_dir OUTDIR_np<n>), extracts the
-# number captured by REGEX from each run's output and fails unless all agree with the first within
-# the relative tolerance RTOL (and every run exits 0).
+# Runs EXE with ARGS at each rank count in RANKS (each with -output_dir OUTDIR_np<n>) and fails unless
+# every run exits 0 and agrees with the first run:
+#   - REGEX: the numbers captured by its groups (one or more) agree within the relative tolerance RTOL;
+#   - EXACT (optional): the text it matches (e.g. particle counts) is identical.
 set(values)
+set(exacts)
 foreach(NP IN LISTS RANKS)
   set(ARGS "${BASE_ARGS} -output_dir ${OUTDIR}_np${NP}")
   include(${CMAKE_CURRENT_LIST_DIR}/run_pfflip.cmake)
@@ -11,15 +13,35 @@ foreach(NP IN LISTS RANKS)
   if(NOT out MATCHES "${REGEX}")
     message(FATAL_ERROR "run on ${NP} ranks: no match for ${REGEX}")
   endif()
-  list(APPEND values "${CMAKE_MATCH_1}")
+  set(groups "")
+  foreach(g RANGE 1 ${CMAKE_MATCH_COUNT})
+    list(APPEND groups "${CMAKE_MATCH_${g}}")
+  endforeach()
+  string(JOIN "," row ${groups})
+  list(APPEND values "${row}")
+  if(DEFINED EXACT)
+    if(NOT out MATCHES "${EXACT}")
+      message(FATAL_ERROR "run on ${NP} ranks: no match for ${EXACT}")
+    endif()
+    list(APPEND exacts "${CMAKE_MATCH_0}")
+  endif()
 endforeach()
 list(GET values 0 ref)
 foreach(v IN LISTS values)
   # CMake has no floating point arithmetic; the standard library of python3 compares
-  execute_process(COMMAND /usr/bin/python3 -c "import sys; a,b,t=map(float,sys.argv[1:]); sys.exit(0 if abs(a-b)<=t*max(abs(a),abs(b),1e-30) else 1)" ${ref} ${v} ${RTOL}
+  execute_process(COMMAND /usr/bin/python3 -c "import sys; a,b=(list(map(float,s.split(','))) for s in sys.argv[1:3]); t=float(sys.argv[3]); sys.exit(0 if len(a)==len(b) and all(abs(x-y)<=t*max(abs(x),abs(y),1e-30) for x,y in zip(a,b)) else 1)" ${ref} ${v} ${RTOL}
                   RESULT_VARIABLE same)
   if(NOT same EQUAL 0)
     message(FATAL_ERROR "values differ across rank counts ${RANKS}: ${values} (relative tolerance ${RTOL})")
   endif()
 endforeach()
 message("values at ranks ${RANKS}: ${values} agree within ${RTOL}")
+if(DEFINED EXACT)
+  list(GET exacts 0 eref)
+  foreach(e IN LISTS exacts)
+    if(NOT e STREQUAL eref)
+      message(FATAL_ERROR "output differs across rank counts ${RANKS}:\n  ${eref}\n  ${e}")
+    endif()
+  endforeach()
+  message("identical at ranks ${RANKS}: ${eref}")
+endif()

@@ -5,9 +5,13 @@
        (inside, on a boundary, outside, velocities) and PffGeometrySolidDistance (values and unit
        gradients at points with known answers, outside and inside each solid, and the gradient
        against central differences), then PffGeometryCheck on a 32^3 grid must pass;
+     - gas regions (a sphere, a box and a half-space) carved out of a liquid box, and two liquid boxes
+       whose overlap lies inside a gas box: LiquidAt inside, on the boundary of and outside each gas
+       region, and PffGeometryCheck must pass (an overlap removed by gas is not ambiguous);
      - bad input: every error of PffGeometrySetFromOptions and PffGeometryCheck must be raised (on
-       every rank, for Check) with a message naming the key; the message is caught by an error
-       handler and compared.
+       every rank, for Check) with a message naming the key, gas regions included (one that
+       removes no liquid, one inside a solid, a liquid region that a gas region swallows); the message is caught by an
+   error handler and compared.
 
    Sample run:  mpiexec -n 2 ./test_geometry
    Prints (the same on any number of ranks) the view of the good geometry and one line per case. */
@@ -130,6 +134,59 @@ static const char good[] = "-liquid_0_type box -liquid_0_lo 0,0,0.25 -liquid_0_h
                            "-solid_0_type box -solid_0_lo 0.5,0.1,0.1 -solid_0_hi 0.9,0.3,0.3 "
                            "-solid_1_type sphere -solid_1_center 0.7,0.7,0.3 -solid_1_radius 0.1";
 
+/* A liquid box with a velocity, carved by a gas sphere (a bubble), a gas box and the gas half-space
+   y >= 0.9 (its normal points down, out of the region). */
+static const char bubbles[] = "-liquid_0_type box -liquid_0_lo 0,0,0 -liquid_0_hi 1,1,1 -liquid_0_velocity 0,1,0 "
+                              "-gas_0_type sphere -gas_0_center 0.5,0.5,0.5 -gas_0_radius 0.2 "
+                              "-gas_1_type box -gas_1_lo 0.1,0.1,0.1 -gas_1_hi 0.2,0.2,0.2 "
+                              "-gas_2_type halfspace -gas_2_point 0,0.9,0 -gas_2_normal 0,-3,0";
+
+static PetscErrorCode TestGas(MPI_Comm comm, PffGrid grid)
+{
+  PffGeometry     geo;
+  Caught          c;
+  const PetscReal zero[3] = {0, 0, 0}, v0[3] = {0, 1, 0};
+
+  PetscFunctionBeginUser;
+  PetscCall(Build(comm, bubbles, grid, &geo, &c));
+  PetscCheck(c.code == 0, PETSC_COMM_SELF, PETSC_ERR_PLIB, "gas geometry failed: %s", c.msg);
+  PetscCall(PffGeometryView(geo, NULL));
+  PetscCheck(PffGeometryNumLiquids(geo) == 1 && PffGeometryNumGas(geo) == 3 && PffGeometryNumSolids(geo) == 0,
+             PETSC_COMM_SELF, PETSC_ERR_PLIB,
+             "%" PetscInt_FMT " liquids, %" PetscInt_FMT " gas regions and %" PetscInt_FMT
+             " solids, expected 1, 3 and 0",
+             PffGeometryNumLiquids(geo), PffGeometryNumGas(geo), PffGeometryNumSolids(geo));
+  PetscCall(ExpectLiquid(geo, 0.5, 0.5, 0.5, -1, zero));  /* bubble centre */
+  PetscCall(ExpectLiquid(geo, 0.5, 0.69, 0.5, -1, zero)); /* inside the bubble */
+  PetscCall(ExpectLiquid(geo, 0.5, 0.7, 0.5, -1, zero));  /* on the bubble: boundaries belong to the gas */
+  PetscCall(ExpectLiquid(geo, 0.5, 0.71, 0.5, 0, v0));    /* just outside: the liquid's velocity */
+  PetscCall(ExpectLiquid(geo, 0.15, 0.15, 0.15, -1, zero));
+  PetscCall(ExpectLiquid(geo, 0.2, 0.2, 0.2, -1, zero)); /* gas box corner */
+  PetscCall(ExpectLiquid(geo, 0.25, 0.15, 0.15, 0, v0));
+  PetscCall(ExpectLiquid(geo, 0.5, 0.9, 0.5, -1, zero)); /* the half-space's plane */
+  PetscCall(ExpectLiquid(geo, 0.5, 0.95, 0.5, -1, zero));
+  PetscCall(ExpectLiquid(geo, 0.5, 0.85, 0.5, 0, v0));
+  PetscCall(PffGeometryDestroy(&geo));
+  PetscCall(PetscPrintf(comm, "case %-22s ok\n", "gas"));
+
+  /* liquid boxes overlapping on [0.4, 0.6] x [0, 1] x [0, 1], which a gas box removes */
+  PetscCall(Build(comm,
+                  "-liquid_0_type box -liquid_0_lo 0,0,0 -liquid_0_hi 0.6,1,1 -liquid_0_velocity 1,0,0 "
+                  "-liquid_1_type box -liquid_1_lo 0.4,0,0 -liquid_1_hi 1,1,1 -liquid_1_velocity -1,0,0 "
+                  "-gas_0_type box -gas_0_lo 0.4,-1,-1 -gas_0_hi 0.6,2,2",
+                  grid, &geo, &c));
+  PetscCheck(c.code == 0, PETSC_COMM_SELF, PETSC_ERR_PLIB, "overlap inside gas failed: %s", c.msg);
+  {
+    const PetscReal vl[3] = {1, 0, 0}, vr[3] = {-1, 0, 0};
+    PetscCall(ExpectLiquid(geo, 0.3, 0.5, 0.5, 0, vl));
+    PetscCall(ExpectLiquid(geo, 0.5, 0.5, 0.5, -1, zero));
+    PetscCall(ExpectLiquid(geo, 0.7, 0.5, 0.5, 1, vr));
+  }
+  PetscCall(PffGeometryDestroy(&geo));
+  PetscCall(PetscPrintf(comm, "case %-22s ok\n", "gas_removes_overlap"));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 static PetscErrorCode TestGood(MPI_Comm comm, PffGrid grid)
 {
   PffGeometry     geo;
@@ -232,7 +289,8 @@ static const BadCase bad[] = {
     {"liquid_tiny",
      "-liquid_0_type box -liquid_0_lo 0,0,0 -liquid_0_hi 1,1,0.3 "
      "-liquid_1_type sphere -liquid_1_center 0.5,0.5,0.5 -liquid_1_radius 0.001",
-     "-liquid_1: the region contains no particle seed position (empty or inside a solid)", PETSC_TRUE},
+     "-liquid_1: the region contains no particle seed position (empty, inside a solid or removed by gas regions)",
+     PETSC_TRUE},
     {"liquid_in_solid",
      "-liquid_0_type sphere -liquid_0_center 0.5,0.5,0.5 -liquid_0_radius 0.05 "
      "-solid_0_type sphere -solid_0_center 0.5,0.5,0.5 -solid_0_radius 0.2",
@@ -242,6 +300,38 @@ static const BadCase bad[] = {
      "-liquid_1_type halfspace -liquid_1_point 0,0,0.9 -liquid_1_normal 0,0,-1 "
      "-liquid_2_type sphere -liquid_2_center 0.5,0.5,0.5 -liquid_2_radius 0.2",
      "-liquid_2 (sphere) overlaps -liquid_0 (box); liquid regions must not overlap", PETSC_TRUE},
+    {"gas_radius_negative",
+     "-liquid_0_type box -liquid_0_lo 0,0,0 -liquid_0_hi 1,1,1 "
+     "-gas_0_type sphere -gas_0_center 0.5,0.5,0.5 -gas_0_radius -0.1",
+     "-gas_0_radius -0.1 is invalid: must be positive", PETSC_FALSE},
+    {"gas_center_two_values",
+     "-liquid_0_type box -liquid_0_lo 0,0,0 -liquid_0_hi 1,1,1 -gas_0_type sphere -gas_0_center 0.5,0.5 "
+     "-gas_0_radius 0.1",
+     "-gas_0_center takes 3 values, got 2", PETSC_FALSE},
+    {"gas_box_hi_le_lo",
+     "-liquid_0_type box -liquid_0_lo 0,0,0 -liquid_0_hi 1,1,1 -gas_0_type box -gas_0_lo 0.5,0.5,0.5 "
+     "-gas_0_hi 0.6,0.6,0.4",
+     "-gas_0_hi is invalid: hi must exceed lo on every axis, but on z", PETSC_FALSE},
+    {"gas_gap",
+     "-liquid_0_type box -liquid_0_lo 0,0,0 -liquid_0_hi 1,1,1 "
+     "-gas_1_type sphere -gas_1_center 0.5,0.5,0.5 -gas_1_radius 0.1",
+     "-gas_1_type is given but -gas_0_type is not", PETSC_FALSE},
+    {"gas_in_air",
+     "-liquid_0_type box -liquid_0_lo 0,0,0 -liquid_0_hi 1,0.5,1 "
+     "-gas_0_type sphere -gas_0_center 0.3,0.3,0.3 -gas_0_radius 0.1 "
+     "-gas_1_type sphere -gas_1_center 0.5,0.8,0.5 -gas_1_radius 0.1",
+     "-gas_1: the region removes no liquid particle seed position", PETSC_TRUE},
+    {"gas_in_solid",
+     "-liquid_0_type box -liquid_0_lo 0,0,0 -liquid_0_hi 1,1,1 "
+     "-gas_0_type sphere -gas_0_center 0.5,0.5,0.5 -gas_0_radius 0.05 "
+     "-solid_0_type sphere -solid_0_center 0.5,0.5,0.5 -solid_0_radius 0.2",
+     "-gas_0: the region removes no liquid particle seed position", PETSC_TRUE},
+    {"liquid_inside_gas",
+     "-liquid_0_type box -liquid_0_lo 0,0,0 -liquid_0_hi 1,0.3,1 "
+     "-liquid_1_type sphere -liquid_1_center 0.5,0.7,0.5 -liquid_1_radius 0.1 "
+     "-gas_0_type box -gas_0_lo 0.3,0.5,0.3 -gas_0_hi 0.7,0.9,0.7",
+     "-liquid_1: the region contains no particle seed position (empty, inside a solid or removed by gas regions)",
+     PETSC_TRUE},
 };
 
 int main(int argc, char **argv)
@@ -256,6 +346,7 @@ int main(int argc, char **argv)
   comm = PETSC_COMM_WORLD;
   PetscCall(PffTestCreateGrid(comm, nb, periodic, dlo, 1.0 / 32, 8, 1, 0, 0, 1, &ctx));
   PetscCall(TestGood(comm, ctx.grid));
+  PetscCall(TestGas(comm, ctx.grid));
   for (size_t i = 0; i < PETSC_STATIC_ARRAY_LENGTH(bad); i++)
     PetscCall(ExpectError(comm, bad[i].name, bad[i].opts, bad[i].check ? ctx.grid : NULL, bad[i].expect));
   PetscCall(PffGridDestroy(&ctx.grid));
