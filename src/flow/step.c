@@ -76,7 +76,8 @@ PetscErrorCode PffFlowUpdateFields(PffFlow f, PetscBool vorticity)
 }
 
 /* dt from the CFL number on the finest cells, the growth of velocity under gravity over one step,
-   and (with a physical viscosity) the explicit limit of Eq. 13 that keeps alpha >= 0 on the finest level. */
+   (with a physical viscosity) the explicit limit of Eq. 13 that keeps alpha >= 0 on the finest level,
+   -flow_dt_max and the time dtmax to the next output. */
 static PetscErrorCode PffFlowChooseDt(PffFlow f, PetscReal umax, PetscReal dtmax, PetscReal *dt)
 {
   PetscReal h0, g = 0, numax = PetscMax(f->nu[0], f->nu[1]), d = PETSC_MAX_REAL;
@@ -88,7 +89,14 @@ static PetscErrorCode PffFlowChooseDt(PffFlow f, PetscReal umax, PetscReal dtmax
   if (umax > 0) d = f->cfl * h0 / umax;
   if (g > 0 && !f->prescribed) d = PetscMin(d, PetscSqrtReal(f->cfl * h0 / g));
   if (numax > 0 && !f->prescribed) d = PetscMin(d, h0 * h0 / (6 * numax));
-  d = PetscMin(d, PetscMin(f->dtMax, dtmax));
+  d = PetscMin(d, f->dtMax);
+  /* the time to the next output (or the end) in one step if it fits, in two equal ones if it fits in
+     two: no sliver step is left before it. A sliver would inflate c_div (which scales with 1/dt) into
+     a large velocity that the FLIP ratio (alpha -> 1 as dt -> 0) keeps on the particles. */
+  if (dtmax <= d)
+    d = dtmax;
+  else if (dtmax < 2 * d)
+    d = 0.5 * dtmax;
   PetscCheck(d > 0 && d < PETSC_MAX_REAL, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "no finite time step: the flow is at rest with no gravity; set -flow_dt_max");
   *dt = d;
