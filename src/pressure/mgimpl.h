@@ -29,21 +29,22 @@ typedef struct {
 /* One multigrid level. Rows are the owned cells: owned blocks in local (Morton) order, cells x
    fastest at the block's resolution at this level. */
 typedef struct {
-  PetscInt   L;
-  PetscBool  uniform;       /* below the block raster: units are uniform coarse cells, not blocks */
-  PetscInt   nblk;          /* units (blocks, or coarse cells on uniform levels) */
-  PetscInt  *coord;         /* [3 nblk] unit coordinates on uniform levels (block coordinates >> (L - Lr)) */
-  Mat        A;             /* level operator; level 0: the pressure module's, referenced */
-  Mat        P;             /* prolongation from level L+1 (piecewise constant), NULL on the coarsest */
-  KSP        kcycle;        /* K-cycle solver of this level's correction, or NULL */
-  Vec        x, b, r;       /* work (x, b unused on level 0, which works on the PC's vectors) */
-  PetscInt   nrows, rstart; /* owned rows, first global row */
-  PetscInt  *n;             /* [nlocal] cells per axis of each block at this level */
-  PetscInt  *start;         /* [nlocal + 1] first local row of each block */
-  PetscInt  *order, *split; /* rows of block lb: order[start[lb] .. split[lb]) red, then black */
-  PetscBool *relevant;      /* [nlocal] relaxed at this level (resolution L, or L+1 beside a block at L) */
-  PetscInt   ncolour[2];    /* blocks of each block colour */
-  PetscInt  *colourList;    /* [nlocal] relevant blocks: colour 0 first, then colour 1 */
+  PetscInt       L;
+  PetscBool      uniform;       /* below the block raster: units are uniform coarse cells, not blocks */
+  PetscInt       nblk;          /* units (blocks, or coarse cells on uniform levels) */
+  PetscInt      *coord;         /* [3 nblk] unit coordinates on uniform levels (block coordinates >> (L - Lr)) */
+  Mat            A;             /* level operator; level 0: the pressure module's, referenced */
+  Mat            P;             /* prolongation from level L+1 (piecewise constant), NULL on the coarsest */
+  KSP            kcycle;        /* K-cycle solver of this level's correction, or NULL */
+  Vec            x, b, r;       /* work (x, b unused on level 0, which works on the PC's vectors) */
+  PetscInt       nrows, rstart; /* owned rows, first global row */
+  PetscInt      *n;             /* [nlocal] cells per axis of each block at this level */
+  PetscInt      *start;         /* [nlocal + 1] first local row of each block */
+  PetscInt      *order, *split; /* rows of block lb: order[start[lb] .. split[lb]) red, then black */
+  PetscBool     *relevant;      /* [nlocal] relaxed at this level (resolution L, or L+1 beside a block at L) */
+  unsigned char *remote; /* [nblk] the unit has a face neighbour on another rank (relaxed after the ghost exchange) */
+  PetscInt       ncolour[2]; /* blocks of each block colour */
+  PetscInt      *colourList; /* [nlocal] relevant blocks: colour 0 first, then colour 1 */
 
   /* CSR of the local rows: the diagonal block (local columns) and the off-rank block (ghost columns) */
   Mat                Ad, Ao;

@@ -439,6 +439,15 @@ PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
       }
     }
   }
+  for (PetscInt L = 0; L < mg->nlevels; L++) {
+    PffMGLevel *lv = &mg->lev[L];
+    PetscCall(PetscMalloc1(lv->nblk, &lv->remote));
+    for (PetscInt q = 0; q < lv->nblk; q++) {
+      lv->remote[q] = lv->uniform; /* coarse cells of uniform levels: no neighbour list, always after the exchange */
+      for (PetscInt f = 0; f < 6 && !lv->uniform; f++)
+        if (mg->nbr[6 * q + f] <= -2) lv->remote[q] = 1;
+    }
+  }
   mg->built = PETSC_TRUE;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -521,6 +530,7 @@ PetscErrorCode PffMGDestroyLevels_Private(PffMG *mg)
       PetscCall(PetscFree(lv->order));
     }
     PetscCall(PetscFree(lv->coord));
+    PetscCall(PetscFree(lv->remote));
     PetscCall(PetscFree(lv->idiag));
   }
   PetscCall(PetscFree(mg->lev));

@@ -18,12 +18,24 @@
 
 const char *const PffMGSmootherTypes[] = {"rbgs", "jacobi", "PffMGSmootherType", "PFF_MG_SMOOTHER_", NULL};
 
-static PetscErrorCode UpdateGhosts(PffMGLevel *lv, Vec x)
+/* The ghost exchange of one half-sweep is split: blocks without an off-rank neighbour are relaxed
+   between Begin and End. In a half-sweep of colour c the values other ranks need from us for their
+   colour-c blocks are our colour 1-c cells, which this half-sweep does not change. */
+static PetscErrorCode GhostsBegin(PffMGLevel *lv, Vec x)
 {
   PetscFunctionBeginUser;
-  if (lv->scatter == NULL) PetscFunctionReturn(PETSC_SUCCESS);
-  PetscCall(VecScatterBegin(lv->scatter, x, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
-  PetscCall(VecScatterEnd(lv->scatter, x, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
+  if (lv->scatter) PetscCall(VecScatterBegin(lv->scatter, x, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode GhostsEnd(PffMGLevel *lv, Vec x, const PetscScalar **ga)
+{
+  PetscFunctionBeginUser;
+  *ga = NULL;
+  if (lv->scatter) {
+    PetscCall(VecScatterEnd(lv->scatter, x, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(VecGetArrayRead(lv->ghost, ga));
+  }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -114,17 +126,20 @@ PetscErrorCode PffMGSmoothFixed_Private(PffMG *mg, PetscInt L, Vec b, Vec x, Pet
       PetscScalar   *xa;
       const PetscScalar *ba, *ga = NULL;
       PetscInt64         cells = 0;
-      PetscCall(UpdateGhosts(lv, x));
+      PetscCall(GhostsBegin(lv, x));
       PetscCall(VecGetArray(x, &xa));
       PetscCall(VecGetArrayRead(b, &ba));
-      if (lv->ghost) PetscCall(VecGetArrayRead(lv->ghost, &ga));
+      for (PetscInt pass = 0; pass < 2; pass++) {
+        if (pass == 1) PetscCall(GhostsEnd(lv, x, &ga));
 #pragma omp parallel for reduction(+ : cells) schedule(dynamic, 1) if (q1 - q0 >= 8)
-      for (PetscInt q = q0; q < q1; q++) {
-        const PetscInt lb = lv->colourList[q];
-        (void)RelaxBlock(lv, lb, ba, xa, ga, mg->opt.omega, NULL);
-        cells += lv->start[lb + 1] - lv->start[lb];
+        for (PetscInt q = q0; q < q1; q++) {
+          const PetscInt lb = lv->colourList[q];
+          if (lv->remote[lb] != pass) continue;
+          (void)RelaxBlock(lv, lb, ba, xa, ga, mg->opt.omega, NULL);
+          cells += lv->start[lb + 1] - lv->start[lb];
+        }
       }
-      if (lv->ghost) PetscCall(VecRestoreArrayRead(lv->ghost, &ga));
+      if (ga) PetscCall(VecRestoreArrayRead(lv->ghost, &ga));
       PetscCall(VecRestoreArrayRead(b, &ba));
       PetscCall(VecRestoreArray(x, &xa));
       mg->stats.blockRelaxations += q1 - q0;
@@ -168,27 +183,29 @@ static PetscErrorCode RelaxActive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, Petsc
   for (PetscInt c = 0; c < 2; c++) {
     PetscScalar       *xa;
     const PetscScalar *ba, *ga = NULL;
-    PetscCall(UpdateGhosts(lv, x));
+    PetscCall(GhostsBegin(lv, x));
     PetscCall(VecGetArray(x, &xa));
     PetscCall(VecGetArrayRead(b, &ba));
-    if (lv->ghost) PetscCall(VecGetArrayRead(lv->ghost, &ga));
-    for (PetscInt q = 0; q < nactive; q++) {
-      const PetscInt lb = mg->list[q];
-      if (mg->colour[lb] != c) continue;
-      const PetscReal first = RelaxBlock(lv, lb, ba, xa, ga, mg->opt.omega, R);
-      PetscReal       r     = first;
-      PetscInt        k     = 1;
-      if (mg->opt.blockSweeps && first > 0) do {
-          r = RelaxBlock(lv, lb, ba, xa, ga, mg->opt.omega, R);
-          k++;
-        } while (!(r < first / 3 || k >= mg->opt.blockSweepsMax));
-      if (r0) r0[q] = first;
-      mg->bres[lb] = r;
-      for (PetscInt f = 0; f < 6; f++) mg->face[6 * lb + f] = r > 0 ? FaceMax(R, lv->n[lb], f) : 0.0;
-      mg->stats.blockRelaxations += k;
-      mg->stats.cellUpdates += (PetscInt64)k * (lv->start[lb + 1] - lv->start[lb]);
+    for (PetscInt pass = 0; pass < 2; pass++) {
+      if (pass == 1) PetscCall(GhostsEnd(lv, x, &ga));
+      for (PetscInt q = 0; q < nactive; q++) {
+        const PetscInt lb = mg->list[q];
+        if (mg->colour[lb] != c || lv->remote[lb] != pass) continue;
+        const PetscReal first = RelaxBlock(lv, lb, ba, xa, ga, mg->opt.omega, R);
+        PetscReal       r     = first;
+        PetscInt        k     = 1;
+        if (mg->opt.blockSweeps && first > 0) do {
+            r = RelaxBlock(lv, lb, ba, xa, ga, mg->opt.omega, R);
+            k++;
+          } while (!(r < first / 3 || k >= mg->opt.blockSweepsMax));
+        if (r0) r0[q] = first;
+        mg->bres[lb] = r;
+        for (PetscInt f = 0; f < 6; f++) mg->face[6 * lb + f] = r > 0 ? FaceMax(R, lv->n[lb], f) : 0.0;
+        mg->stats.blockRelaxations += k;
+        mg->stats.cellUpdates += (PetscInt64)k * (lv->start[lb + 1] - lv->start[lb]);
+      }
     }
-    if (lv->ghost) PetscCall(VecRestoreArrayRead(lv->ghost, &ga));
+    if (ga) PetscCall(VecRestoreArrayRead(lv->ghost, &ga));
     PetscCall(VecRestoreArrayRead(b, &ba));
     PetscCall(VecRestoreArray(x, &xa));
   }

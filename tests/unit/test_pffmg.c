@@ -6,7 +6,7 @@
    - the smoother (fixed hybrid red-black sweeps and adaptive relaxation) lowers the energy norm of a
      random error on every level;
    - FCG + pffmg converges at rtol 1e-8 on a bubbly problem (nine bubbles, density ratio 1000), closed
-     box, with an iteration count that differs from a one-rank solve of the same problem by at most 3;
+     box, with an iteration count at most 3 above that of a one-rank solve of the same problem;
    - adaptive relaxation relaxes fewer blocks than fixed sweeps when the residual is localised.
    Sample run: mpiexec -n 4 ./test_pffmg     prints one line per check on rank 0. */
 #include "pfftest.h"
@@ -279,7 +279,8 @@ static PetscErrorCode TestSolve(PetscBool graded, PetscBool belowRaster)
   PetscCall(Solve(PETSC_COMM_SELF, graded, &its1, &rn1));
   PetscCheck(rn <= 1e-8 && rn1 <= 1e-8, PETSC_COMM_WORLD, PETSC_ERR_PLIB, "solve: residual %g / %g above 1e-8",
              (double)rn, (double)rn1);
-  PetscCheck(PetscAbs(its - its1) <= 3, PETSC_COMM_WORLD, PETSC_ERR_PLIB,
+  /* the ghost values of the hybrid smoother lag one half-sweep across ranks: allow a few more iterations */
+  PetscCheck(its <= its1 + 3, PETSC_COMM_WORLD, PETSC_ERR_PLIB,
              "solve: %" PetscInt_FMT " iterations on all ranks, %" PetscInt_FMT " on one", its, its1);
   PetscCheck(its <= 25, PETSC_COMM_WORLD, PETSC_ERR_PLIB, "solve: %" PetscInt_FMT " iterations (more than 25)", its);
   PetscCall(PetscPrintf(PETSC_COMM_WORLD,
