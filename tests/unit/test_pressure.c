@@ -6,7 +6,8 @@
      solve of the same problem on one rank (partition independence);
    - hydrostatic balance for layered density (exact, u = 0) on a uniform and a y-graded grid.
    Sample run: mpiexec -n 4 ./test_pressure            prints one line per check on rank 0.
-   Benchmark:  mpiexec -n 2 ./test_pressure -bench 64  one 64^3 bubbly projection per PC and assembly. */
+   Benchmark:  mpiexec -n 2 ./test_pressure -bench 64  one 64^3 bubbly projection per PC and assembly
+               (PCs pffmg, gamg, hypre, bjacobi, jacobi; -bench_npcs k runs the first k). */
 #include "pfftest.h"
 
 typedef struct {
