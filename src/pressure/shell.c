@@ -4,8 +4,12 @@
    (one lower cell) or 1/4 (coarse above fine, the 4 fine cells; faces.c). Face by face,
      flux = c_f (x_upper - sum_k w_k x_lower_k),   y_upper += flux,   y_lower_k -= w_k flux,
    plus the unit diagonal that the assembly (operator.c) gives cells with every face closed, so the
-   shell is the assembled A up to rounding. The faces are the owned rows r = 3 cell + d in the block
-   Morton order of the cells, so x and y are walked nearly in order.
+   shell is the assembled A up to rounding. The cells are walked block by block in the block Morton
+   order of the numbering. Faces inside a block (the bulk: all but 3 n^2 of the 3 n^3 faces of a block
+   of n^3 cells) need no index arrays, their lower cell is the cell minus the raster stride 1, n or n^2,
+   and their coefficients sit in one contiguous array per axis; so a product reads 3 coefficients per
+   cell against the 7 values and 7 column indices per row of the AIJ matrix. The faces on block sides
+   (same level, coarser, finer) go through an explicit list of upper and lower cells.
 
    Communication: a face's upper cell is always owned, its lower cells may belong to another rank.
    Their x values come through a VecScatter into a ghost Vec of the distinct remote lower cells, and
@@ -21,8 +25,11 @@
 enum { PFF_SHELL_LOCAL, PFF_SHELL_GHOST, PFF_SHELL_NLISTS };
 
 typedef struct {
-  PetscInt ncells; /* owned cells */
-  PetscInt nface[PFF_SHELL_NLISTS];
+  PetscInt   ncells;                  /* owned cells */
+  PetscInt   nblocks, *bstart;        /* owned blocks: first local cell, [nblocks + 1] */
+  PetscInt  *bn;                      /* cells per block edge */
+  PetscReal *cin[3];                  /* [ncells] c_f of the lower d-face of each cell if inside its block, else 0 */
+  PetscInt   nface[PFF_SHELL_NLISTS]; /* faces on block sides */
   /* per list, over its faces i: the owned face row, the local upper cell, lower cells lo[off[i] ..
      off[i+1]-1] (1 or 4 of them, weight 1/count) as local cell numbers, ghosts as ncells + ghost index */
   PetscInt  *row[PFF_SHELL_NLISTS], *up[PFF_SHELL_NLISTS], *off[PFF_SHELL_NLISTS], *lo[PFF_SHELL_NLISTS];
@@ -40,6 +47,9 @@ static PetscErrorCode PffShellDestroy(void *ctx)
   PffShell *s = (PffShell *)ctx;
 
   PetscFunctionBeginUser;
+  PetscCall(PetscFree(s->bstart));
+  PetscCall(PetscFree(s->bn));
+  for (PetscInt d = 0; d < 3; d++) PetscCall(PetscFree(s->cin[d]));
   for (PetscInt l = 0; l < PFF_SHELL_NLISTS; l++) {
     PetscCall(PetscFree(s->row[l]));
     PetscCall(PetscFree(s->up[l]));
@@ -54,6 +64,37 @@ static PetscErrorCode PffShellDestroy(void *ctx)
   PetscCall(VecScatterDestroy(&s->scatter));
   PetscCall(PetscFree(s));
   PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* y += sum over the faces inside the blocks, per block and axis, the lower cell one stride down. */
+static inline void PffShellInterior(const PffShell *s, const PetscScalar *restrict x, PetscScalar *restrict y)
+{
+  const PetscReal *restrict cx = s->cin[0], *restrict cy = s->cin[1], *restrict cz = s->cin[2];
+
+  for (PetscInt b = 0; b < s->nblocks; b++) {
+    const PetscInt n = s->bn[b], n2 = n * n;
+    for (PetscInt k = 0; k < n; k++)
+      for (PetscInt j = 0; j < n; j++) {
+        const PetscInt row = s->bstart[b] + n * (j + n * k);
+        for (PetscInt c = row + 1; c < row + n; c++) {
+          const PetscScalar f = cx[c] * (x[c] - x[c - 1]);
+          y[c] += f;
+          y[c - 1] -= f;
+        }
+        if (j > 0)
+          for (PetscInt c = row; c < row + n; c++) {
+            const PetscScalar f = cy[c] * (x[c] - x[c - n]);
+            y[c] += f;
+            y[c - n] -= f;
+          }
+        if (k > 0)
+          for (PetscInt c = row; c < row + n; c++) {
+            const PetscScalar f = cz[c] * (x[c] - x[c - n2]);
+            y[c] += f;
+            y[c - n2] -= f;
+          }
+      }
+  }
 }
 
 /* y += A_list x for the faces of one list; xg, yg may be NULL for the local list. */
@@ -108,7 +149,8 @@ static PetscErrorCode MatMult_PffShell(Mat S, Vec x, Vec y)
   PetscCall(VecGetArrayWrite(y, &ya));
   PetscCall(PetscArrayzero(ya, s->ncells));
   for (PetscInt q = 0; q < s->nisolated; q++) ya[s->isolated[q]] = xa[s->isolated[q]];
-  PffShellFaces(s, PFF_SHELL_LOCAL, xa, NULL, ya, NULL); /* overlaps the gather */
+  PffShellInterior(s, xa, ya); /* these two overlap the gather */
+  PffShellFaces(s, PFF_SHELL_LOCAL, xa, NULL, ya, NULL);
   PetscCall(VecScatterEnd(s->scatter, x, s->xg, INSERT_VALUES, SCATTER_FORWARD));
   PetscCall(VecGetArrayRead(s->xg, &xg));
   PetscCall(VecGetArrayWrite(s->yg, &yg));
@@ -120,7 +162,7 @@ static PetscErrorCode MatMult_PffShell(Mat S, Vec x, Vec y)
   PetscCall(VecRestoreArrayRead(x, &xa));
   PetscCall(VecScatterBegin(s->scatter, s->yg, y, ADD_VALUES, SCATTER_REVERSE));
   PetscCall(VecScatterEnd(s->scatter, s->yg, y, ADD_VALUES, SCATTER_REVERSE));
-  PetscCall(PetscLogFlops(7.0 * (s->nface[PFF_SHELL_LOCAL] + s->nface[PFF_SHELL_GHOST])));
+  PetscCall(PetscLogFlops(4.0 * 3 * s->ncells));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -181,7 +223,17 @@ PetscErrorCode PffPressureShellCreate_Private(PffPressure ps, Mat *S)
 
   PetscFunctionBeginUser;
   PetscCall(PetscNew(&s));
-  s->ncells = ps->ncells;
+  s->ncells  = ps->ncells;
+  s->nblocks = ps->nlocal;
+  PetscCall(PetscMalloc1(ps->nlocal + 1, &s->bstart));
+  PetscCall(PetscMalloc1(ps->nlocal, &s->bn));
+  PetscCall(PetscArraycpy(s->bstart, ps->blockStart, ps->nlocal + 1));
+  for (PetscInt lb = 0; lb < ps->nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(ps->grid, lb, &info));
+    s->bn[lb] = info.n;
+  }
+  for (PetscInt d = 0; d < 3; d++) PetscCall(PetscCalloc1(ps->ncells, &s->cin[d]));
 
   /* the distinct remote lower cells, and the size of each list */
   PetscCall(PetscMalloc1(nrows + 3 * ps->nfiner, &ghosts));
@@ -190,7 +242,7 @@ PetscErrorCode PffPressureShellCreate_Private(PffPressure ps, Mat *S)
     PetscBool   remote = PETSC_FALSE;
     PetscScalar vals[5];
     m = PffPressureGradientRow(ps, r, cols, vals);
-    if (m == 0) continue; /* wall or inactive: never a flux */
+    if (m == 0 || ps->kind[r] == PFF_FACE_INTERIOR) continue; /* wall or inactive: never a flux */
     for (PetscInt q = 1; q < m; q++)
       if (cols[q] < ps->rstart || cols[q] >= rend) {
         ghosts[nremote++] = cols[q];
@@ -214,7 +266,7 @@ PetscErrorCode PffPressureShellCreate_Private(PffPressure ps, Mat *S)
     PetscInt    cols[5], m, l = PFF_SHELL_LOCAL;
     PetscScalar vals[5];
     m = PffPressureGradientRow(ps, r, cols, vals);
-    if (m == 0) continue;
+    if (m == 0 || ps->kind[r] == PFF_FACE_INTERIOR) continue;
     for (PetscInt q = 1; q < m; q++)
       if (cols[q] < ps->rstart || cols[q] >= rend) l = PFF_SHELL_GHOST;
     const PetscInt i = s->nface[l]++;
@@ -262,6 +314,17 @@ PetscErrorCode PffPressureShellUpdate_Private(PffPressure ps, Mat S)
   PetscCall(VecGetArrayWrite(s->yg, &dg));
   PetscCall(PetscArrayzero(d, s->ncells));
   PetscCall(PetscArrayzero(dg, s->nghost));
+  for (PetscInt b = 0; b < s->nblocks; b++) {
+    const PetscInt n = s->bn[b], stride[3] = {1, n, n * n};
+    for (PetscInt c = s->bstart[b]; c < s->bstart[b + 1]; c++)
+      for (PetscInt e = 0; e < 3; e++) {
+        const PetscInt r = 3 * c + e;
+        s->cin[e][c]     = ps->kind[r] == PFF_FACE_INTERIOR ? PetscRealPart(coef[r]) : 0.0;
+        if (ps->kind[r] != PFF_FACE_INTERIOR) continue;
+        d[c] += s->cin[e][c];
+        d[c - stride[e]] += s->cin[e][c];
+      }
+  }
   for (PetscInt l = 0; l < PFF_SHELL_NLISTS; l++)
     for (PetscInt i = 0; i < s->nface[l]; i++) {
       const PetscInt  k0 = s->off[l][i], k1 = s->off[l][i + 1];
