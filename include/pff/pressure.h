@@ -21,7 +21,8 @@
    (rows of wall and inactive-neighbour faces exist but are always closed). docs/pressure.md has more.
 
    The operator sits behind a small interface (apply, diagonal, face coefficients per level); the
-   adaptive multigrid preconditioner pffmg (below) builds its hierarchy from the assembled A. */
+   adaptive multigrid preconditioner pffmg (below) builds its hierarchy from the assembled A. The Krylov
+   method applies either that A or a matrix-free MATSHELL of it (-pressure_operator aij|shell). */
 #pragma once
 
 #include <pff/grid.h>

@@ -3,7 +3,8 @@
    Stage "Pressure" of the time step: SetUp once per grid topology (face list, gradient G, the
    operator pattern, Vecs and the Krylov solver), SetCoefficients once per step (beta = 1/rho and the
    open mask from face channels, A = G^T diag(M beta open) G plus the Dirichlet wall terms), Project
-   (rhs from V D u*, KSP solve, u <- u* - dt beta G p). Closed boxes and periodic axes leave A singular
+   (rhs from V D u*, KSP solve, u <- u* - dt beta G p). The KSP applies A or its matrix-free twin (shell.c,
+   -pressure_operator) and preconditions with A. Closed boxes and periodic axes leave A singular
    with the constants as null space: it is attached to A and removed from the rhs. A Dirichlet wall
    (p = 0, PffPressureSetDirichletWalls) makes A definite, and then no null space is attached. */
 #include "pressureimpl.h"

@@ -190,8 +190,8 @@ static PetscErrorCode MatView_PffShell(Mat S, PetscViewer viewer)
     PetscInt64 n[3] = {s->nface[PFF_SHELL_LOCAL], s->nface[PFF_SHELL_GHOST], s->nghost};
     PetscCall(MPIU_Allreduce(MPI_IN_PLACE, n, 3, MPIU_INT64, MPI_SUM, PetscObjectComm((PetscObject)S)));
     PetscCall(PetscViewerASCIIPrintf(viewer,
-                                     "pressure operator, matrix-free: %" PetscInt64_FMT
-                                     " faces with owned lower cells, %" PetscInt64_FMT " with ghosts, %" PetscInt64_FMT
+                                     "pressure operator, matrix-free: block-side faces %" PetscInt64_FMT
+                                     " with owned lower cells, %" PetscInt64_FMT " with ghosts; %" PetscInt64_FMT
                                      " ghost cells\n",
                                      n[0], n[1], n[2]));
   }
