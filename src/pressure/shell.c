@@ -3,13 +3,15 @@
    with the stencil weight c_f = M_f beta_f open_f / d_f^2 (PffPressureGetFaceCoefficients) and w_k = 1
    (one lower cell) or 1/4 (coarse above fine, the 4 fine cells; faces.c). Face by face,
      flux = c_f (x_upper - sum_k w_k x_lower_k),   y_upper += flux,   y_lower_k -= w_k flux,
-   plus the unit diagonal that the assembly (operator.c) gives cells with every face closed, so the
-   shell is the assembled A up to rounding. The cells are walked block by block in the block Morton
-   order of the numbering. Faces inside a block (the bulk: all but 3 n^2 of the 3 n^3 faces of a block
-   of n^3 cells) need no index arrays, their lower cell is the cell minus the raster stride 1, n or n^2,
-   and their coefficients sit in one contiguous array per axis; so a product reads 3 coefficients per
-   cell against the 7 values and 7 column indices per row of the AIJ matrix. The faces on block sides
-   (same level, coarser, finer) go through an explicit list of upper and lower cells.
+   plus the diagonal-only terms of the assembly (operator.c): the Dirichlet wall terms 2 h beta and the
+   unit diagonal of cells with every face closed. So the shell is the assembled A up to rounding.
+
+   The cells are walked block by block in the block Morton order of the numbering. Faces inside a block
+   (the bulk: all but 3 n^2 of the 3 n^3 faces of a block of n^3 cells) need no index arrays, their
+   lower cell is the cell minus the raster stride 1, n or n^2, and their coefficients sit in one
+   contiguous array per axis; so a product reads 3 coefficients per cell against the 7 values and 7
+   column indices per row of the AIJ matrix. The faces on block sides (same level, coarser, finer) go
+   through an explicit list of upper and lower cells.
 
    Communication: a face's upper cell is always owned, its lower cells may belong to another rank.
    Their x values come through a VecScatter into a ghost Vec of the distinct remote lower cells, and
@@ -33,8 +35,9 @@ typedef struct {
   /* per list, over its faces i: the owned face row, the local upper cell, lower cells lo[off[i] ..
      off[i+1]-1] (1 or 4 of them, weight 1/count) as local cell numbers, ghosts as ncells + ghost index */
   PetscInt  *row[PFF_SHELL_NLISTS], *up[PFF_SHELL_NLISTS], *off[PFF_SHELL_NLISTS], *lo[PFF_SHELL_NLISTS];
-  PetscReal *c[PFF_SHELL_NLISTS];  /* c_f of each face, refreshed by Update */
-  PetscInt   nisolated, *isolated; /* local cells with every face closed: unit diagonal */
+  PetscReal *c[PFF_SHELL_NLISTS]; /* c_f of each face, refreshed by Update */
+  PetscInt   ndiag, *diagCell;    /* cells with a diagonal-only term: Dirichlet walls, or the unit */
+  PetscReal *diagVal;             /* diagonal of a cell with every face closed */
   PetscInt   nghost;
   Vec        xg, yg;  /* ghost values of x, contributions to y (sequential) */
   VecScatter scatter; /* owned x -> xg; reversed, yg -> y */
@@ -57,7 +60,8 @@ static PetscErrorCode PffShellDestroy(void *ctx)
     PetscCall(PetscFree(s->lo[l]));
     PetscCall(PetscFree(s->c[l]));
   }
-  PetscCall(PetscFree(s->isolated));
+  PetscCall(PetscFree(s->diagCell));
+  PetscCall(PetscFree(s->diagVal));
   PetscCall(VecDestroy(&s->xg));
   PetscCall(VecDestroy(&s->yg));
   PetscCall(VecDestroy(&s->diag));
@@ -148,7 +152,7 @@ static PetscErrorCode MatMult_PffShell(Mat S, Vec x, Vec y)
   PetscCall(VecGetArrayRead(x, &xa));
   PetscCall(VecGetArrayWrite(y, &ya));
   PetscCall(PetscArrayzero(ya, s->ncells));
-  for (PetscInt q = 0; q < s->nisolated; q++) ya[s->isolated[q]] = xa[s->isolated[q]];
+  for (PetscInt q = 0; q < s->ndiag; q++) ya[s->diagCell[q]] = s->diagVal[q] * xa[s->diagCell[q]];
   PffShellInterior(s, xa, ya); /* these two overlap the gather */
   PffShellFaces(s, PFF_SHELL_LOCAL, xa, NULL, ya, NULL);
   PetscCall(VecScatterEnd(s->scatter, x, s->xg, INSERT_VALUES, SCATTER_FORWARD));
@@ -299,12 +303,13 @@ PetscErrorCode PffPressureShellCreate_Private(PffPressure ps, Mat *S)
 }
 
 /* Copies c_f from ps->coef into the lists and rebuilds the diagonal, sum_f c_f (1 on the upper cell,
-   w_k^2 on the lower ones), with the ghost part sent home; cells whose diagonal is exactly zero have
-   every face closed and get 1, the criterion of the assembly. */
+   w_k^2 on the lower ones), with the ghost part sent home. Then the diagonal-only terms of the assembly
+   (operator.c): the Dirichlet wall terms 2 h beta of ps->dirdiag, and 1 for a cell whose diagonal is
+   still exactly zero (every face closed, no Dirichlet term), the criterion of the assembly. */
 PetscErrorCode PffPressureShellUpdate_Private(PffPressure ps, Mat S)
 {
   PffShell          *s;
-  const PetscScalar *coef;
+  const PetscScalar *coef, *dd;
   PetscScalar       *d, *dg;
 
   PetscFunctionBeginUser;
@@ -344,18 +349,25 @@ PetscErrorCode PffPressureShellUpdate_Private(PffPressure ps, Mat S)
   PetscCall(VecScatterBegin(s->scatter, s->yg, s->diag, ADD_VALUES, SCATTER_REVERSE));
   PetscCall(VecScatterEnd(s->scatter, s->yg, s->diag, ADD_VALUES, SCATTER_REVERSE));
 
-  PetscCall(PetscFree(s->isolated));
-  s->nisolated = 0;
+  PetscCall(PetscFree(s->diagCell));
+  PetscCall(PetscFree(s->diagVal));
   PetscCall(VecGetArray(s->diag, &d));
+  PetscCall(VecGetArrayRead(ps->dirdiag, &dd));
+  s->ndiag = 0;
   for (PetscInt i = 0; i < s->ncells; i++)
-    if (PetscRealPart(d[i]) == 0) s->nisolated++;
-  PetscCall(PetscMalloc1(s->nisolated, &s->isolated));
-  s->nisolated = 0;
-  for (PetscInt i = 0; i < s->ncells; i++)
-    if (PetscRealPart(d[i]) == 0) {
-      d[i]                        = 1.0;
-      s->isolated[s->nisolated++] = i;
-    }
+    if (PetscRealPart(dd[i]) != 0 || PetscRealPart(d[i]) == 0) s->ndiag++;
+  PetscCall(PetscMalloc1(s->ndiag, &s->diagCell));
+  PetscCall(PetscMalloc1(s->ndiag, &s->diagVal));
+  s->ndiag = 0;
+  for (PetscInt i = 0; i < s->ncells; i++) {
+    PetscReal extra = PetscRealPart(dd[i]);
+    if (PetscRealPart(d[i]) + extra == 0) extra = 1.0; /* no open face and no Dirichlet term */
+    if (extra == 0) continue;
+    d[i] += extra;
+    s->diagCell[s->ndiag]  = i;
+    s->diagVal[s->ndiag++] = extra;
+  }
+  PetscCall(VecRestoreArrayRead(ps->dirdiag, &dd));
   PetscCall(VecRestoreArray(s->diag, &d));
   s->updated = PETSC_TRUE;
   PetscCall(MatSetNullSpace(S, ps->nullsp));

@@ -1,10 +1,11 @@
 /* The matrix-free pressure operator (src/pressure/shell.c) against the assembled A = G^T diag(M beta open) G:
    - S x = A x (relative 1e-12) for random x and MatGetDiagonal(S) = MatGetDiagonal(A), on uniform and
      graded 3-level grids, closed, periodic and with inactive blocks, random beta in [1e-3, 1], 10% of the
-     faces closed at random and a solid box (its cells have every face closed: unit diagonal);
+     faces closed at random and a solid box (its cells have every face closed: unit diagonal), also with
+     Dirichlet walls (their 2 h beta diagonal terms);
    - Jacobi-preconditioned CG with (S, S) against (A, A): the shell's diagonal drives the same iterations;
    - a projection with -pressure_operator shell gives the p and u of -pressure_operator aij (rtol 1e-10,
-     default PC pffmg and PC jacobi, both on the assembled Pmat).
+     default PC pffmg and PC jacobi, both on the assembled Pmat; also with Dirichlet walls).
    Sample run: mpiexec -n 4 ./test_pressure_shell            prints one line per check on rank 0.
    Benchmark:  mpiexec -n 2 ./test_pressure_shell -bench 64  MatMult of aij and shell on a 64^3 box, best of 10. */
 #include "pfftest.h"
@@ -108,8 +109,22 @@ static PetscErrorCode ProblemCreate(MPI_Comm comm, PetscInt g, PetscReal closedF
 static const char *const GridNames[] = {"uniform closed", "uniform periodic", "graded closed", "graded periodic",
                                         "graded inactive"};
 
+/* Dirichlet walls (p = 0) on the non-periodic walls -x and +y when asked: they add 2 h beta to the
+   diagonal of the cells beside them, a diagonal-only term the shell must reproduce. */
+static PetscErrorCode SetWalls(PffPressure ps, const PffTestCtx *t, PetscBool dirichlet)
+{
+  PetscBool walls[6] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
+
+  PetscFunctionBeginUser;
+  if (!dirichlet) PetscFunctionReturn(PETSC_SUCCESS);
+  walls[0] = !t->periodic[0];
+  walls[3] = !t->periodic[1];
+  PetscCall(PffPressureSetDirichletWalls(ps, walls));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /* S x = A x, diag(S) = diag(A), and Jacobi-CG with (S, S) = with (A, A). */
-static PetscErrorCode TestEquality(PetscInt g)
+static PetscErrorCode TestEquality(PetscInt g, PetscBool dirichlet)
 {
   Problem     pb;
   PffPressure ps;
@@ -122,10 +137,21 @@ static PetscErrorCode TestEquality(PetscInt g)
   PetscCall(ProblemCreate(PETSC_COMM_WORLD, g, 0.1, &pb));
   PetscCall(PffPressureCreate(pb.t.grid, &ps));
   PetscCall(PffPressureSetFromOptions(ps));
+  PetscCall(SetWalls(ps, &pb.t, dirichlet));
   PetscCall(PffPressureSetUp(ps));
   PetscCall(PffPressureSetCoefficients(ps, pb.betaCh, pb.openCh));
   PetscCall(PffPressureGetOperator(ps, &A));
   PetscCall(PffPressureGetShellOperator(ps, &S));
+  if (dirichlet) { /* the walls are on: A is definite, and has the 2 h beta terms */
+    MatNullSpace nsp;
+    Vec          dd;
+    PetscReal    ddsum;
+    PetscCall(MatGetNullSpace(A, &nsp));
+    PetscCall(PffPressureGetDirichletDiagonal(ps, &dd));
+    PetscCall(VecSum(dd, &ddsum));
+    PetscCheck(nsp == NULL && ddsum > 0, PETSC_COMM_WORLD, PETSC_ERR_PLIB, "%s: Dirichlet walls not applied",
+               GridNames[g]);
+  }
   PetscCall(MatCreateVecs(A, &x, &ya));
   PetscCall(VecDuplicate(ya, &ys));
   PetscCall(VecDuplicate(ya, &da));
@@ -192,9 +218,9 @@ static PetscErrorCode TestEquality(PetscInt g)
              "%s: Jacobi-CG took %" PetscInt_FMT " iterations with (A, A) but %" PetscInt_FMT " with (S, S)",
              GridNames[g], its[0], its[1]);
   PetscCall(PetscPrintf(PETSC_COMM_WORLD,
-                        "shell %-16s |Ax-Sx|/|Ax| <= %.1e  |diag A - diag S| %.1e  closed cells %" PetscInt_FMT
+                        "shell %-16s %-9s |Ax-Sx|/|Ax| <= %.1e  |diag A - diag S| %.1e  closed cells %" PetscInt_FMT
                         "  jacobi-cg its aij/shell %s\n",
-                        GridNames[g], (double)errMax, (double)(derr / ndA), nisolated,
+                        GridNames[g], dirichlet ? "dirichlet" : "", (double)errMax, (double)(derr / ndA), nisolated,
                         its[0] == its[1] ? "equal" : "within 1"));
   PetscCall(VecDestroy(&x));
   PetscCall(VecDestroy(&ya));
@@ -207,7 +233,7 @@ static PetscErrorCode TestEquality(PetscInt g)
 }
 
 /* The projection with -pressure_operator aij and shell: p (up to the null space) and u agree. */
-static PetscErrorCode TestProjection(PetscInt g, PCType pctype)
+static PetscErrorCode TestProjection(PetscInt g, PCType pctype, PetscBool dirichlet)
 {
   Problem   pb;
   Vec       pref = NULL, uref = NULL;
@@ -231,6 +257,7 @@ static PetscErrorCode TestProjection(PetscInt g, PCType pctype)
     PetscCall(PffPressureCreate(pb.t.grid, &ps));
     PetscCall(PffPressureSetFromOptions(ps));
     PetscCall(PetscOptionsClearValue(NULL, "-pressure_operator"));
+    PetscCall(SetWalls(ps, &pb.t, dirichlet));
     PetscCall(PffPressureGetKSP(ps, &ksp));
     PetscCall(KSPSetTolerances(ksp, 1e-10, 1e-50, PETSC_DEFAULT, 10000));
     if (pctype) {
@@ -272,13 +299,13 @@ static PetscErrorCode TestProjection(PetscInt g, PCType pctype)
     if (k == 0) {
       PetscCall(VecDuplicate(p, &pref));
       PetscCall(VecCopy(p, pref));
-      PetscCall(MatNullSpaceRemove(nsp, pref));
+      if (nsp) PetscCall(MatNullSpaceRemove(nsp, pref)); /* none with a Dirichlet wall */
       PetscCall(VecNorm(pref, NORM_2, &pn));
       uref = u;
     } else {
       PetscReal un;
       PetscCall(VecAXPY(pref, -1.0, p));
-      PetscCall(MatNullSpaceRemove(nsp, pref));
+      if (nsp) PetscCall(MatNullSpaceRemove(nsp, pref));
       PetscCall(VecNorm(pref, NORM_2, &dp));
       dp /= pn;
       PetscCall(VecNorm(uref, NORM_2, &un));
@@ -290,9 +317,10 @@ static PetscErrorCode TestProjection(PetscInt g, PCType pctype)
     PetscCall(PffPressureDestroy(&ps));
   }
   PetscCall(PetscPrintf(PETSC_COMM_WORLD,
-                        "project %-16s pc %-6s its aij %3" PetscInt_FMT " shell %3" PetscInt_FMT
+                        "project %-16s %-9s pc %-6s its aij %3" PetscInt_FMT " shell %3" PetscInt_FMT
                         "  |p_shell - p_aij|/|p| %.1e  |u_shell - u_aij|/|u| %.1e\n",
-                        GridNames[g], pctype ? pctype : "pffmg", its[0], its[1], (double)dp, (double)du));
+                        GridNames[g], dirichlet ? "dirichlet" : "", pctype ? pctype : "pffmg", its[0], its[1],
+                        (double)dp, (double)du));
   /* rtol 1e-10 on the residual; rounding alone separates the two runs */
   PetscCheck(dp <= 1e-6 && du <= 1e-6, PETSC_COMM_WORLD, PETSC_ERR_PLIB,
              "%s: shell and aij projections differ: p %g, u %g (relative)", GridNames[g], (double)dp, (double)du);
@@ -371,10 +399,13 @@ int main(int argc, char **argv)
   if (bench > 0)
     PetscCall(Bench(bench, nrep));
   else {
-    for (PetscInt g = 0; g < 5; g++) PetscCall(TestEquality(g));
-    PetscCall(TestProjection(0, NULL));
-    PetscCall(TestProjection(2, NULL));
-    PetscCall(TestProjection(3, PCJACOBI));
+    for (PetscInt g = 0; g < 5; g++) PetscCall(TestEquality(g, PETSC_FALSE));
+    PetscCall(TestEquality(2, PETSC_TRUE));
+    PetscCall(TestEquality(4, PETSC_TRUE));
+    PetscCall(TestProjection(0, NULL, PETSC_FALSE));
+    PetscCall(TestProjection(2, NULL, PETSC_FALSE));
+    PetscCall(TestProjection(3, PCJACOBI, PETSC_FALSE));
+    PetscCall(TestProjection(2, NULL, PETSC_TRUE));
   }
   PetscCall(PetscFinalize());
   return 0;
