@@ -122,9 +122,9 @@ PETSC_EXTERN PetscErrorCode PffPressureGetDiagonal(PffPressure ps, Vec *diag);
 PETSC_EXTERN PetscErrorCode PffPressureGetFaceCoefficients(PffPressure ps, Vec *coef);
 PETSC_EXTERN PetscErrorCode PffPressureGetDirichletDiagonal(PffPressure ps, Vec *dirdiag);
 /* The matrix-free operator (MATSHELL: MatMult, MatMultTranspose, MatGetDiagonal, MatView) equal to the
-   assembled A, including the unit diagonal of cells with every face closed; borrowed, valid until
-   PffPressureDestroy and kept current by SetCoefficients. Built on the first call when the operator
-   type is aij. Collective. */
+   assembled A, including its diagonal-only terms (Dirichlet walls, the unit diagonal of cells with every
+   face closed); borrowed, valid until PffPressureDestroy and kept current by SetCoefficients. Built on
+   the first call when the operator type is aij. Needs SetCoefficients first. Collective. */
 PETSC_EXTERN PetscErrorCode PffPressureGetShellOperator(PffPressure ps, Mat *S);
 PETSC_EXTERN PetscErrorCode PffPressureGetKSP(PffPressure ps, KSP *ksp);
 
