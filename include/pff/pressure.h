@@ -21,7 +21,8 @@
    (rows of wall and inactive-neighbour faces exist but are always closed). docs/pressure.md has more.
 
    The operator sits behind a small interface (apply, diagonal, face coefficients per level); the
-   adaptive multigrid preconditioner pffmg (below) builds its hierarchy from the assembled A. */
+   adaptive multigrid preconditioner pffmg (below) builds its hierarchy from the assembled A. The Krylov
+   method applies either that A or a matrix-free MATSHELL of it (-pressure_operator aij|shell). */
 #pragma once
 
 #include <pff/grid.h>
@@ -49,10 +50,24 @@ typedef struct {
    the norm type defaults to unpreconditioned), -pressure_pc_type pffmg|gamg|hypre|bjacobi|jacobi (default pffmg;
    bjacobi uses ICC(0) on its blocks unless -pressure_sub_pc_type is given), -pressure_assembly
    ptap|direct (how A is assembled, default ptap), -pressure_dirichlet_walls none|<list of xmin,xmax,ymin,ymax,
-   zmin,zmax> (PffPressureSetDirichletWalls; default none), and every other PETSc KSP/PC option under that prefix. */
+   zmin,zmax> (PffPressureSetDirichletWalls; default none), -pressure_operator aij|shell (the operator the
+   Krylov method applies, PffPressureSetOperatorType), and every other PETSc KSP/PC option under that prefix. */
 PETSC_EXTERN PetscErrorCode PffPressureCreate(PffGrid grid, PffPressure *ps);
 PETSC_EXTERN PetscErrorCode PffPressureSetFromOptions(PffPressure ps);
-/* Builds the numbering, the face list and the gradient once per grid topology. Collective. */
+/* The operator that the Krylov method applies (the KSP's Amat): the assembled MATMPIAIJ A, or the
+   matrix-free MATSHELL of the same A (src/pressure/shell.c: one face loop, split-phase ghost exchange
+   through a VecScatter built once). The preconditioner matrix (Pmat) is the assembled A in both cases,
+   so every PETSc PC and pffmg keep working; A is assembled either way. */
+typedef enum { PFF_PRESSURE_OPERATOR_AIJ, PFF_PRESSURE_OPERATOR_SHELL } PffPressureOperatorType;
+PETSC_EXTERN const char *const PffPressureOperatorTypes[];
+
+/* Sets the KSP's Amat type (default PFF_PRESSURE_OPERATOR_AIJ); option -pressure_operator aij|shell.
+   Takes effect at the next SetCoefficients. Logically collective. */
+PETSC_EXTERN PetscErrorCode PffPressureSetOperatorType(PffPressure ps, PffPressureOperatorType type);
+PETSC_EXTERN PetscErrorCode PffPressureGetOperatorType(PffPressure ps, PffPressureOperatorType *type);
+
+/* Builds the numbering, the face list and the gradient once per grid topology (and the shell's
+   communication plan when the operator type is shell). Collective. */
 PETSC_EXTERN PetscErrorCode PffPressureSetUp(PffPressure ps);
 PETSC_EXTERN PetscErrorCode PffPressureDestroy(PffPressure *ps);
 
@@ -106,6 +121,11 @@ PETSC_EXTERN PetscErrorCode PffPressureGetOperator(PffPressure ps, Mat *A);
 PETSC_EXTERN PetscErrorCode PffPressureGetDiagonal(PffPressure ps, Vec *diag);
 PETSC_EXTERN PetscErrorCode PffPressureGetFaceCoefficients(PffPressure ps, Vec *coef);
 PETSC_EXTERN PetscErrorCode PffPressureGetDirichletDiagonal(PffPressure ps, Vec *dirdiag);
+/* The matrix-free operator (MATSHELL: MatMult, MatMultTranspose, MatGetDiagonal, MatView) equal to the
+   assembled A, including its diagonal-only terms (Dirichlet walls, the unit diagonal of cells with every
+   face closed); borrowed, valid until PffPressureDestroy and kept current by SetCoefficients. Built on
+   the first call when the operator type is aij. Needs SetCoefficients first. Collective. */
+PETSC_EXTERN PetscErrorCode PffPressureGetShellOperator(PffPressure ps, Mat *S);
 PETSC_EXTERN PetscErrorCode PffPressureGetKSP(PffPressure ps, KSP *ksp);
 
 /* The adaptive multigrid preconditioner of PF-FLIP Sec. 6, -pressure_pc_type pffmg (a PCSHELL inside
@@ -113,8 +133,8 @@ PETSC_EXTERN PetscErrorCode PffPressureGetKSP(PffPressure ps, KSP *ksp);
    red-black hybrid Gauss-Seidel, default, or weighted Jacobi), -pffmg_adaptive (adaptive relaxation,
    Algorithm 2, default true), -pffmg_block_sweeps (repeat block-local sweeps until the update falls by 1/3,
    default true), -pffmg_block_sweeps_max (4), -pffmg_adaptive_steps (10), -pffmg_sweeps (fixed pre/post
-   sweeps without adaptivity, 2), -pffmg_omega (6/7), -pffmg_theta_sigmas (2), -pffmg_max_levels, -pffmg_rescale (coarse coefficients
-   consistent with the coarse discretisation, default true), -pffmg_kcycle (flexible-CG steps per coarse
+   sweeps without adaptivity, 2), -pffmg_omega (6/7), -pffmg_theta_sigmas (2), -pffmg_max_levels, -pffmg_rescale (coarse
+   coefficients consistent with the coarse discretisation, default true), -pffmg_kcycle (flexible-CG steps per coarse
    correction, default 2; 0 = V-cycle), -pffmg_correction (coarse-correction scale, 1), and
    the coarsest-level KSP under pressure_pffmg_coarse_ (default preonly + redundant LU). The functions
    below need pffmg as the PC and a KSPSetUp or solve before them. */

@@ -3,18 +3,22 @@
    Stage "Pressure" of the time step: SetUp once per grid topology (face list, gradient G, the
    operator pattern, Vecs and the Krylov solver), SetCoefficients once per step (beta = 1/rho and the
    open mask from face channels, A = G^T diag(M beta open) G plus the Dirichlet wall terms), Project
-   (rhs from V D u*, KSP solve, u <- u* - dt beta G p). Closed boxes and periodic axes leave A singular
+   (rhs from V D u*, KSP solve, u <- u* - dt beta G p). The KSP applies A or its matrix-free twin (shell.c,
+   -pressure_operator) and preconditions with A. Closed boxes and periodic axes leave A singular
    with the constants as null space: it is attached to A and removed from the rhs. A Dirichlet wall
    (p = 0, PffPressureSetDirichletWalls) makes A definite, and then no null space is attached. */
 #include "pressureimpl.h"
 
 const char *const PffPressureAssemblyTypes[] = {"ptap", "direct", "PffPressureAssemblyType", "PFF_PRESSURE_ASSEMBLY_",
                                                 NULL};
+const char *const PffPressureOperatorTypes[] = {"aij", "shell", "PffPressureOperatorType", "PFF_PRESSURE_OPERATOR_",
+                                                NULL};
 
 #define PFF_PRESSURE_KSP_TYPE_DEFAULT KSPFCG
 #define PFF_PRESSURE_PC_TYPE_DEFAULT "pffmg"
 #define PFF_PRESSURE_RTOL_DEFAULT 1e-4
 #define PFF_PRESSURE_ASSEMBLY_DEFAULT PFF_PRESSURE_ASSEMBLY_PTAP
+#define PFF_PRESSURE_OPERATOR_DEFAULT PFF_PRESSURE_OPERATOR_AIJ
 
 /* Names of the six domain walls in the order of PffPressureSetDirichletWalls. */
 static const char *const PffWallNames[6] = {"xmin", "xmax", "ymin", "ymax", "zmin", "zmax"};
@@ -30,8 +34,9 @@ PetscErrorCode PffPressureCreate(PffGrid grid, PffPressure *ps)
   PetscCall(PffGridGetRaster(grid, NULL, NULL, NULL)); /* errors unless the grid is set up */
   PetscCall(PffPressureMGRegister_Private());
   PetscCall(PetscNew(&p));
-  p->grid     = grid;
-  p->assembly = PFF_PRESSURE_ASSEMBLY_DEFAULT;
+  p->grid         = grid;
+  p->assembly     = PFF_PRESSURE_ASSEMBLY_DEFAULT;
+  p->operatorType = PFF_PRESSURE_OPERATOR_DEFAULT;
   PetscCall(PffGridGetComm(grid, &p->comm));
   PetscCall(KSPCreate(p->comm, &p->ksp));
   PetscCall(KSPSetOptionsPrefix(p->ksp, "pressure_"));
@@ -59,6 +64,10 @@ PetscErrorCode PffPressureSetFromOptions(PffPressure ps)
   PetscCall(PetscOptionsStringArray("-pressure_dirichlet_walls",
                                     "Walls with p = 0: none or a list of xmin,xmax,ymin,ymax,zmin,zmax",
                                     "PffPressureSetDirichletWalls", names, &nnames, &set));
+  PetscCall(PetscOptionsEnum("-pressure_operator",
+                             "Operator the Krylov method applies: assembled AIJ or matrix-free shell (the PC uses AIJ)",
+                             "PffPressureSetOperatorType", PffPressureOperatorTypes, (PetscEnum)ps->operatorType,
+                             (PetscEnum *)&ps->operatorType, NULL));
   PetscOptionsEnd();
   /* parsed after the options block, so that a bad name leaves the options object closed */
   if (set) {
@@ -157,6 +166,7 @@ PetscErrorCode PffPressureSetUp(PffPressure ps)
   PetscCall(MatSetOption(ps->A, MAT_NEW_NONZERO_LOCATION_ERR, PETSC_TRUE));
   PetscCall(MatSetOption(ps->A, MAT_SYMMETRIC, PETSC_TRUE));
   PetscCall(MatSetOption(ps->A, MAT_SYMMETRY_ETERNAL, PETSC_TRUE));
+  if (ps->operatorType == PFF_PRESSURE_OPERATOR_SHELL) PetscCall(PffPressureShellCreate_Private(ps, &ps->S));
   ps->setup = PETSC_TRUE;
   PetscCall(PetscLogEventEnd(PFF_PressSetUp, 0, 0, 0, 0));
   PetscCall(PetscInfo(NULL,
@@ -177,6 +187,7 @@ PetscErrorCode PffPressureDestroy(PffPressure *ps)
   PetscCall(KSPDestroy(&p->ksp));
   PetscCall(MatNullSpaceDestroy(&p->nullsp));
   PetscCall(MatDestroy(&p->A));
+  PetscCall(MatDestroy(&p->S));
   PetscCall(MatDestroy(&p->W));
   PetscCall(MatDestroy(&p->G));
   PetscCall(VecDestroy(&p->p));
@@ -217,7 +228,11 @@ PetscErrorCode PffPressureSetCoefficients(PffPressure ps, PetscInt chBeta, Petsc
   PetscCall(PffPressureCheckSetUp(ps, PETSC_FALSE));
   PetscCall(PetscLogEventBegin(PFF_PressAssemble, 0, 0, 0, 0));
   PetscCall(PffPressureAssemble_Private(ps, chBeta, chOpen));
-  PetscCall(KSPSetOperators(ps->ksp, ps->A, ps->A));
+  if (ps->operatorType == PFF_PRESSURE_OPERATOR_SHELL && ps->S == NULL)
+    PetscCall(PffPressureShellCreate_Private(ps, &ps->S));
+  if (ps->S != NULL) PetscCall(PffPressureShellUpdate_Private(ps, ps->S));
+  /* the PC always gets the assembled A (pffmg and PETSc's PCs need entries) */
+  PetscCall(KSPSetOperators(ps->ksp, ps->operatorType == PFF_PRESSURE_OPERATOR_SHELL ? ps->S : ps->A, ps->A));
   ps->coefficientsSet = PETSC_TRUE;
   PetscCall(PetscLogEventEnd(PFF_PressAssemble, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -315,8 +330,8 @@ PetscErrorCode PffPressureProject(PffPressure ps, PetscInt chU, PetscReal dt, Pe
             "pressure solver (KSP %s, PC %s, options prefix pressure_) failed: %s after %" PetscInt_FMT " iterations",
             ktype, ptype, KSPConvergedReasons[st.reason], st.its);
   }
-  /* true relative residual, whatever norm the KSP monitors */
-  PetscCall(MatMult(ps->A, ps->p, ps->vcell));
+  /* true relative residual, whatever norm the KSP monitors, with the operator the KSP applied */
+  PetscCall(MatMult(ps->operatorType == PFF_PRESSURE_OPERATOR_SHELL ? ps->S : ps->A, ps->p, ps->vcell));
   PetscCall(VecAYPX(ps->vcell, -1.0, ps->b));
   PetscCall(VecNorm(ps->vcell, NORM_2, &rnorm));
   PetscCall(VecNorm(ps->b, NORM_2, &bnorm));
@@ -382,6 +397,38 @@ PetscErrorCode PffPressureGetFaceCoefficients(PffPressure ps, Vec *coef)
   PetscFunctionBeginUser;
   PetscCall(PffPressureCheckSetUp(ps, PETSC_TRUE));
   *coef = ps->coef;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureGetShellOperator(PffPressure ps, Mat *S)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffPressureCheckSetUp(ps, PETSC_TRUE));
+  PetscCheck(S != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL output argument");
+  if (ps->S == NULL) {
+    PetscCall(PffPressureShellCreate_Private(ps, &ps->S));
+    PetscCall(PffPressureShellUpdate_Private(ps, ps->S));
+  }
+  *S = ps->S;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureSetOperatorType(PffPressure ps, PffPressureOperatorType type)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(ps != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL object");
+  PetscCheck(type == PFF_PRESSURE_OPERATOR_AIJ || type == PFF_PRESSURE_OPERATOR_SHELL, ps->comm,
+             PETSC_ERR_ARG_OUTOFRANGE, "pressure: unknown operator type %d", (int)type);
+  ps->operatorType = type;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureGetOperatorType(PffPressure ps, PffPressureOperatorType *type)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(ps != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL object");
+  PetscCheck(type != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL output argument");
+  *type = ps->operatorType;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -41,6 +41,7 @@ struct _n_PffPressure {
   Mat          G;      /* gradient: 3 ncells x ncells rows, (G p)_f = (p_upper - sum w_c p_c) / d_f */
   Mat          W;      /* diag(M_f beta_f open_f) on the face rows, for MatPtAP */
   Mat          A;      /* G^T W G */
+  Mat          S;      /* the matrix-free A (shell.c), NULL until an operator of type shell is needed */
   MatNullSpace nullsp; /* constants (or the connected cells), NULL when a Dirichlet wall makes A definite */
   KSP          ksp;
 
@@ -51,6 +52,7 @@ struct _n_PffPressure {
   Vec uf, wf, mface, beta, open, coef, w; /* face Vecs: velocity, work, M_f, beta_f, open_f, coefficient, W */
 
   PffPressureAssemblyType assembly;
+  PffPressureOperatorType operatorType; /* the KSP's Amat; the Pmat is always A */
   PetscBool               subPCDefaultApplied;
 };
 
@@ -86,6 +88,8 @@ static inline PetscInt PffPressureGradientRow(PffPressure ps, PetscInt r, PetscI
 PETSC_INTERN PetscErrorCode PffPressureBuildFaces_Private(PffPressure);
 PETSC_INTERN PetscErrorCode PffPressureBuildGradient_Private(PffPressure);
 PETSC_INTERN PetscErrorCode PffPressureAssemble_Private(PffPressure, PetscInt, PetscInt);
+PETSC_INTERN PetscErrorCode PffPressureShellCreate_Private(PffPressure, Mat *);
+PETSC_INTERN PetscErrorCode PffPressureShellUpdate_Private(PffPressure, Mat);
 PETSC_INTERN PetscErrorCode PffPressureChannelToVec_Private(PffPressure, PetscInt, PffChannelKind, Vec);
 PETSC_INTERN PetscErrorCode PffPressureVecToChannel_Private(PffPressure, Vec, PffChannelKind, PetscInt);
 PETSC_INTERN PetscErrorCode PffPressureMaxDivergenceVec_Private(PffPressure, Vec, PetscReal *);

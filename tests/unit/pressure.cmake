@@ -8,3 +8,7 @@ pff_add_unit(test_pffmg RANKS 1 2 4)
 # pressure with Dirichlet walls: symmetric, definite (no null space), exact for p = distance to the wall on
 # uniform and graded grids, CG on a nonzero-mean rhs, partition independence, bad input. At 1, 2 and 4 ranks.
 pff_add_unit(test_pressure_dirichlet RANKS 1 2 4)
+# matrix-free operator: S x = A x and diag S = diag A on uniform, graded, periodic, closed and inactive grids
+# with random beta and closed faces; Jacobi-CG with (S, S) as with (A, A); projection with
+# -pressure_operator shell as with aij (pffmg and jacobi), also with Dirichlet walls. At 1, 2 and 4 ranks.
+pff_add_unit(test_pressure_shell RANKS 1 2 4)

@@ -1,0 +1,375 @@
+/* The matrix-free pressure operator (PF-FLIP Eq. 8-10, stage "Pressure"): a MATSHELL that applies
+     A = G^T diag(M_f beta_f open_f) G = sum_f c_f g_f g_f^T,   g_f = e_upper - sum_k w_k e_lower_k,
+   with the stencil weight c_f = M_f beta_f open_f / d_f^2 (PffPressureGetFaceCoefficients) and w_k = 1
+   (one lower cell) or 1/4 (coarse above fine, the 4 fine cells; faces.c). Face by face,
+     flux = c_f (x_upper - sum_k w_k x_lower_k),   y_upper += flux,   y_lower_k -= w_k flux,
+   plus the diagonal-only terms of the assembly (operator.c): the Dirichlet wall terms 2 h beta and the
+   unit diagonal of cells with every face closed. So the shell is the assembled A up to rounding.
+
+   The cells are walked block by block in the block Morton order of the numbering. Faces inside a block
+   (the bulk: all but 3 n^2 of the 3 n^3 faces of a block of n^3 cells) need no index arrays, their
+   lower cell is the cell minus the raster stride 1, n or n^2, and their coefficients sit in one
+   contiguous array per axis; so a product reads 3 coefficients per cell against the 7 values and 7
+   column indices per row of the AIJ matrix. The faces on block sides (same level, coarser, finer) go
+   through an explicit list of upper and lower cells.
+
+   Communication: a face's upper cell is always owned, its lower cells may belong to another rank.
+   Their x values come through a VecScatter into a ghost Vec of the distinct remote lower cells, and
+   the contributions to them go back with the reverse scatter (ADD_VALUES); both are built once per
+   grid topology. The product is split-phase: the gather is started, the faces whose lower cells are
+   all owned are done, the gather is finished, then the faces touching a ghost.
+
+   The coefficients are copied into the shell's own arrays by PffPressureShellUpdate_Private (called
+   from SetCoefficients), so the shell does not depend on the PffPressure after it is built. */
+#include "pressureimpl.h"
+
+/* The two face lists: [PFF_SHELL_LOCAL] every lower cell owned, [PFF_SHELL_GHOST] at least one not. */
+enum { PFF_SHELL_LOCAL, PFF_SHELL_GHOST, PFF_SHELL_NLISTS };
+
+typedef struct {
+  PetscInt   ncells;                  /* owned cells */
+  PetscInt   nblocks, *bstart;        /* owned blocks: first local cell, [nblocks + 1] */
+  PetscInt  *bn;                      /* cells per block edge */
+  PetscReal *cin[3];                  /* [ncells] c_f of the lower d-face of each cell if inside its block, else 0 */
+  PetscInt   nface[PFF_SHELL_NLISTS]; /* faces on block sides */
+  /* per list, over its faces i: the owned face row, the local upper cell, lower cells lo[off[i] ..
+     off[i+1]-1] (1 or 4 of them, weight 1/count) as local cell numbers, ghosts as ncells + ghost index */
+  PetscInt  *row[PFF_SHELL_NLISTS], *up[PFF_SHELL_NLISTS], *off[PFF_SHELL_NLISTS], *lo[PFF_SHELL_NLISTS];
+  PetscReal *c[PFF_SHELL_NLISTS]; /* c_f of each face, refreshed by Update */
+  PetscInt   ndiag, *diagCell;    /* cells with a diagonal-only term: Dirichlet walls, or the unit */
+  PetscReal *diagVal;             /* diagonal of a cell with every face closed */
+  PetscInt   nghost;
+  Vec        xg, yg;  /* ghost values of x, contributions to y (sequential) */
+  VecScatter scatter; /* owned x -> xg; reversed, yg -> y */
+  Vec        diag;
+  PetscBool  updated;
+} PffShell;
+
+static PetscErrorCode PffShellDestroy(void *ctx)
+{
+  PffShell *s = (PffShell *)ctx;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscFree(s->bstart));
+  PetscCall(PetscFree(s->bn));
+  for (PetscInt d = 0; d < 3; d++) PetscCall(PetscFree(s->cin[d]));
+  for (PetscInt l = 0; l < PFF_SHELL_NLISTS; l++) {
+    PetscCall(PetscFree(s->row[l]));
+    PetscCall(PetscFree(s->up[l]));
+    PetscCall(PetscFree(s->off[l]));
+    PetscCall(PetscFree(s->lo[l]));
+    PetscCall(PetscFree(s->c[l]));
+  }
+  PetscCall(PetscFree(s->diagCell));
+  PetscCall(PetscFree(s->diagVal));
+  PetscCall(VecDestroy(&s->xg));
+  PetscCall(VecDestroy(&s->yg));
+  PetscCall(VecDestroy(&s->diag));
+  PetscCall(VecScatterDestroy(&s->scatter));
+  PetscCall(PetscFree(s));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* y += sum over the faces inside the blocks, per block and axis, the lower cell one stride down. */
+static inline void PffShellInterior(const PffShell *s, const PetscScalar *restrict x, PetscScalar *restrict y)
+{
+  const PetscReal *restrict cx = s->cin[0], *restrict cy = s->cin[1], *restrict cz = s->cin[2];
+
+  for (PetscInt b = 0; b < s->nblocks; b++) {
+    const PetscInt n = s->bn[b], n2 = n * n;
+    for (PetscInt k = 0; k < n; k++)
+      for (PetscInt j = 0; j < n; j++) {
+        const PetscInt row = s->bstart[b] + n * (j + n * k);
+        for (PetscInt c = row + 1; c < row + n; c++) {
+          const PetscScalar f = cx[c] * (x[c] - x[c - 1]);
+          y[c] += f;
+          y[c - 1] -= f;
+        }
+        if (j > 0)
+          for (PetscInt c = row; c < row + n; c++) {
+            const PetscScalar f = cy[c] * (x[c] - x[c - n]);
+            y[c] += f;
+            y[c - n] -= f;
+          }
+        if (k > 0)
+          for (PetscInt c = row; c < row + n; c++) {
+            const PetscScalar f = cz[c] * (x[c] - x[c - n2]);
+            y[c] += f;
+            y[c - n2] -= f;
+          }
+      }
+  }
+}
+
+/* y += A_list x for the faces of one list; xg, yg may be NULL for the local list. */
+static inline void PffShellFaces(const PffShell *s, PetscInt l, const PetscScalar *x, const PetscScalar *xg,
+                                 PetscScalar *y, PetscScalar *yg)
+{
+  const PetscInt  *up = s->up[l], *off = s->off[l], *lo = s->lo[l], nc = s->ncells;
+  const PetscReal *c = s->c[l];
+
+  if (l == PFF_SHELL_LOCAL) {
+    for (PetscInt i = 0; i < s->nface[l]; i++) {
+      const PetscInt  k0 = off[i], k1 = off[i + 1];
+      const PetscReal w  = k1 - k0 == 1 ? 1.0 : 0.25;
+      PetscScalar     xl = 0;
+      if (c[i] == 0) continue; /* closed by the phase field or a solid */
+      for (PetscInt k = k0; k < k1; k++) xl += x[lo[k]];
+      const PetscScalar flux = c[i] * (x[up[i]] - w * xl), wf = w * flux;
+      y[up[i]] += flux;
+      for (PetscInt k = k0; k < k1; k++) y[lo[k]] -= wf;
+    }
+    return;
+  }
+  for (PetscInt i = 0; i < s->nface[l]; i++) {
+    const PetscInt  k0 = off[i], k1 = off[i + 1];
+    const PetscReal w  = k1 - k0 == 1 ? 1.0 : 0.25;
+    PetscScalar     xl = 0;
+    if (c[i] == 0) continue;
+    for (PetscInt k = k0; k < k1; k++) xl += lo[k] < nc ? x[lo[k]] : xg[lo[k] - nc];
+    const PetscScalar flux = c[i] * (x[up[i]] - w * xl), wf = w * flux;
+    y[up[i]] += flux;
+    for (PetscInt k = k0; k < k1; k++) {
+      if (lo[k] < nc)
+        y[lo[k]] -= wf;
+      else
+        yg[lo[k] - nc] -= wf;
+    }
+  }
+}
+
+static PetscErrorCode MatMult_PffShell(Mat S, Vec x, Vec y)
+{
+  PffShell          *s;
+  const PetscScalar *xa, *xg;
+  PetscScalar       *ya, *yg;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatShellGetContext(S, &s));
+  PetscCheck(s->updated, PetscObjectComm((PetscObject)S), PETSC_ERR_ORDER,
+             "pressure shell: no coefficients yet (PffPressureSetCoefficients)");
+  PetscCall(VecScatterBegin(s->scatter, x, s->xg, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecGetArrayRead(x, &xa));
+  PetscCall(VecGetArrayWrite(y, &ya));
+  PetscCall(PetscArrayzero(ya, s->ncells));
+  for (PetscInt q = 0; q < s->ndiag; q++) ya[s->diagCell[q]] = s->diagVal[q] * xa[s->diagCell[q]];
+  PffShellInterior(s, xa, ya); /* these two overlap the gather */
+  PffShellFaces(s, PFF_SHELL_LOCAL, xa, NULL, ya, NULL);
+  PetscCall(VecScatterEnd(s->scatter, x, s->xg, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecGetArrayRead(s->xg, &xg));
+  PetscCall(VecGetArrayWrite(s->yg, &yg));
+  PetscCall(PetscArrayzero(yg, s->nghost));
+  PffShellFaces(s, PFF_SHELL_GHOST, xa, xg, ya, yg);
+  PetscCall(VecRestoreArrayWrite(s->yg, &yg));
+  PetscCall(VecRestoreArrayRead(s->xg, &xg));
+  PetscCall(VecRestoreArrayWrite(y, &ya));
+  PetscCall(VecRestoreArrayRead(x, &xa));
+  PetscCall(VecScatterBegin(s->scatter, s->yg, y, ADD_VALUES, SCATTER_REVERSE));
+  PetscCall(VecScatterEnd(s->scatter, s->yg, y, ADD_VALUES, SCATTER_REVERSE));
+  PetscCall(PetscLogFlops(4.0 * 3 * s->ncells));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode MatGetDiagonal_PffShell(Mat S, Vec d)
+{
+  PffShell *s;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatShellGetContext(S, &s));
+  PetscCheck(s->updated, PetscObjectComm((PetscObject)S), PETSC_ERR_ORDER,
+             "pressure shell: no coefficients yet (PffPressureSetCoefficients)");
+  PetscCall(VecCopy(s->diag, d));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode MatView_PffShell(Mat S, PetscViewer viewer)
+{
+  PffShell *s;
+  PetscBool isascii;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatShellGetContext(S, &s));
+  PetscCall(PetscObjectTypeCompare((PetscObject)viewer, PETSCVIEWERASCII, &isascii));
+  if (isascii) {
+    PetscInt64 n[3] = {s->nface[PFF_SHELL_LOCAL], s->nface[PFF_SHELL_GHOST], s->nghost};
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, n, 3, MPIU_INT64, MPI_SUM, PetscObjectComm((PetscObject)S)));
+    PetscCall(PetscViewerASCIIPrintf(viewer,
+                                     "pressure operator, matrix-free: block-side faces %" PetscInt64_FMT
+                                     " with owned lower cells, %" PetscInt64_FMT " with ghosts; %" PetscInt64_FMT
+                                     " ghost cells\n",
+                                     n[0], n[1], n[2]));
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Local number of global cell g: owned cells directly, others through the sorted ghost list. */
+static PetscErrorCode PffShellLocalCell(PffPressure ps, const PetscInt *ghosts, PetscInt nghost, PetscInt g,
+                                        PetscInt *loc)
+{
+  PetscFunctionBeginUser;
+  if (g >= ps->rstart && g < ps->rstart + ps->ncells)
+    *loc = g - ps->rstart;
+  else {
+    PetscInt q;
+    PetscCall(PetscFindInt(g, nghost, ghosts, &q));
+    PetscAssert(q >= 0, PETSC_COMM_SELF, PETSC_ERR_PLIB, "pressure shell: cell %" PetscInt_FMT " not a ghost", g);
+    *loc = ps->ncells + q;
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureShellCreate_Private(PffPressure ps, Mat *S)
+{
+  const PetscInt nrows = 3 * ps->ncells, rend = ps->rstart + ps->ncells;
+  PffShell      *s;
+  PetscInt      *ghosts, nremote = 0, count[PFF_SHELL_NLISTS] = {0}, nlo[PFF_SHELL_NLISTS] = {0};
+  IS             is;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscNew(&s));
+  s->ncells  = ps->ncells;
+  s->nblocks = ps->nlocal;
+  PetscCall(PetscMalloc1(ps->nlocal + 1, &s->bstart));
+  PetscCall(PetscMalloc1(ps->nlocal, &s->bn));
+  PetscCall(PetscArraycpy(s->bstart, ps->blockStart, ps->nlocal + 1));
+  for (PetscInt lb = 0; lb < ps->nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(ps->grid, lb, &info));
+    s->bn[lb] = info.n;
+  }
+  for (PetscInt d = 0; d < 3; d++) PetscCall(PetscCalloc1(ps->ncells, &s->cin[d]));
+
+  /* the distinct remote lower cells, and the size of each list */
+  PetscCall(PetscMalloc1(nrows + 3 * ps->nfiner, &ghosts));
+  for (PetscInt r = 0; r < nrows; r++) {
+    PetscInt    cols[5], m;
+    PetscBool   remote = PETSC_FALSE;
+    PetscScalar vals[5];
+    m = PffPressureGradientRow(ps, r, cols, vals);
+    if (m == 0 || ps->kind[r] == PFF_FACE_INTERIOR) continue; /* wall or inactive: never a flux */
+    for (PetscInt q = 1; q < m; q++)
+      if (cols[q] < ps->rstart || cols[q] >= rend) {
+        ghosts[nremote++] = cols[q];
+        remote            = PETSC_TRUE;
+      }
+    count[remote ? PFF_SHELL_GHOST : PFF_SHELL_LOCAL]++;
+    nlo[remote ? PFF_SHELL_GHOST : PFF_SHELL_LOCAL] += m - 1;
+  }
+  PetscCall(PetscSortRemoveDupsInt(&nremote, ghosts));
+  s->nghost = nremote;
+
+  for (PetscInt l = 0; l < PFF_SHELL_NLISTS; l++) {
+    PetscCall(PetscMalloc1(count[l], &s->row[l]));
+    PetscCall(PetscMalloc1(count[l], &s->up[l]));
+    PetscCall(PetscMalloc1(count[l] + 1, &s->off[l]));
+    PetscCall(PetscMalloc1(nlo[l], &s->lo[l]));
+    PetscCall(PetscCalloc1(count[l], &s->c[l]));
+    s->off[l][0] = 0;
+  }
+  for (PetscInt r = 0; r < nrows; r++) {
+    PetscInt    cols[5], m, l = PFF_SHELL_LOCAL;
+    PetscScalar vals[5];
+    m = PffPressureGradientRow(ps, r, cols, vals);
+    if (m == 0 || ps->kind[r] == PFF_FACE_INTERIOR) continue;
+    for (PetscInt q = 1; q < m; q++)
+      if (cols[q] < ps->rstart || cols[q] >= rend) l = PFF_SHELL_GHOST;
+    const PetscInt i = s->nface[l]++;
+    s->row[l][i]     = r;
+    s->up[l][i]      = r / 3;
+    s->off[l][i + 1] = s->off[l][i] + m - 1;
+    for (PetscInt q = 1; q < m; q++)
+      PetscCall(PffShellLocalCell(ps, ghosts, nremote, cols[q], &s->lo[l][s->off[l][i] + q - 1]));
+  }
+
+  /* the plan, once: owned x -> ghost x; the same plan reversed carries the ghost contributions home */
+  PetscCall(VecCreateSeq(PETSC_COMM_SELF, nremote, &s->xg));
+  PetscCall(VecDuplicate(s->xg, &s->yg));
+  PetscCall(ISCreateGeneral(PETSC_COMM_SELF, nremote, ghosts, PETSC_COPY_VALUES, &is));
+  PetscCall(VecScatterCreate(ps->p, is, s->xg, NULL, &s->scatter));
+  PetscCall(ISDestroy(&is));
+  PetscCall(PetscFree(ghosts));
+  PetscCall(VecDuplicate(ps->p, &s->diag));
+
+  PetscCall(MatCreateShell(ps->comm, ps->ncells, ps->ncells, ps->ntotal, ps->ntotal, s, S));
+  PetscCall(MatShellSetContextDestroy(*S, PffShellDestroy));
+  PetscCall(MatShellSetOperation(*S, MATOP_MULT, (void (*)(void))MatMult_PffShell));
+  PetscCall(MatShellSetOperation(*S, MATOP_MULT_TRANSPOSE, (void (*)(void))MatMult_PffShell)); /* symmetric */
+  PetscCall(MatShellSetOperation(*S, MATOP_GET_DIAGONAL, (void (*)(void))MatGetDiagonal_PffShell));
+  PetscCall(MatShellSetOperation(*S, MATOP_VIEW, (void (*)(void))MatView_PffShell));
+  PetscCall(MatSetOption(*S, MAT_SYMMETRIC, PETSC_TRUE));
+  PetscCall(MatSetOption(*S, MAT_SYMMETRY_ETERNAL, PETSC_TRUE));
+  PetscCall(PetscObjectSetName((PetscObject)*S, "pressure_shell"));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Copies c_f from ps->coef into the lists and rebuilds the diagonal, sum_f c_f (1 on the upper cell,
+   w_k^2 on the lower ones), with the ghost part sent home. Then the diagonal-only terms of the assembly
+   (operator.c): the Dirichlet wall terms 2 h beta of ps->dirdiag, and 1 for a cell whose diagonal is
+   still exactly zero (every face closed, no Dirichlet term), the criterion of the assembly. */
+PetscErrorCode PffPressureShellUpdate_Private(PffPressure ps, Mat S)
+{
+  PffShell          *s;
+  const PetscScalar *coef, *dd;
+  PetscScalar       *d, *dg;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatShellGetContext(S, &s));
+  PetscCall(VecGetArrayRead(ps->coef, &coef));
+  PetscCall(VecGetArrayWrite(s->diag, &d));
+  PetscCall(VecGetArrayWrite(s->yg, &dg));
+  PetscCall(PetscArrayzero(d, s->ncells));
+  PetscCall(PetscArrayzero(dg, s->nghost));
+  for (PetscInt b = 0; b < s->nblocks; b++) {
+    const PetscInt n = s->bn[b], stride[3] = {1, n, n * n};
+    for (PetscInt c = s->bstart[b]; c < s->bstart[b + 1]; c++)
+      for (PetscInt e = 0; e < 3; e++) {
+        const PetscInt r = 3 * c + e;
+        s->cin[e][c]     = ps->kind[r] == PFF_FACE_INTERIOR ? PetscRealPart(coef[r]) : 0.0;
+        if (ps->kind[r] != PFF_FACE_INTERIOR) continue;
+        d[c] += s->cin[e][c];
+        d[c - stride[e]] += s->cin[e][c];
+      }
+  }
+  for (PetscInt l = 0; l < PFF_SHELL_NLISTS; l++)
+    for (PetscInt i = 0; i < s->nface[l]; i++) {
+      const PetscInt  k0 = s->off[l][i], k1 = s->off[l][i + 1];
+      const PetscReal w = k1 - k0 == 1 ? 1.0 : 0.25, c = PetscRealPart(coef[s->row[l][i]]);
+      s->c[l][i] = c;
+      d[s->up[l][i]] += c;
+      for (PetscInt k = k0; k < k1; k++) {
+        if (s->lo[l][k] < s->ncells)
+          d[s->lo[l][k]] += w * w * c;
+        else
+          dg[s->lo[l][k] - s->ncells] += w * w * c;
+      }
+    }
+  PetscCall(VecRestoreArrayWrite(s->yg, &dg));
+  PetscCall(VecRestoreArrayWrite(s->diag, &d));
+  PetscCall(VecRestoreArrayRead(ps->coef, &coef));
+  PetscCall(VecScatterBegin(s->scatter, s->yg, s->diag, ADD_VALUES, SCATTER_REVERSE));
+  PetscCall(VecScatterEnd(s->scatter, s->yg, s->diag, ADD_VALUES, SCATTER_REVERSE));
+
+  PetscCall(PetscFree(s->diagCell));
+  PetscCall(PetscFree(s->diagVal));
+  PetscCall(VecGetArray(s->diag, &d));
+  PetscCall(VecGetArrayRead(ps->dirdiag, &dd));
+  s->ndiag = 0;
+  for (PetscInt i = 0; i < s->ncells; i++)
+    if (PetscRealPart(dd[i]) != 0 || PetscRealPart(d[i]) == 0) s->ndiag++;
+  PetscCall(PetscMalloc1(s->ndiag, &s->diagCell));
+  PetscCall(PetscMalloc1(s->ndiag, &s->diagVal));
+  s->ndiag = 0;
+  for (PetscInt i = 0; i < s->ncells; i++) {
+    PetscReal extra = PetscRealPart(dd[i]);
+    if (PetscRealPart(d[i]) + extra == 0) extra = 1.0; /* no open face and no Dirichlet term */
+    if (extra == 0) continue;
+    d[i] += extra;
+    s->diagCell[s->ndiag]  = i;
+    s->diagVal[s->ndiag++] = extra;
+  }
+  PetscCall(VecRestoreArrayRead(ps->dirdiag, &dd));
+  PetscCall(VecRestoreArray(s->diag, &d));
+  s->updated = PETSC_TRUE;
+  PetscCall(MatSetNullSpace(S, ps->nullsp));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
