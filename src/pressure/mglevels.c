@@ -483,6 +483,15 @@ PetscErrorCode PffMGUpdateOperators_Private(PffMG *mg, Mat A)
       PetscCall(RescaleCoarse(mg, L));
       PetscCall(RefreshLevelArrays(mg, lv));
     }
+    /* the K-cycle's inner Krylov steps must see the constants as null space too, or they gather a
+       constant component that stalls the outer FCG near 1e-11 */
+    if (mg->singular) {
+      MatNullSpace cn;
+      PetscCall(MatNullSpaceCreate(mg->comm, PETSC_TRUE, 0, NULL, &cn));
+      PetscCall(MatSetNullSpace(lv->A, cn));
+      PetscCall(MatNullSpaceDestroy(&cn));
+    } else
+      PetscCall(MatSetNullSpace(lv->A, NULL));
   }
   {
     PffMGLevel *c = &mg->lev[mg->nlevels - 1];

@@ -417,6 +417,9 @@ static PetscErrorCode TestHydrostatic(void)
                           graded ? "y-graded" : "uniform", (int)st.its, (double)(umax / (9.81 * c.dt))));
     PetscCheck(umax <= 1e-6 * 9.81 * c.dt, PETSC_COMM_WORLD, PETSC_ERR_PLIB,
                "hydrostatic (%s): max |u| = %g, not below 1e-6 |dt g|", graded ? "graded" : "uniform", (double)umax);
+    PetscCheck(st.reason > 0, PETSC_COMM_WORLD, PETSC_ERR_NOT_CONVERGED,
+               "hydrostatic (%s): the default PC did not reach rtol 1e-12: %s", graded ? "graded" : "uniform",
+               KSPConvergedReasons[st.reason]);
     PetscCall(PffPressureDestroy(&ps));
     PetscCall(PffGridDestroy(&t.grid));
   }
