@@ -34,9 +34,9 @@
    with PetscTime inside the PressSolve log event; -log_view shows one stage per grid), relres =
    ||b - A p|| / ||b|| recomputed here from the module's A, b and p. With -bench_repeat R (default 1)
    each PC sets up (new coefficients, as in a time step) and solves R times and the times are the
-   best of R; a "#" line then gives the first set-up, which includes one-time symbolic work. A PC type that PETSc does not know
-   prints "SKIP pc=<name> (not available)". The run fails (non-zero exit, after all PCs have run) when a
-   KSP did not converge or relres > 1.05 rtol, and when an option was not used (misspelt). */
+   best of R; a "#" line then gives the first set-up, which includes one-time symbolic work. A PC type that PETSc does
+   not know prints "SKIP pc=<name> (not available)". The run fails (non-zero exit, after all PCs have run) when a KSP
+   did not converge or relres > 1.05 rtol, and when an option was not used (misspelt). */
 #include <pff.h>
 #include <omp.h>
 

@@ -133,8 +133,8 @@ PetscErrorCode PffFlowVolumeCorrection_Private(PffFlow f, PetscReal dt)
         continue;
       }
       const PetscReal target = f->rho[0] * f->rho0;
-      const PetscReal ratio = (PetscReal)(m[0][c] + m[1][c] + m[2][c]) / (3 * target);
-      cdiv[c]               = (float)(-f->volCorr * PetscMax(ratio - 1, 0) / dt);
+      const PetscReal ratio  = (PetscReal)(m[0][c] + m[1][c] + m[2][c]) / (3 * target);
+      cdiv[c]                = (float)(-f->volCorr * PetscMax(ratio - 1, 0) / dt);
     }
   }
   PetscFunctionReturn(PETSC_SUCCESS);
