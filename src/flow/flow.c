@@ -21,6 +21,7 @@ PetscErrorCode PffFlowCreate(PffGrid grid, PffFlow *flow)
   f->deltaPhi                 = PFF_FLOW_DELTA_PHI_DEFAULT;
   f->flip                     = PFF_FLOW_FLIP_DEFAULT;
   f->volCorr                  = PFF_FLOW_VOLCORR_DEFAULT;
+  f->volCorrGas               = PETSC_TRUE;
   f->usePressure              = PETSC_TRUE;
   f->deleteBubbles            = PETSC_TRUE;
   f->chMass = f->chUt = f->chU = f->chPhiF = f->chBeta = f->chOpen = f->chPhi = f->chP = f->chCdiv = f->chVort = -1;
@@ -60,6 +61,10 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
                              &f->usePressure, NULL));
   PetscCall(PetscOptionsReal("-flow_volume_correction", "Volume-correction gain kappa of c_div",
                              "PffFlowSetFromOptions", f->volCorr, &f->volCorr, NULL));
+  PetscCall(PetscOptionsBool("-flow_volume_correction_gas",
+                             "Volume correction also in gas cells (off for large density ratios, where the gas cells' "
+                             "raw mass holds liquid kernel tails)",
+                             "PffFlowSetFromOptions", f->volCorrGas, &f->volCorrGas, NULL));
   PetscCall(PetscOptionsBool("-flow_delete_bubbles", "Delete escaped air particles deep in liquid (Sec. 3.4)",
                              "PffFlowSetFromOptions", f->deleteBubbles, &f->deleteBubbles, NULL));
   PetscOptionsEnd();

@@ -14,6 +14,7 @@ struct _n_PffFlow {
   /* physics and numerics */
   PetscReal rho[PFF_PARTICLE_NTYPES], nu[PFF_PARTICLE_NTYPES], gravity[3];
   PetscReal cfl, dtMax, alphaPhi, deltaPhi, flip, volCorr;
+  PetscBool volCorrGas; /* c_div also in gas cells (docs/decisions.md) */
   PetscBool usePressure, deleteBubbles;
   PetscReal rho0; /* kernel sum rho~_0 (Eq. 7) */
 

@@ -104,12 +104,12 @@ PetscErrorCode PffFlowPhaseField_Private(PffFlow f)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* c_div (Eq. 8, after Losasso et al. 2008): where a cell lies inside the liquid (all its lower faces
-   have phi 1), the raw density over its target rho_l rho~_0 measures how compressed the liquid
+/* c_div (Eq. 8, after Losasso et al. 2008): where a cell lies inside one phase (all its lower faces
+   have phi 1, or all 0), the raw density over its target rho rho~_0 measures how compressed the
    particles are; c_div = -kappa max(ratio - 1, 0) / dt makes the projection spread them again.
-   Gas cells get none: their raw mass includes the kernel tails of nearby liquid particles, up to
-   rho_l / rho_g times the gas target, which at 1000:1 turned a correction into a 2e4 /s source
-   beside every bubble (docs/decisions.md). */
+   With -flow_volume_correction_gas false only liquid cells get it: a gas cell's raw mass includes
+   the kernel tails of nearby liquid particles, up to rho_l / rho_g times the gas target, which at
+   1000:1 turned the correction into a 2e4 /s source beside every bubble (docs/decisions.md). */
 PetscErrorCode PffFlowVolumeCorrection_Private(PffFlow f, PetscReal dt)
 {
   PetscInt nlocal;
@@ -128,11 +128,11 @@ PetscErrorCode PffFlowVolumeCorrection_Private(PffFlow f, PetscReal dt)
     }
     for (PetscInt c = 0; c < n3; c++) {
       const PetscReal s = (PetscReal)(phi[0][c] + phi[1][c] + phi[2][c]);
-      if (s != 3) {
+      if (!(s == 3 || (s == 0 && f->volCorrGas))) {
         cdiv[c] = 0;
         continue;
       }
-      const PetscReal target = f->rho[0] * f->rho0;
+      const PetscReal target = (s == 3 ? f->rho[0] : f->rho[1]) * f->rho0;
       const PetscReal ratio  = (PetscReal)(m[0][c] + m[1][c] + m[2][c]) / (3 * target);
       cdiv[c]                = (float)(-f->volCorr * PetscMax(ratio - 1, 0) / dt);
     }
