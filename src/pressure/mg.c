@@ -2,10 +2,12 @@
    KSPFCG (flexible CG, Polak-Ribiere; Sec. 6.4), registered as the PC type "pffmg" so that
    -pressure_pc_type pffmg selects it like any PETSc PC.
 
-   One application is a V-cycle with zero initial guess over the multigrid levels of mglevels.c:
-   smooth (mgsmooth.c), restrict the residual with R = P^T, recurse, add P times the correction,
-   smooth again; the coarsest level (every block one cell) is solved by the KSP with options prefix
-   pressure_pffmg_coarse_ (default: a redundant direct solve). The smoother is the two-stage
+   One application is a cycle with zero initial guess over the multigrid levels of mglevels.c:
+   smooth (mgsmooth.c), restrict the residual with R = P^T, correct on the next level, add P times the
+   correction, smooth again. The correction below the finest level is two flexible-CG steps (K-cycle,
+   default) or one recursive V-cycle (-pressure_pffmg_kcycle 0, the paper's choice); the coarsest
+   level is solved by the KSP with options prefix pressure_pffmg_coarse_ (default: a redundant direct
+   solve). The smoother is the two-stage
    red-black hybrid Gauss-Seidel with adaptive relaxation (Algorithm 2), or fixed sweeps, or
    weighted Jacobi, chosen by options so that the comparison of the paper's Fig. 17 can be redone.
    Set-up is symbolic once per grid and numeric (Galerkin products, coarse factorisation) each time
@@ -93,7 +95,7 @@ static PetscErrorCode PffMGKCycleDestroy(PC pc)
 
 /* K-cycle (Notay & Vassilevski): the correction on level L is two flexible-CG steps preconditioned by
    the cycle of that level, which keeps aggregation multigrid's convergence independent of the depth. */
-PetscErrorCode PffMGSetUpKCycle_Private(PffMG *mg, PetscInt L)
+static PetscErrorCode PffMGSetUpKCycle(PffMG *mg, PetscInt L)
 {
   PffMGLevel  *lv = &mg->lev[L];
   PffMGKCycle *k;
@@ -146,7 +148,7 @@ static PetscErrorCode PffMGSetUp(PC pc)
   if (!mg->built) PetscCall(PffMGBuildLevels_Private(mg));
   PetscCall(PffMGUpdateOperators_Private(mg, A));
   for (PetscInt L = 1; L + 1 < mg->nlevels; L++)
-    if (mg->opt.kcycleIts > 0) PetscCall(PffMGSetUpKCycle_Private(mg, L));
+    if (mg->opt.kcycleIts > 0) PetscCall(PffMGSetUpKCycle(mg, L));
   mg->stats.levels = mg->nlevels;
   PetscCall(PetscLogEventEnd(PFF_MGSetUp, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);

@@ -43,8 +43,9 @@ typedef struct {
   PetscInt      *order, *split; /* rows of block lb: order[start[lb] .. split[lb]) red, then black */
   PetscBool     *relevant;      /* [nlocal] relaxed at this level (resolution L, or L+1 beside a block at L) */
   unsigned char *remote; /* [nblk] the unit has a face neighbour on another rank (relaxed after the ghost exchange) */
-  PetscInt       ncolour[2]; /* blocks of each block colour */
-  PetscInt      *colourList; /* [nlocal] relevant blocks: colour 0 first, then colour 1 */
+  unsigned char *merged, *mergedGhost; /* [nrows], [nghost]: the cell was merged from level L-1 (RescaleCoarse) */
+  PetscInt       ncolour[2];           /* blocks of each block colour */
+  PetscInt      *colourList;           /* [nlocal] relevant blocks: colour 0 first, then colour 1 */
 
   /* CSR of the local rows: the diagonal block (local columns) and the off-rank block (ghost columns) */
   Mat                Ad, Ao;
@@ -63,6 +64,7 @@ typedef struct {
   PetscInt     nlevels, nlocal;
   PffMGLevel  *lev;
   KSP          coarse;   /* coarsest-level solver, options prefix pressure_pffmg_coarse_ */
+  Mat          Apinned;  /* the coarsest operator with its first diagonal entry doubled, when A is singular */
   PetscBool    singular; /* A has the constants as null space: the coarsest operator is pinned */
   PetscBool    built;    /* hierarchy structure exists (coefficients are refreshed each set-up) */
   PetscBool    optionsRead;
@@ -74,6 +76,9 @@ typedef struct {
   PetscReal     *face;    /* [6 nlocal] per-face border effective residual */
   PetscInt      *list;    /* [nlocal] active blocks */
   PetscInt      *gid;     /* [nlocal] raster index of each owned block */
+  unsigned char *next;    /* [nlocal] blocks active in the next adaptive step */
+  PetscReal     *r0;      /* [nlocal] first-sweep maxima of the active blocks (theta) */
+  PetscReal     *R;       /* [n0^3] effective residual per cell of the block being relaxed */
   unsigned char *colour;  /* [nlocal] block colour (x_b + y_b + z_b) mod 2 */
   PffMGStats     stats;
 } PffMG;

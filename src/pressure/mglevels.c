@@ -21,12 +21,27 @@ static PetscInt ResolutionAt(PetscInt l, PetscInt L)
   return PetscMax(l, L);
 }
 
-/* Face neighbour gid of block ijk along axis a, side s (0: lower, 1: upper), or -1. */
+/* Face neighbour gid of block ijk across face f (0..5: -x, +x, -y, +y, -z, +z), or -1. */
 static PetscInt FaceNeighbour(const PetscInt nb[3], const PetscBool periodic[3], const PetscInt ijk[3], PetscInt f)
 {
   PetscInt dir[3] = {0, 0, 0};
   dir[f / 2]      = (f % 2) ? 1 : -1;
   return PffRasterNeighbour(nb, periodic, ijk, dir);
+}
+
+/* The relevant units of a level sorted by colour: colour 0 first, then colour 1. */
+static void BuildColourList(PffMGLevel *lv, const unsigned char *colour)
+{
+  PetscInt q[2] = {0, 0};
+
+  for (PetscInt u = 0; u < lv->nblk; u++)
+    if (lv->relevant[u]) q[colour[u]]++;
+  lv->ncolour[0] = q[0];
+  lv->ncolour[1] = q[1];
+  q[1]           = q[0];
+  q[0]           = 0;
+  for (PetscInt u = 0; u < lv->nblk; u++)
+    if (lv->relevant[u]) lv->colourList[q[colour[u]]++] = u;
 }
 
 static PetscErrorCode BuildLevelLayout(PffMG *mg, PetscInt L)
@@ -44,7 +59,6 @@ static PetscErrorCode BuildLevelLayout(PffMG *mg, PetscInt L)
   lv->L = L;
   PetscCall(
       PetscMalloc4(mg->nlocal, &lv->n, mg->nlocal + 1, &lv->start, mg->nlocal, &lv->split, mg->nlocal, &lv->relevant));
-  PetscCall(PetscMalloc1(mg->nlocal, &lv->colourList));
   lv->start[0] = 0;
   for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
     PffBlockInfo info;
@@ -58,7 +72,7 @@ static PetscErrorCode BuildLevelLayout(PffMG *mg, PetscInt L)
   lv->rstart = rstart;
 
   /* red cells (i + j + k even) first, then black, per block */
-  PetscCall(PetscMalloc1(lv->nrows, &lv->order));
+  PetscCall(PetscMalloc2(mg->nlocal, &lv->colourList, lv->nrows, &lv->order));
   for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
     const PetscInt n = lv->n[lb];
     PetscInt       q = lv->start[lb];
@@ -71,7 +85,6 @@ static PetscErrorCode BuildLevelLayout(PffMG *mg, PetscInt L)
   }
 
   /* relevant blocks (Algorithm 2's initial list): resolution L, and the blocks at L+1 that touch one */
-  lv->ncolour[0] = lv->ncolour[1] = 0;
   for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(mg->grid, lb, &info));
@@ -83,18 +96,8 @@ static PetscErrorCode BuildLevelLayout(PffMG *mg, PetscInt L)
         if (g >= 0 && level[g] >= 0 && ResolutionAt(level[g], L) == L) rel = PETSC_TRUE;
       }
     lv->relevant[lb] = rel;
-    if (rel) lv->ncolour[(info.ijk[0] + info.ijk[1] + info.ijk[2]) % 2]++;
   }
-  {
-    PetscInt q[2] = {0, lv->ncolour[0]};
-    for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
-      PffBlockInfo info;
-      if (!lv->relevant[lb]) continue;
-      PetscCall(PffGridGetBlockInfo(mg->grid, lb, &info));
-      const PetscInt c       = (info.ijk[0] + info.ijk[1] + info.ijk[2]) % 2;
-      lv->colourList[q[c]++] = lb;
-    }
-  }
+  BuildColourList(lv, mg->colour);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -192,8 +195,9 @@ static PetscErrorCode BuildGroups(PffMG *mg, PetscInt k, PffMGGroups *g, PffMGLe
 
 static PetscErrorCode BuildUniformLevel(PffMG *mg, PetscInt L, PetscInt k)
 {
-  PffMGLevel *lv = &mg->lev[L];
-  PffMGGroups g;
+  PffMGLevel    *lv = &mg->lev[L];
+  PffMGGroups    g;
+  unsigned char *colour;
 
   PetscFunctionBeginUser;
   lv->L       = L;
@@ -202,21 +206,18 @@ static PetscErrorCode BuildUniformLevel(PffMG *mg, PetscInt L, PetscInt k)
   PetscCall(PetscFree2(g.key, g.global));
   PetscCall(PetscMalloc4(lv->nblk, &lv->n, lv->nblk + 1, &lv->start, lv->nblk, &lv->split, lv->nblk, &lv->relevant));
   PetscCall(PetscMalloc2(lv->nblk, &lv->colourList, lv->nrows, &lv->order));
-  lv->ncolour[0] = lv->ncolour[1] = 0;
+  PetscCall(PetscMalloc1(lv->nblk, &colour));
   for (PetscInt q = 0; q < lv->nblk; q++) {
     lv->n[q]        = 1;
     lv->start[q]    = q;
     lv->split[q]    = q + 1;
     lv->order[q]    = q;
     lv->relevant[q] = PETSC_TRUE;
-    lv->ncolour[(lv->coord[3 * q] + lv->coord[3 * q + 1] + lv->coord[3 * q + 2]) % 2]++;
+    colour[q]       = (unsigned char)((lv->coord[3 * q] + lv->coord[3 * q + 1] + lv->coord[3 * q + 2]) % 2);
   }
   lv->start[lv->nblk] = lv->nblk;
-  {
-    PetscInt c[2] = {0, lv->ncolour[0]};
-    for (PetscInt q = 0; q < lv->nblk; q++)
-      lv->colourList[c[(lv->coord[3 * q] + lv->coord[3 * q + 1] + lv->coord[3 * q + 2]) % 2]++] = q;
-  }
+  BuildColourList(lv, colour);
+  PetscCall(PetscFree(colour));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -282,7 +283,45 @@ static PetscErrorCode BuildGhosts(PffMG *mg, PffMGLevel *lv)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* CSR pointers and the inverse diagonal of A_L, after every numeric update. */
+/* Which rows of level L (and of its ghost columns) were merged from level L-1: structural, so
+   computed and exchanged once per grid, for RescaleCoarse at every set-up. */
+static PetscErrorCode BuildMergedFlags(PffMG *mg, PetscInt L)
+{
+  PffMGLevel        *lv = &mg->lev[L], *f = &mg->lev[L - 1];
+  PetscScalar       *fl;
+  const PetscScalar *gf;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc2(lv->nrows, &lv->merged, lv->nghost, &lv->mergedGhost));
+  PetscCall(VecGetArrayWrite(lv->r, &fl));
+  for (PetscInt u = 0; u < lv->nblk; u++)
+    for (PetscInt i = lv->start[u]; i < lv->start[u + 1]; i++) {
+      lv->merged[i] = (unsigned char)(lv->uniform || lv->n[u] < f->n[u]);
+      fl[i]         = lv->merged[i];
+    }
+  PetscCall(VecRestoreArrayWrite(lv->r, &fl));
+  if (lv->scatter) {
+    PetscCall(VecScatterBegin(lv->scatter, lv->r, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(VecScatterEnd(lv->scatter, lv->r, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(VecGetArrayRead(lv->ghost, &gf));
+    for (PetscInt j = 0; j < lv->nghost; j++) lv->mergedGhost[j] = (unsigned char)(gf[j] != 0);
+    PetscCall(VecRestoreArrayRead(lv->ghost, &gf));
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* 1 / a_ii of A_L (0 for an empty row), after every numeric update. */
+static void ComputeInverseDiagonal(PffMGLevel *lv)
+{
+  for (PetscInt i = 0; i < lv->nrows; i++) {
+    PetscScalar d = 0;
+    for (PetscInt k = lv->ai[i]; k < lv->ai[i + 1]; k++)
+      if (lv->aj[k] == i) d = lv->aa[k];
+    lv->idiag[i] = d != 0 ? 1.0 / d : 0.0;
+  }
+}
+
+/* CSR pointers of A_L, after every numeric update. */
 static PetscErrorCode RefreshLevelArrays(PffMG *mg, PffMGLevel *lv)
 {
   PetscInt  nr;
@@ -308,12 +347,6 @@ static PetscErrorCode RefreshLevelArrays(PffMG *mg, PffMGLevel *lv)
     PetscCall(MatSeqAIJRestoreArrayRead(lv->Ao, &a));
   }
   if (lv->idiag == NULL) PetscCall(PetscMalloc1(lv->nrows, &lv->idiag));
-  for (PetscInt i = 0; i < lv->nrows; i++) {
-    PetscScalar d = 0;
-    for (PetscInt k = lv->ai[i]; k < lv->ai[i + 1]; k++)
-      if (lv->aj[k] == i) d = lv->aa[k];
-    lv->idiag[i] = d != 0 ? 1.0 / d : 0.0;
-  }
   (void)mg;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -328,26 +361,14 @@ static PetscErrorCode RefreshLevelArrays(PffMG *mg, PffMGLevel *lv)
    the diagonal is rebuilt so that rows keep their sums. The result stays symmetric. */
 static PetscErrorCode RescaleCoarse(PffMG *mg, PetscInt L)
 {
-  PffMGLevel        *lv = &mg->lev[L], *f = &mg->lev[L - 1];
-  PetscScalar       *fl, *aa, *ba = NULL;
-  const PetscScalar *gf = NULL;
+  PffMGLevel  *lv = &mg->lev[L];
+  PetscScalar *aa, *ba = NULL;
 
   PetscFunctionBeginUser;
-  PetscCall(VecGetArrayWrite(lv->r, &fl));
-  for (PetscInt lb = 0; lb < lv->nblk; lb++)
-    for (PetscInt i = lv->start[lb]; i < lv->start[lb + 1]; i++)
-      fl[i] = lv->uniform || lv->n[lb] < f->n[lb] ? 1.0 : 0.0;
-  PetscCall(VecRestoreArrayWrite(lv->r, &fl));
-  if (lv->scatter) {
-    PetscCall(VecScatterBegin(lv->scatter, lv->r, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
-    PetscCall(VecScatterEnd(lv->scatter, lv->r, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
-    PetscCall(VecGetArrayRead(lv->ghost, &gf));
-  }
-  PetscCall(VecGetArrayRead(lv->r, (const PetscScalar **)&fl));
   PetscCall(MatSeqAIJGetArray(lv->Ad, &aa));
   if (lv->Ao) PetscCall(MatSeqAIJGetArray(lv->Ao, &ba));
   for (PetscInt i = 0; i < lv->nrows; i++) {
-    const PetscBool mi     = (PetscBool)(fl[i] != 0);
+    const PetscBool mi     = (PetscBool)lv->merged[i];
     PetscScalar     offOld = 0, offNew = 0;
     PetscInt        kd = -1;
     for (PetscInt k = lv->ai[i]; k < lv->ai[i + 1]; k++) {
@@ -355,14 +376,14 @@ static PetscErrorCode RescaleCoarse(PffMG *mg, PetscInt L)
         kd = k;
         continue;
       }
-      const PetscBool mj = (PetscBool)(fl[lv->aj[k]] != 0);
+      const PetscBool mj = (PetscBool)lv->merged[lv->aj[k]];
       offOld += aa[k];
       aa[k] *= mi && mj ? 0.5 : (mi || mj ? 0.75 : 1.0);
       offNew += aa[k];
     }
     if (lv->Ao)
       for (PetscInt k = lv->bi[i]; k < lv->bi[i + 1]; k++) {
-        const PetscBool mj = (PetscBool)(gf[lv->bj[k]] != 0);
+        const PetscBool mj = (PetscBool)lv->mergedGhost[lv->bj[k]];
         offOld += ba[k];
         ba[k] *= mi && mj ? 0.5 : (mi || mj ? 0.75 : 1.0);
         offNew += ba[k];
@@ -371,21 +392,45 @@ static PetscErrorCode RescaleCoarse(PffMG *mg, PetscInt L)
   }
   if (lv->Ao) PetscCall(MatSeqAIJRestoreArray(lv->Ao, &ba));
   PetscCall(MatSeqAIJRestoreArray(lv->Ad, &aa));
-  PetscCall(VecRestoreArrayRead(lv->r, (const PetscScalar **)&fl));
-  if (gf) PetscCall(VecRestoreArrayRead(lv->ghost, &gf));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
 {
-  PetscInt n0, nb[3];
+  PetscInt           n0, nb[3], nblockLevels = 1, nmax;
+  const PetscInt    *level;
+  const PetscMPIInt *owner;
+  PetscBool          periodic[3];
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridGetSizes(mg->grid, &n0, NULL, NULL, NULL, NULL));
-  PetscCall(PffGridGetRaster(mg->grid, nb, NULL, NULL));
+  PetscCall(PffGridGetSizes(mg->grid, &n0, NULL, NULL, NULL, periodic));
+  PetscCall(PffGridGetRaster(mg->grid, nb, &level, &owner));
   PetscCall(PffGridGetLocalBlocks(mg->grid, &mg->nlocal));
-  mg->nraster           = nb[0] * nb[1] * nb[2];
-  PetscInt nblockLevels = 1, nmax;
+  mg->nraster = nb[0] * nb[1] * nb[2];
+
+  /* per owned block: raster index, colour, face neighbours (local index, or -2 - gid on another rank),
+     and the scratch of adaptive relaxation */
+  PetscCall(PetscMalloc5(6 * mg->nlocal, &mg->nbr, mg->nraster, &mg->flags, mg->nlocal, &mg->bres, 6 * mg->nlocal,
+                         &mg->face, mg->nlocal, &mg->list));
+  PetscCall(PetscMalloc5(mg->nlocal, &mg->gid, mg->nlocal, &mg->colour, mg->nlocal, &mg->next, mg->nlocal, &mg->r0,
+                         n0 * n0 * n0, &mg->R));
+  PetscCall(PetscArrayzero(mg->flags, mg->nraster));
+  for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(mg->grid, lb, &info));
+    mg->gid[lb]    = info.gid;
+    mg->colour[lb] = (unsigned char)((info.ijk[0] + info.ijk[1] + info.ijk[2]) % 2);
+    for (PetscInt f = 0; f < 6; f++) {
+      const PetscInt g = FaceNeighbour(nb, periodic, info.ijk, f);
+      PetscInt       l = -1;
+      if (g >= 0 && level[g] >= 0) {
+        PetscCall(PffGridGetLocalIndex(mg->grid, g, &l));
+        if (l < 0) l = -2 - g;
+      }
+      mg->nbr[6 * lb + f] = l;
+    }
+  }
+
   while ((n0 >> (nblockLevels - 1)) > 1 && nblockLevels < mg->opt.maxLevels) nblockLevels++;
   nmax = mg->opt.maxLevels;
   PetscCall(PetscCalloc1(nmax, &mg->lev));
@@ -412,33 +457,6 @@ PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
     PetscCall(VecDuplicate(mg->lev[L + 1].x, &mg->lev[L + 1].b));
   }
   if (mg->nlevels > 1) PetscCall(VecDuplicate(mg->lev[mg->nlevels - 1].x, &mg->lev[mg->nlevels - 1].r));
-  PetscCall(PetscMalloc5(6 * mg->nlocal, &mg->nbr, mg->nraster, &mg->flags, mg->nlocal, &mg->bres, 6 * mg->nlocal,
-                         &mg->face, mg->nlocal, &mg->list));
-  PetscCall(PetscArrayzero(mg->flags, mg->nraster));
-  PetscCall(PetscMalloc2(mg->nlocal, &mg->gid, mg->nlocal, &mg->colour));
-  {
-    PetscInt           nbv[3];
-    const PetscInt    *level;
-    const PetscMPIInt *owner;
-    PetscBool          periodic[3];
-    PetscCall(PffGridGetRaster(mg->grid, nbv, &level, &owner));
-    PetscCall(PffGridGetSizes(mg->grid, NULL, NULL, NULL, NULL, periodic));
-    for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
-      PffBlockInfo info;
-      PetscCall(PffGridGetBlockInfo(mg->grid, lb, &info));
-      mg->gid[lb]    = info.gid;
-      mg->colour[lb] = (unsigned char)((info.ijk[0] + info.ijk[1] + info.ijk[2]) % 2);
-      for (PetscInt f = 0; f < 6; f++) {
-        const PetscInt g = FaceNeighbour(nbv, periodic, info.ijk, f);
-        PetscInt       l = -1;
-        if (g >= 0 && level[g] >= 0) {
-          PetscCall(PffGridGetLocalIndex(mg->grid, g, &l));
-          if (l < 0) l = -2 - g;
-        }
-        mg->nbr[6 * lb + f] = l;
-      }
-    }
-  }
   for (PetscInt L = 0; L < mg->nlevels; L++) {
     PffMGLevel *lv = &mg->lev[L];
     PetscCall(PetscMalloc1(lv->nblk, &lv->remote));
@@ -471,46 +489,42 @@ PetscErrorCode PffMGUpdateOperators_Private(PffMG *mg, Mat A)
     PetscCall(BuildGhosts(mg, &mg->lev[0]));
   }
   PetscCall(RefreshLevelArrays(mg, &mg->lev[0]));
+  ComputeInverseDiagonal(&mg->lev[0]);
   for (PetscInt L = 1; L < mg->nlevels; L++) {
     PffMGLevel *lv = &mg->lev[L];
     if (lv->A == NULL) {
       PetscCall(MatPtAP(mg->lev[L - 1].A, mg->lev[L - 1].P, MAT_INITIAL_MATRIX, 1.5, &lv->A));
       PetscCall(BuildGhosts(mg, lv));
+      PetscCall(BuildMergedFlags(mg, L));
     } else
       PetscCall(MatPtAP(mg->lev[L - 1].A, mg->lev[L - 1].P, MAT_REUSE_MATRIX, 1.5, &lv->A));
     PetscCall(RefreshLevelArrays(mg, lv));
-    if (mg->opt.rescale) {
-      PetscCall(RescaleCoarse(mg, L));
-      PetscCall(RefreshLevelArrays(mg, lv));
-    }
-    /* the K-cycle's inner Krylov steps must see the constants as null space too, or they gather a
-       constant component that stalls the outer FCG near 1e-11 */
-    if (mg->singular) {
-      MatNullSpace cn;
-      PetscCall(MatNullSpaceCreate(mg->comm, PETSC_TRUE, 0, NULL, &cn));
-      PetscCall(MatSetNullSpace(lv->A, cn));
-      PetscCall(MatNullSpaceDestroy(&cn));
-    } else
-      PetscCall(MatSetNullSpace(lv->A, NULL));
+    if (mg->opt.rescale) PetscCall(RescaleCoarse(mg, L));
+    ComputeInverseDiagonal(lv);
+    /* A's null space (the constants) holds on every level; the K-cycle's inner Krylov steps need it,
+       or they gather a constant component that stalls the outer FCG near 1e-11 */
+    PetscCall(MatSetNullSpace(lv->A, nsp));
   }
   {
     PffMGLevel *c = &mg->lev[mg->nlevels - 1];
-    Mat         Ac;
     if (mg->nlevels == 1 || !mg->singular)
-      Ac = c->A;
+      PetscCall(KSPSetOperators(mg->coarse, c->A, c->A));
     else {
       /* A_c + d e_0 e_0^T: for a rhs orthogonal to the constants its solution is the singular
-         system's up to a constant, whatever d > 0 (the constant is removed by the Krylov method) */
-      PetscCall(MatDuplicate(c->A, MAT_COPY_VALUES, &Ac));
+         system's up to a constant, whatever d > 0 (the constant is removed by the Krylov method);
+         one copy per grid, refreshed in place so the coarse factorisation keeps its symbolic part */
+      if (mg->Apinned == NULL)
+        PetscCall(MatDuplicate(c->A, MAT_COPY_VALUES, &mg->Apinned));
+      else
+        PetscCall(MatCopy(c->A, mg->Apinned, SAME_NONZERO_PATTERN));
       if (c->rstart == 0 && c->nrows > 0) {
         const PetscScalar d = c->idiag[0] != 0 ? 1.0 / c->idiag[0] : 1.0;
-        PetscCall(MatSetValue(Ac, 0, 0, d, ADD_VALUES));
+        PetscCall(MatSetValue(mg->Apinned, 0, 0, d, ADD_VALUES));
       }
-      PetscCall(MatAssemblyBegin(Ac, MAT_FINAL_ASSEMBLY));
-      PetscCall(MatAssemblyEnd(Ac, MAT_FINAL_ASSEMBLY));
+      PetscCall(MatAssemblyBegin(mg->Apinned, MAT_FINAL_ASSEMBLY));
+      PetscCall(MatAssemblyEnd(mg->Apinned, MAT_FINAL_ASSEMBLY));
+      PetscCall(KSPSetOperators(mg->coarse, mg->Apinned, mg->Apinned));
     }
-    PetscCall(KSPSetOperators(mg->coarse, Ac, Ac));
-    if (Ac != c->A) PetscCall(MatDestroy(&Ac));
     PetscCall(KSPSetUp(mg->coarse));
   }
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -532,20 +546,17 @@ PetscErrorCode PffMGDestroyLevels_Private(PffMG *mg)
     PetscCall(VecDestroy(&lv->ghost));
     PetscCall(VecScatterDestroy(&lv->scatter));
     PetscCall(PetscFree4(lv->n, lv->start, lv->split, lv->relevant));
-    if (lv->uniform)
-      PetscCall(PetscFree2(lv->colourList, lv->order));
-    else {
-      PetscCall(PetscFree(lv->colourList));
-      PetscCall(PetscFree(lv->order));
-    }
+    PetscCall(PetscFree2(lv->colourList, lv->order));
     PetscCall(PetscFree(lv->coord));
     PetscCall(PetscFree(lv->remote));
+    PetscCall(PetscFree2(lv->merged, lv->mergedGhost));
     PetscCall(PetscFree(lv->idiag));
   }
   PetscCall(PetscFree(mg->lev));
+  PetscCall(MatDestroy(&mg->Apinned));
   if (mg->built) {
     PetscCall(PetscFree5(mg->nbr, mg->flags, mg->bres, mg->face, mg->list));
-    PetscCall(PetscFree2(mg->gid, mg->colour));
+    PetscCall(PetscFree5(mg->gid, mg->colour, mg->next, mg->r0, mg->R));
   }
   mg->nlevels = 0;
   mg->built   = PETSC_FALSE;

@@ -11,9 +11,9 @@
    sweeps), and stays active when its effective residual -- the largest |delta| a_jj of its cells,
    which equalises the air and water phases -- exceeds theta; a face neighbour joins when the
    effective residual on the shared border exceeds theta (across ranks too). theta is the mean plus
-   two standard deviations of log10 of the per-block maxima of the initial effective residual
-   omega |b - A x|. The loop ends after a fixed number of steps; the result is not a symmetric
-   operator, which is why the Krylov method is flexible CG. */
+   two standard deviations of log10 of the per-block maxima of the initial effective residual, the
+   omega |b_j - A_j x| each block sees in its first sweep. The loop ends after a fixed number of steps; the result is
+   not a symmetric operator, which is why the Krylov method is flexible CG. */
 #include "mgimpl.h"
 
 const char *const PffMGSmootherTypes[] = {"rbgs", "jacobi", "PffMGSmootherType", "PFF_MG_SMOOTHER_", NULL};
@@ -94,14 +94,12 @@ static PetscErrorCode SmoothJacobi(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, Pets
     PetscCall(VecAYPX(lv->r, -1.0, b));
     PetscCall(VecGetArray(x, &xa));
     PetscCall(VecGetArrayRead(lv->r, &ra));
-    for (PetscInt c = 0; c < 2; c++)
-      for (PetscInt q = (c == 0 ? 0 : lv->ncolour[0]); q < (c == 0 ? lv->ncolour[0] : lv->ncolour[0] + lv->ncolour[1]);
-           q++) {
-        const PetscInt lb = lv->colourList[q];
-        for (PetscInt i = lv->start[lb]; i < lv->start[lb + 1]; i++) xa[i] += mg->opt.omega * ra[i] * lv->idiag[i];
-        mg->stats.blockRelaxations++;
-        mg->stats.cellUpdates += lv->start[lb + 1] - lv->start[lb];
-      }
+    for (PetscInt q = 0; q < lv->ncolour[0] + lv->ncolour[1]; q++) { /* every relevant block, colours do not matter */
+      const PetscInt lb = lv->colourList[q];
+      for (PetscInt i = lv->start[lb]; i < lv->start[lb + 1]; i++) xa[i] += mg->opt.omega * ra[i] * lv->idiag[i];
+      mg->stats.blockRelaxations++;
+      mg->stats.cellUpdates += lv->start[lb + 1] - lv->start[lb];
+    }
     PetscCall(VecRestoreArrayRead(lv->r, &ra));
     PetscCall(VecRestoreArray(x, &xa));
   }
@@ -214,16 +212,13 @@ static PetscErrorCode RelaxActive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, Petsc
 
 static PetscErrorCode SmoothAdaptive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x)
 {
-  PetscReal      theta = 0, *R, *r0;
-  PetscInt       n0;
+  PetscReal      theta = 0, *R = mg->R, *r0 = mg->r0;
   PetscMPIInt    size;
-  unsigned char *next;
+  unsigned char *next = mg->next;
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_size(mg->comm, &size));
-  PetscCall(PffGridGetSizes(mg->grid, &n0, NULL, NULL, NULL, NULL));
-  PetscCall(PetscCalloc1(mg->nlocal, &next));
-  PetscCall(PetscMalloc2(n0 * n0 * n0, &R, mg->nlocal, &r0));
+  PetscCall(PetscArrayzero(next, mg->nlocal));
   for (PetscInt q = 0; q < lv->ncolour[0] + lv->ncolour[1]; q++) next[lv->colourList[q]] = 1;
   for (PetscInt it = 0; it < mg->opt.adaptiveSteps; it++) {
     PetscInt nactive = 0, nglobal;
@@ -257,8 +252,6 @@ static PetscErrorCode SmoothAdaptive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x)
     }
     mg->stats.adaptiveSteps++;
   }
-  PetscCall(PetscFree2(R, r0));
-  PetscCall(PetscFree(next));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
