@@ -116,3 +116,33 @@ static inline PetscReal PffTestLinearValue(const PetscReal x[3], PetscInt comp, 
   const PffTestLinearFill *f = (const PffTestLinearFill *)fill;
   return PffTestLinear(f->ctx, comp + f->shift, x);
 }
+
+static inline PetscReal PffTestOne(const PetscReal x[3], PetscInt comp, void *ctx)
+{
+  (void)x, (void)comp, (void)ctx;
+  return 1.0;
+}
+
+static inline PetscReal PffTestZero(const PetscReal x[3], PetscInt comp, void *ctx)
+{
+  (void)x, (void)comp, (void)ctx;
+  return 0.0;
+}
+
+/* The channels of a pressure test: face channels beta and u filled from the given functions (both get
+   ctx), face channel open = 1 (every face open), cell channel p = 0. */
+static inline PetscErrorCode PffTestAddPressureChannels(PffGrid grid, PffFieldFn beta, PffFieldFn u, void *ctx,
+                                                        PetscInt *betaCh, PetscInt *openCh, PetscInt *uCh,
+                                                        PetscInt *pCh)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffGridAddChannel(grid, "beta", PFF_CHANNEL_FACE, 1, betaCh));
+  PetscCall(PffGridAddChannel(grid, "open", PFF_CHANNEL_FACE, 1, openCh));
+  PetscCall(PffGridAddChannel(grid, "u", PFF_CHANNEL_FACE, 1, uCh));
+  PetscCall(PffGridAddChannel(grid, "p", PFF_CHANNEL_CELL, 1, pCh));
+  PetscCall(PffGridFillChannel(grid, *betaCh, beta, ctx));
+  PetscCall(PffGridFillChannel(grid, *openCh, PffTestOne, NULL));
+  PetscCall(PffGridFillChannel(grid, *uCh, u, ctx));
+  PetscCall(PffGridFillChannel(grid, *pCh, PffTestZero, NULL));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}

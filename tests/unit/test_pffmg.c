@@ -37,18 +37,6 @@ static PetscReal BetaFn(const PetscReal x[3], PetscInt comp, void *vctx)
   return c->ratio > 0 && InBubble(c, x) ? c->ratio : 1.0;
 }
 
-static PetscReal OneFn(const PetscReal x[3], PetscInt comp, void *vctx)
-{
-  (void)x, (void)comp, (void)vctx;
-  return 1.0;
-}
-
-static PetscReal ZeroFn(const PetscReal x[3], PetscInt comp, void *vctx)
-{
-  (void)x, (void)comp, (void)vctx;
-  return 0.0;
-}
-
 static PetscReal RandomFn(const PetscReal x[3], PetscInt comp, void *vctx)
 {
   const Bubbly *c = (const Bubbly *)vctx;
@@ -71,14 +59,7 @@ static PetscErrorCode CreateCase(MPI_Comm comm, PetscInt N, PetscInt n0, PetscBo
   c->t     = t;
   c->ratio = ratio;
   c->side  = 1.0;
-  PetscCall(PffGridAddChannel(t->grid, "u", PFF_CHANNEL_FACE, 1, &c->uCh));
-  PetscCall(PffGridAddChannel(t->grid, "beta", PFF_CHANNEL_FACE, 1, &c->betaCh));
-  PetscCall(PffGridAddChannel(t->grid, "open", PFF_CHANNEL_FACE, 1, &c->openCh));
-  PetscCall(PffGridAddChannel(t->grid, "p", PFF_CHANNEL_CELL, 1, &c->pCh));
-  PetscCall(PffGridFillChannel(t->grid, c->betaCh, BetaFn, c));
-  PetscCall(PffGridFillChannel(t->grid, c->openCh, OneFn, c));
-  PetscCall(PffGridFillChannel(t->grid, c->pCh, ZeroFn, c));
-  PetscCall(PffGridFillChannel(t->grid, c->uCh, RandomFn, c));
+  PetscCall(PffTestAddPressureChannels(t->grid, BetaFn, RandomFn, c, &c->betaCh, &c->openCh, &c->uCh, &c->pCh));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

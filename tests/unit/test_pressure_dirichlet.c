@@ -49,15 +49,6 @@ static PetscReal RandomVelocity(const PetscReal x[3], PetscInt comp, void *vctx)
   return 2 * Random01(c->t, x, comp, 11) - 1;
 }
 
-static PetscReal One(const PetscReal x[3], PetscInt comp, void *vctx)
-{
-  return 1.0;
-}
-static PetscReal Zero(const PetscReal x[3], PetscInt comp, void *vctx)
-{
-  return 0.0;
-}
-
 /* A closed unit box of NB^3 blocks of N0 cells; graded: level 0, 1, 2, 2 by block index along axis d,
    so that every level boundary is a d-face. */
 static PetscErrorCode CreateGrid(MPI_Comm comm, PetscBool graded, PetscInt d, PffTestCtx *t)
@@ -96,14 +87,8 @@ static PetscErrorCode CaseSetUp(PffTestCtx *t, PetscBool randomBeta, Case *c)
   PetscFunctionBeginUser;
   c->t          = t;
   c->randomBeta = randomBeta;
-  PetscCall(PffGridAddChannel(t->grid, "beta", PFF_CHANNEL_FACE, 1, &c->betaCh));
-  PetscCall(PffGridAddChannel(t->grid, "open", PFF_CHANNEL_FACE, 1, &c->openCh));
-  PetscCall(PffGridAddChannel(t->grid, "u", PFF_CHANNEL_FACE, 1, &c->uCh));
-  PetscCall(PffGridAddChannel(t->grid, "p", PFF_CHANNEL_CELL, 1, &c->pCh));
-  PetscCall(PffGridFillChannel(t->grid, c->betaCh, BetaField, c));
-  PetscCall(PffGridFillChannel(t->grid, c->openCh, One, c));
-  PetscCall(PffGridFillChannel(t->grid, c->uCh, RandomVelocity, c));
-  PetscCall(PffGridFillChannel(t->grid, c->pCh, Zero, c));
+  PetscCall(
+      PffTestAddPressureChannels(t->grid, BetaField, RandomVelocity, c, &c->betaCh, &c->openCh, &c->uCh, &c->pCh));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
