@@ -41,6 +41,33 @@ static PetscErrorCode PffMGGetContext(PC pc, PffMG **mg)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+#define PFF_MG_GRID_KEY "PffPressureGrid"
+
+/* The pressure module composes its grid with the PC once. PCSetType replaces the PC's implementation
+   but keeps composed objects, so pffmg finds the grid however it was chosen (options or PCSetType). */
+PetscErrorCode PffPressureMGComposeGrid_Private(PC pc, PffGrid grid)
+{
+  PetscContainer c;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscContainerCreate(PetscObjectComm((PetscObject)pc), &c));
+  PetscCall(PetscContainerSetPointer(c, grid));
+  PetscCall(PetscObjectCompose((PetscObject)pc, PFF_MG_GRID_KEY, (PetscObject)c));
+  PetscCall(PetscContainerDestroy(&c));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffMGQueryGrid(PC pc, PffGrid *grid)
+{
+  PetscObject c;
+
+  PetscFunctionBeginUser;
+  *grid = NULL;
+  PetscCall(PetscObjectQuery((PetscObject)pc, PFF_MG_GRID_KEY, &c));
+  if (c) PetscCall(PetscContainerGetPointer((PetscContainer)c, (void **)grid));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 static PetscErrorCode VCycle(PffMG *mg, PetscInt L, Vec b, Vec x)
 {
   PffMGLevel *lv = &mg->lev[L];
@@ -140,8 +167,13 @@ static PetscErrorCode PffMGSetUp(PC pc)
 
   PetscFunctionBeginUser;
   PetscCall(PCShellGetContext(pc, &mg));
-  PetscCheck(mg->grid != NULL, PetscObjectComm((PetscObject)pc), PETSC_ERR_ORDER,
-             "pffmg needs the grid: use it through PffPressure (-pressure_pc_type pffmg)");
+  if (!mg->optionsRead) { /* chosen by PCSetType after PffPressureSetFromOptions */
+    PffGrid grid;
+    PetscCall(PffMGQueryGrid(pc, &grid));
+    PetscCheck(grid != NULL, PetscObjectComm((PetscObject)pc), PETSC_ERR_ORDER,
+               "pffmg needs the grid: use it through PffPressure (-pressure_pc_type pffmg)");
+    PetscCall(PffPressureMGSetFromOptions_Private(pc, grid));
+  }
   PetscCall(PetscLogEventBegin(PFF_MGSetUp, 0, 0, 0, 0));
   PetscCall(PCGetOperators(pc, NULL, &A));
   if (mg->built && mg->lev[0].A != NULL && mg->lev[0].A != A) PetscCall(PffMGDestroyLevels_Private(mg));
@@ -254,17 +286,6 @@ PetscErrorCode PffPressureMGIsActive_Private(PC pc, PetscBool *active)
   if (!shell) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PCShellGetName(pc, &name));
   *active = (PetscBool)(name != NULL && strcmp(name, PFF_MG_NAME) == 0);
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-/* Hands the grid to the PC and reads its options, unless PffPressureSetFromOptions did already. */
-PetscErrorCode PffPressureMGSetGrid_Private(PC pc, PffGrid grid)
-{
-  PffMG *mg;
-
-  PetscFunctionBeginUser;
-  PetscCall(PffMGGetContext(pc, &mg));
-  if (!mg->optionsRead) PetscCall(PffPressureMGSetFromOptions_Private(pc, grid));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -63,10 +63,11 @@ typedef struct {
   PffMGOptions opt;
   PetscInt     nlevels, nlocal;
   PffMGLevel  *lev;
-  KSP          coarse;   /* coarsest-level solver, options prefix pressure_pffmg_coarse_ */
-  Mat          Apinned;  /* the coarsest operator with its first diagonal entry doubled, when A is singular */
-  PetscBool    singular; /* A has the constants as null space: the coarsest operator is pinned */
-  PetscBool    built;    /* hierarchy structure exists (coefficients are refreshed each set-up) */
+  KSP          coarse;    /* coarsest-level solver, options prefix pressure_pffmg_coarse_ */
+  MatNullSpace constants; /* the constants, null space of the singular coarse levels */
+  Mat          Apinned;   /* the coarsest operator with its first diagonal entry doubled, when A is singular */
+  PetscBool    singular;  /* A has the constants as null space: the coarsest operator is pinned */
+  PetscBool    built;     /* hierarchy structure exists (coefficients are refreshed each set-up) */
   PetscBool    optionsRead;
   /* per-block scratch for adaptive relaxation */
   PetscInt      *nbr;     /* [6 nlocal] local face neighbour (or -1: none, wall, or remote -2 - gid) */

@@ -501,9 +501,12 @@ PetscErrorCode PffMGUpdateOperators_Private(PffMG *mg, Mat A)
     PetscCall(RefreshLevelArrays(mg, lv));
     if (mg->opt.rescale) PetscCall(RescaleCoarse(mg, L));
     ComputeInverseDiagonal(lv);
-    /* A's null space (the constants) holds on every level; the K-cycle's inner Krylov steps need it,
-       or they gather a constant component that stalls the outer FCG near 1e-11 */
-    PetscCall(MatSetNullSpace(lv->A, nsp));
+    /* the K-cycle's inner Krylov steps need the constants as null space of the singular levels, or
+       they gather a constant component that stalls the outer FCG near 1e-11 (not A's own null-space
+       object: with closed cells it is a vector of the fine level) */
+    if (mg->singular && mg->constants == NULL)
+      PetscCall(MatNullSpaceCreate(mg->comm, PETSC_TRUE, 0, NULL, &mg->constants));
+    PetscCall(MatSetNullSpace(lv->A, mg->singular ? mg->constants : NULL));
   }
   {
     PffMGLevel *c = &mg->lev[mg->nlevels - 1];
@@ -554,6 +557,7 @@ PetscErrorCode PffMGDestroyLevels_Private(PffMG *mg)
   }
   PetscCall(PetscFree(mg->lev));
   PetscCall(MatDestroy(&mg->Apinned));
+  PetscCall(MatNullSpaceDestroy(&mg->constants));
   if (mg->built) {
     PetscCall(PetscFree5(mg->nbr, mg->flags, mg->bres, mg->face, mg->list));
     PetscCall(PetscFree5(mg->gid, mg->colour, mg->next, mg->r0, mg->R));

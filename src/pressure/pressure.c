@@ -46,6 +46,7 @@ PetscErrorCode PffPressureCreate(PffGrid grid, PffPressure *ps)
   /* rtol then bounds the true residual V (D u + c_div) / dt, whatever the PC */
   PetscCall(KSPSetNormType(p->ksp, KSP_NORM_UNPRECONDITIONED));
   PetscCall(KSPGetPC(p->ksp, &pc));
+  PetscCall(PffPressureMGComposeGrid_Private(pc, grid));
   PetscCall(PCSetType(pc, PFF_PRESSURE_PC_TYPE_DEFAULT));
   *ps = p;
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -238,19 +239,6 @@ PetscErrorCode PffPressureSetCoefficients(PffPressure ps, PetscInt chBeta, Petsc
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* pffmg needs the grid, also when it was chosen by PCSetType rather than by options. */
-static PetscErrorCode PffPressureAttachMG(PffPressure ps)
-{
-  PC        pc;
-  PetscBool mg;
-
-  PetscFunctionBeginUser;
-  PetscCall(KSPGetPC(ps->ksp, &pc));
-  PetscCall(PffPressureMGIsActive_Private(pc, &mg));
-  if (mg) PetscCall(PffPressureMGSetGrid_Private(pc, ps->grid));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
 /* Block Jacobi: ICC(0) on the blocks unless the user chose -pressure_sub_pc_type (needs the sub-KSPs,
    which exist after PCSetUp and are set up at the first solve). */
 static PetscErrorCode PffPressureApplySubPCDefault(PffPressure ps)
@@ -310,7 +298,6 @@ PetscErrorCode PffPressureProject(PffPressure ps, PetscInt chU, PetscReal dt, Pe
 
   PetscCall(PffPressureChannelToVec_Private(ps, chP, PFF_CHANNEL_CELL, ps->p));
   PetscCall(PetscTime(&t0));
-  PetscCall(PffPressureAttachMG(ps));
   PetscCall(KSPSetUp(ps->ksp));
   PetscCall(PffPressureApplySubPCDefault(ps));
   PetscCall(KSPSetUpOnBlocks(ps->ksp));
