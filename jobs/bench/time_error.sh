@@ -8,6 +8,8 @@
 # error after 2 periods. Plots: time_error.png and rt3d_spike.png in the same directory.
 #   bash jobs/bench/time_error.sh                 all runs (about 2 hours on 2 cores)
 #   PFF_RT_SIZES="16 32" PFF_SHEAR_SIZES="48" bash jobs/bench/time_error.sh    a subset
+#   PFF_RESUME=1 PFF_RT_SIZES=64 PFF_SHEAR_SIZES= bash jobs/bench/time_error.sh  continue a killed run
+#   PFF_BENCH_ARGS="-pressure_pc_type gamg" ...                                  extra pfflip options
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/../setup.sh"
 out=${PFF_BENCH_DIR:-$PFF_ROOT/output/bench}
@@ -21,21 +23,41 @@ py=/usr/bin/python3
 pfflip=$PFF_BUILD_DIR/bin/pfflip
 rev=$(git -C "$PFF_ROOT" describe --always --dirty)
 
-run() { # <log> <pfflip args...>: runs, returns "steps wall" from the summary line
-  local log=$1
+# run <dir> <pfflip args...>: runs into <dir> with a checkpoint every 50 steps and prints
+# "steps wall". With PFF_RESUME=1 a run that left <dir>/checkpoint.h5 continues from it: the
+# diagnostics rows after the checkpoint are dropped (the restarted run appends its own) and the wall
+# time is the sum over the segments (<dir>/segments.txt).
+run() {
+  local dir=$1
   shift
-  "${PFF_MPIEXEC[@]}" -n "$ranks" "$pfflip" "$@" -sim_frames false >"$log" 2>&1 || {
+  local log=$dir/log.txt restart=()
+  if [ "${PFF_RESUME:-0}" = 1 ] && [ -f "$dir/checkpoint.h5" ]; then
+    local at
+    at=$(sed -n 's/^checkpoint .* at step \([0-9]*\)$/\1/p' "$dir"/log*.txt | sort -n | tail -n 1)
+    for d in "$dir"/*_diag.csv; do
+      awk -F, -v at="$at" 'NR == 1 || /^#/ || $1 + 0 <= at' "$d" >"$d.tmp" && mv "$d.tmp" "$d"
+    done
+    log=$dir/log.$at.txt
+    restart=(-sim_restart "$dir/checkpoint.h5")
+    echo "pfflip: $dir continues from step $at" >&2
+  else
+    : >"$dir/segments.txt"
+  fi
+  # shellcheck disable=SC2086
+  "${PFF_MPIEXEC[@]}" -n "$ranks" "$pfflip" "$@" -output_dir "$dir" -sim_frames false -sim_checkpoint_every 50 \
+    "${restart[@]}" ${PFF_BENCH_ARGS:-} >"$log" 2>&1 || {
     tail -n 20 "$log"
     return 1
   }
-  sed -n 's/^summary: \([0-9]*\) steps .* wall \([0-9.]*\) s.*/\1 \2/p' "$log"
+  sed -n 's/^summary: \([0-9]*\) steps .* wall \([0-9.]*\) s.*/\1 \2/p' "$log" >>"$dir/segments.txt"
+  awk '{w += $2} END {print last, w} {last = $1}' "$dir/segments.txt"
 }
 
 spikes=()
 for W in ${PFF_RT_SIZES:-16 32 64}; do
   dir=$out/rt3d_W$W
   mkdir -p "$dir"
-  read -r steps wall < <(run "$dir/log.txt" -options_file_yaml "$PFF_ROOT/config/rt3d.yaml" -rt_resolution "$W" -output_dir "$dir")
+  read -r steps wall < <(run "$dir" -options_file_yaml "$PFF_ROOT/config/rt3d.yaml" -rt_resolution "$W")
   line=$($py "$PFF_ROOT/postproc/rt_spike.py" "$dir/rt3d_diag.csv" -o "$dir/spike.png")
   err=$(sed -n 's/.*max_dev=\([^ ]*\).*/\1/p' <<<"$line")
   band=$(sed -n 's/.*inside_band=\([^ ]*\).*/\1/p' <<<"$line")
@@ -46,8 +68,8 @@ done
 for N in ${PFF_SHEAR_SIZES:-48 100 200}; do
   dir=$out/shear_$N
   mkdir -p "$dir"
-  read -r steps wall < <(run "$dir/log.txt" -options_file_yaml "$PFF_ROOT/config/shear_sphere.yaml" -shear_resolution "$N" -output_dir "$dir")
-  err=$(sed -n 's/^shear_sphere: relative phi error \([0-9.eE+-]*\).*/\1/p' "$dir/log.txt")
+  read -r steps wall < <(run "$dir" -options_file_yaml "$PFF_ROOT/config/shear_sphere.yaml" -shear_resolution "$N")
+  err=$(sed -n 's/^shear_sphere: relative phi error \([0-9.eE+-]*\).*/\1/p' "$dir"/log*.txt | tail -n 1)
   echo "shear_sphere,${N}^3,$ranks,$threads,$steps,$wall,$err,-" | tee -a "$csv"
 done
 $py "$PFF_ROOT/postproc/time_error.py" "$csv" -o "$out/time_error.png"
