@@ -9,11 +9,12 @@
 typedef struct _n_PffFlow *PffFlow;
 
 /* Defaults, named after their options. */
-#define PFF_FLOW_CFL_DEFAULT 1.0       /* -flow_cfl, at most 4 */
-#define PFF_FLOW_ALPHA_PHI_DEFAULT 1.0 /* -flow_alpha_phi (Eq. 7) */
-#define PFF_FLOW_DELTA_PHI_DEFAULT 0.2 /* -flow_delta_phi (Sec. 3.4) */
-#define PFF_FLOW_FLIP_DEFAULT 0.99     /* -flow_flip: FLIP ratio where no viscosity is given */
-#define PFF_FLOW_VOLCORR_DEFAULT 0.2   /* -flow_volume_correction kappa of c_div */
+#define PFF_FLOW_CFL_DEFAULT 1.0              /* -flow_cfl, at most 4 */
+#define PFF_FLOW_ALPHA_PHI_DEFAULT 1.0        /* -flow_alpha_phi (Eq. 7) */
+#define PFF_FLOW_DELTA_PHI_DEFAULT 0.2        /* -flow_delta_phi (Sec. 3.4) */
+#define PFF_FLOW_FLIP_DEFAULT 0.99            /* -flow_flip: FLIP ratio where no viscosity is given */
+#define PFF_FLOW_VOLCORR_DEFAULT 0.2          /* -flow_volume_correction kappa of c_div */
+#define PFF_FLOW_EXTRAPOLATE_LAYERS_DEFAULT 3 /* -flow_extrapolate_layers: the paper's "a few cells" (Sec. 3.7) */
 
 /* Prescribed face velocity (e.g. the shear benchmark): component comp at x and time t. */
 typedef PetscReal (*PffVelocityFn)(const PetscReal x[3], PetscInt comp, PetscReal t, void *ctx);
@@ -37,7 +38,8 @@ PETSC_EXTERN const char *const PffFlowStageNames[]; /* P2G, PhaseField, Forces, 
    -rho_liquid, -rho_gas (> 0), -nu_liquid, -nu_gas (>= 0; 0 = no physical viscosity: FLIP ratio -flow_flip),
    -gravity gx,gy,gz, -flow_cfl (0, 4], -flow_dt_max, -flow_alpha_phi (> 0), -flow_delta_phi [0, 0.5),
    -flow_flip [0, 1], -flow_pressure (bool, default true), -flow_volume_correction [0, 1],
-   -flow_delete_bubbles (bool, default true), and the particle and pressure options. */
+   -flow_delete_bubbles (bool, default true), -flow_extrapolate_layers (>= 0; 0 = off), and the particle and
+   pressure options. */
 PETSC_EXTERN PetscErrorCode PffFlowCreate(PffGrid grid, PffFlow *flow);
 PETSC_EXTERN PetscErrorCode PffFlowSetFromOptions(PffFlow flow);
 /* Static solids (signed distance, negative inside); faces inside are closed. Before SetUp. */
@@ -69,3 +71,15 @@ PETSC_EXTERN PetscErrorCode PffFlowGetDeleteBubbles(PffFlow flow, PetscBool *del
 PETSC_EXTERN PetscErrorCode PffFlowGetChannels(PffFlow flow, PetscInt *phi, PetscInt *p, PetscInt *u, PetscInt *vort);
 /* Max |u| over owned faces and the liquid volume sum(phi_cell V_cell). Collective. */
 PETSC_EXTERN PetscErrorCode PffFlowGetDiagnostics(PffFlow flow, PetscReal *umax, PetscReal *liquidVolume);
+
+/* Extrapolation of the liquid velocity into the air (PF-FLIP Sec. 3.7), on face channels of grid: open
+   faces with chPhiF >= 1/2 copy chU into chUl; then, layer by layer (layers times), every open face not
+   yet valid that has valid neighbours of the same component (6 in that component's lattice, validity of
+   the previous layer only) takes their mean; the remaining faces copy chU, closed faces (chOpen 0) get 0.
+   Across a level boundary an interpolated neighbour counts as valid when its interpolated mask is >= 1/2
+   and contributes the mean of its valid sources. chMask (any width) is scratch; chUl's halo is current
+   on return. faces (may be NULL) receives the global number of faces extrapolated. The flow calls it
+   in the Advect stage; exposed for tests. Collective. */
+PETSC_EXTERN PetscErrorCode PffExtrapolateLiquidVelocity(PffGrid grid, PetscInt chU, PetscInt chPhiF, PetscInt chOpen,
+                                                         PetscInt layers, PetscInt chMask, PetscInt chUl,
+                                                         PetscInt64 *faces);

@@ -96,6 +96,12 @@ PETSC_EXTERN PetscErrorCode PffParticlesG2P(PffParticles p, PetscInt chU, PetscI
    and the particles are migrated. Collective. */
 PETSC_EXTERN PetscErrorCode PffParticlesAdvect(PffParticles p, PetscInt chU, PetscReal dt, PffSolidFn solid,
                                                void *solidctx, PffParticleStats *stats);
+/* As PffParticlesAdvect, but particles of type t sample chU[t] (PF-FLIP Sec. 3.7: liquid particles move
+   with the liquid velocity extrapolated into the air). Samples reach as far as the narrower of the two
+   halos allows. Collective. */
+PETSC_EXTERN PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const PetscInt chU[PFF_PARTICLE_NTYPES],
+                                                      PetscReal dt, PffSolidFn solid, void *solidctx,
+                                                      PffParticleStats *stats);
 
 /* Appends m particles (copied) anywhere in the domain, ids chosen by the caller; call
    PffParticlesMigrate next to send them to their owners and bin them. For restart and tests.

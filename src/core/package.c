@@ -6,7 +6,8 @@ PetscClassId  PFF_CLASSID;
 PetscLogEvent PFF_GridSetUp, PFF_GridRefine, PFF_GridPartition, PFF_HaloSetUp, PFF_HaloBegin, PFF_HaloEnd,
     PFF_HaloRevBegin, PFF_HaloRevEnd, PFF_GridInterp, PFF_GridLaplacian, PFF_IOWrite, PFF_IORead, PFF_PartSeed,
     PFF_PartBin, PFF_PartMigrate, PFF_P2G, PFF_G2P, PFF_Advect, PFF_PressSetUp, PFF_PressAssemble, PFF_PressSolve,
-    PFF_PhaseField, PFF_Forces, PFF_CkptWrite, PFF_CkptRead, PFF_MGSetUp, PFF_MGApply, PFF_MGSmooth, PFF_MGCoarse;
+    PFF_PhaseField, PFF_Forces, PFF_FlowExtrap, PFF_CkptWrite, PFF_CkptRead, PFF_MGSetUp, PFF_MGApply, PFF_MGSmooth,
+    PFF_MGCoarse;
 
 static PetscBool PffPackageInitialized = PETSC_FALSE;
 
@@ -39,6 +40,7 @@ PetscErrorCode PffInitializePackage(void)
   PetscCall(PetscLogEventRegister("PressSolve", PFF_CLASSID, &PFF_PressSolve));
   PetscCall(PetscLogEventRegister("PhaseField", PFF_CLASSID, &PFF_PhaseField));
   PetscCall(PetscLogEventRegister("Forces", PFF_CLASSID, &PFF_Forces));
+  PetscCall(PetscLogEventRegister("FlowExtrapolate", PFF_CLASSID, &PFF_FlowExtrap));
   PetscCall(PetscLogEventRegister("CkptWrite", PFF_CLASSID, &PFF_CkptWrite));
   PetscCall(PetscLogEventRegister("CkptRead", PFF_CLASSID, &PFF_CkptRead));
   PetscCall(PetscLogEventRegister("MGSetUp", PFF_CLASSID, &PFF_MGSetUp));

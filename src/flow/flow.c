@@ -24,7 +24,9 @@ PetscErrorCode PffFlowCreate(PffGrid grid, PffFlow *flow)
   f->volCorrGas               = PETSC_TRUE;
   f->usePressure              = PETSC_TRUE;
   f->deleteBubbles            = PETSC_TRUE;
+  f->extrapLayers             = PFF_FLOW_EXTRAPOLATE_LAYERS_DEFAULT;
   f->chMass = f->chUt = f->chU = f->chPhiF = f->chBeta = f->chOpen = f->chPhi = f->chP = f->chCdiv = f->chVort = -1;
+  f->chUl = f->chUlMask = -1;
   PetscCall(PffParticlesCreate(grid, &f->part));
   PetscCall(PffPressureCreate(grid, &f->press));
   *flow = f;
@@ -67,6 +69,10 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
                              "PffFlowSetFromOptions", f->volCorrGas, &f->volCorrGas, NULL));
   PetscCall(PetscOptionsBool("-flow_delete_bubbles", "Delete escaped air particles deep in liquid (Sec. 3.4)",
                              "PffFlowSetFromOptions", f->deleteBubbles, &f->deleteBubbles, NULL));
+  PetscCall(PetscOptionsInt("-flow_extrapolate_layers",
+                            "Face layers the liquid velocity is extrapolated into the air for liquid particles (Sec. "
+                            "3.7; 0: off)",
+                            "PffFlowSetFromOptions", f->extrapLayers, &f->extrapLayers, NULL));
   PetscOptionsEnd();
   for (int t = 0; t < PFF_PARTICLE_NTYPES; t++) {
     const char *key = t == PFF_PARTICLE_LIQUID ? "liquid" : "gas";
@@ -91,6 +97,8 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
              "-flow_flip %g is invalid: must be in [0, 1]", (double)f->flip);
   PetscCheck(f->volCorr >= 0 && f->volCorr <= 1, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-flow_volume_correction %g is invalid: must be in [0, 1]", (double)f->volCorr);
+  PetscCheck(f->extrapLayers >= 0, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-flow_extrapolate_layers %" PetscInt_FMT " is invalid: must be >= 0", f->extrapLayers);
   PetscCall(PffParticlesSetFromOptions(f->part));
   PetscCall(PffPressureSetFromOptions(f->press));
   /* the advection stages read velocity up to about CFL cells beyond a particle's block, plus one cell
@@ -140,6 +148,13 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
   PetscCall(PffGridAddChannel(f->grid, "p", PFF_CHANNEL_CELL, 1, &f->chP));
   PetscCall(PffGridAddChannel(f->grid, "cdiv", PFF_CHANNEL_CELL, 1, &f->chCdiv));
   PetscCall(PffGridAddChannel(f->grid, "vorticity", PFF_CHANNEL_CELL, 1, &f->chVort));
+  /* a prescribed field moves both phases alike; without layers nothing is allocated */
+  if (!f->prescribed && f->extrapLayers > 0) {
+    PetscCall(PffGridAddChannel(f->grid, "velocity_liquid", PFF_CHANNEL_FACE, width, &f->chUl));
+    PetscCall(PffGridAddChannel(f->grid, "extrap_mask", PFF_CHANNEL_FACE, 1, &f->chUlMask));
+    PetscCall(PffGridSetChannelOutput(f->grid, f->chUl, PETSC_FALSE));
+    PetscCall(PffGridSetChannelOutput(f->grid, f->chUlMask, PETSC_FALSE));
+  }
   /* working channels stay out of frames (checkpoints keep everything) */
   const PetscInt hidden[] = {f->chMass, f->chUt, f->chPhiF, f->chBeta, f->chOpen, f->chCdiv};
   for (size_t k = 0; k < PETSC_STATIC_ARRAY_LENGTH(hidden); k++)

@@ -25,22 +25,33 @@ struct _n_PffFlow {
 
   /* channels */
   PetscInt chMass, chUt, chU, chPhiF, chBeta, chOpen, chPhi, chP, chCdiv, chVort;
+  PetscInt chUl, chUlMask; /* liquid velocity extrapolated into the air and its validity (only with layers > 0) */
+  PetscInt extrapLayers;   /* -flow_extrapolate_layers (Sec. 3.7) */
   PetscInt uWidth;
 
   PetscReal t, dtPrev;
   PetscInt  step;
 };
 
-/* Component d of nch channels on local block lb (n^3 floats each, x fastest); n3 may be NULL. */
-static inline PetscErrorCode PffFlowBlockData_Private(PffFlow f, PetscInt lb, PetscInt d, PetscInt nch,
-                                                      const PetscInt ch[], float *data[], PetscInt *n3)
+/* Component d of nch channels on local block lb of grid (n^3 floats each, x fastest); n3 may be NULL. */
+static inline PetscErrorCode PffFlowGridBlockData_Private(PffGrid grid, PetscInt lb, PetscInt d, PetscInt nch,
+                                                          const PetscInt ch[], float *data[], PetscInt *n3)
 {
   PffBlockInfo info;
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
-  for (PetscInt k = 0; k < nch; k++) PetscCall(PffGridGetBlockData(f->grid, ch[k], lb, d, &data[k]));
+  PetscCall(PffGridGetBlockInfo(grid, lb, &info));
+  for (PetscInt k = 0; k < nch; k++) PetscCall(PffGridGetBlockData(grid, ch[k], lb, d, &data[k]));
   if (n3) *n3 = info.n * info.n * info.n;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The same on the flow's grid. */
+static inline PetscErrorCode PffFlowBlockData_Private(PffFlow f, PetscInt lb, PetscInt d, PetscInt nch,
+                                                      const PetscInt ch[], float *data[], PetscInt *n3)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffFlowGridBlockData_Private(f->grid, lb, d, nch, ch, data, n3));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

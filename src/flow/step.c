@@ -131,6 +131,25 @@ static PetscErrorCode PffFlowPrescribedDt(PffFlow f, PetscReal dtmax, PetscReal 
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* RK3 advection (Sec. 3.7) through the projected velocity: liquid particles through the liquid
+   velocity extrapolated into the air by -flow_extrapolate_layers faces, air particles through u. A
+   prescribed field and zero layers use u for both (chUl is then not allocated). */
+static PetscErrorCode PffFlowAdvect(PffFlow f, PetscReal dt, PffFlowStepStats *st)
+{
+  PetscInt ch[PFF_PARTICLE_NTYPES] = {f->chU, f->chU};
+
+  PetscFunctionBeginUser;
+  if (f->chUl >= 0) {
+    PetscInt64 faces = 0;
+    PetscCall(PffExtrapolateLiquidVelocity(f->grid, f->chU, f->chPhiF, f->chOpen, f->extrapLayers, f->chUlMask, f->chUl,
+                                           &faces));
+    PetscCall(PetscInfo(NULL, "liquid velocity extrapolated to %" PetscInt64_FMT " air faces\n", faces));
+    ch[PFF_PARTICLE_LIQUID] = f->chUl;
+  }
+  PetscCall(PffParticlesAdvectPerType(f->part, ch, dt, f->solid, f->solidCtx, &st->advect));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
 {
   PetscLogDouble t0   = 0;
@@ -191,7 +210,7 @@ PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
   }
 
   PetscCall(PffStageBegin(PFF_STAGE_ADVECT, &t0));
-  PetscCall(PffParticlesAdvect(f->part, f->chU, dt, f->solid, f->solidCtx, &st->advect));
+  PetscCall(PffFlowAdvect(f, dt, st));
   PetscCall(PffStageEnd(st, PFF_STAGE_ADVECT, t0));
 
   f->t += dt;

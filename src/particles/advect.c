@@ -4,6 +4,10 @@
    in its own sub-steps: n_sub = ceil(|u(x)| dt / (cfl h)), 1 <= n_sub <= PFF_PARTICLES_MAX_SUBSTEPS,
    h the cell size of its block (locally adaptive time stepping).
 
+   Each particle type has its own velocity channel (liquid particles sample the liquid velocity
+   extrapolated into the air, Sec. 3.7); the batches are grouped by type so that each channel is
+   interpolated in one call.
+
    Velocity samples use PffGridInterpolateFrom on the lattice of a "current" owned block, which may
    reach (width - 1) cells of that block's level beyond it. A stage point within that reach keeps the
    block; a point beyond it that lies in another owned block switches to that block; a point beyond
@@ -58,31 +62,74 @@ static PetscBool PffAdvectFix(PffParticles p, const PffAdvectBlock *blocks, cons
   return PETSC_TRUE;
 }
 
+/* Velocity samples at the m packed points (xs, bl): the first m0 use ch[0], the others ch[1]. */
+static PetscErrorCode PffAdvectSample(PffParticles p, const PetscInt ch[2], PetscInt m0, PetscInt m,
+                                      const PetscReal xs[], const PetscInt bl[], PetscReal k[])
+{
+  PetscFunctionBeginUser;
+  if (m0 > 0) PetscCall(PffGridInterpolateFrom(p->grid, ch[0], m0, xs, bl, k));
+  if (m > m0) PetscCall(PffGridInterpolateFrom(p->grid, ch[1], m - m0, xs + 3 * m0, bl + m0, k + 3 * m0));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* ord: the local particles with the liquid ones first (all in order when both types share a channel);
+   returns how many sample ch[0]. */
+static PetscInt PffAdvectOrder(PffParticles p, const PetscInt chU[PFF_PARTICLE_NTYPES], PetscInt ord[])
+{
+  PetscInt m0 = 0, m = 0;
+
+  if (chU[PFF_PARTICLE_LIQUID] == chU[PFF_PARTICLE_AIR]) {
+    for (PetscInt i = 0; i < p->n; i++) ord[i] = i;
+    return p->n;
+  }
+  for (PetscInt i = 0; i < p->n; i++)
+    if (p->s.type[i] == PFF_PARTICLE_LIQUID) ord[m0++] = i;
+  m = m0;
+  for (PetscInt i = 0; i < p->n; i++)
+    if (p->s.type[i] != PFF_PARTICLE_LIQUID) ord[m++] = i;
+  return m0;
+}
+
 PetscErrorCode PffParticlesAdvect(PffParticles p, PetscInt chU, PetscReal dt, PffSolidFn solid, void *solidctx,
                                   PffParticleStats *stats)
 {
-  PffChannelKind  kind;
-  PetscInt        width, nb[3], maxsub = 0, nclamp = 0;
+  const PetscInt ch[PFF_PARTICLE_NTYPES] = {chU, chU};
+
+  PetscFunctionBeginUser;
+  PetscCall(PffParticlesAdvectPerType(p, ch, dt, solid, solidctx, stats));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const PetscInt chU[PFF_PARTICLE_NTYPES], PetscReal dt,
+                                         PffSolidFn solid, void *solidctx, PffParticleStats *stats)
+{
+  PetscInt        width = PFF_GRID_MAX_WIDTH, nb[3], maxsub = 0, nclamp = 0, nliq;
   const PetscInt *level;
-  const char     *name;
   const PetscInt  n = p->n;
   PetscReal      *work, *k1, *k2, *k3, *xs, *xa, *hsub;
-  PetscInt       *iwork, *cur, *nsub, *act, *bl;
+  PetscInt       *iwork, *cur, *nsub, *act, *bl, *ord;
   PffAdvectBlock *blocks;
   PetscInt64      pushed = 0;
 
   PetscFunctionBeginUser;
   PetscCall(PffParticlesCheckBinned_Private(p, "PffParticlesAdvect"));
-  PetscCall(PffGridGetChannelInfo(p->grid, chU, &name, &kind, NULL, &width));
-  PetscCheck(kind == PFF_CHANNEL_FACE, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
-             "advection channel %s must be a face channel", name);
-  PetscCheck(width >= 2, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
-             "advection channel %s has halo width %" PetscInt_FMT ": needs >= 2", name, width);
+  for (PetscInt t = 0; t < PFF_PARTICLE_NTYPES; t++) {
+    PffChannelKind kind;
+    PetscInt       w;
+    const char    *name;
+    PetscCall(PffGridGetChannelInfo(p->grid, chU[t], &name, &kind, NULL, &w));
+    PetscCheck(kind == PFF_CHANNEL_FACE, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
+               "advection channel %s must be a face channel", name);
+    PetscCheck(w >= 2, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
+               "advection channel %s has halo width %" PetscInt_FMT ": needs >= 2", name, w);
+    /* the reach of a sample is that of the narrower halo */
+    width = PetscMin(width, w);
+  }
   PetscCheck(dt >= 0 && PetscIsNormalReal(dt + 1), PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
              "advection time step %g is invalid", (double)dt);
   PetscCall(PetscLogEventBegin(PFF_Advect, 0, 0, 0, 0));
   PetscCall(PffGridGetRaster(p->grid, nb, &level, NULL));
-  PetscCall(PffParticlesGetWork_Private(p, (size_t)(16 * n), &work, (size_t)(4 * n), &iwork));
+  PetscCall(PffParticlesGetWork_Private(p, (size_t)(16 * n), &work, (size_t)(5 * n), &iwork));
   k1   = work;
   k2   = k1 + 3 * n;
   k3   = k2 + 3 * n;
@@ -93,6 +140,8 @@ PetscErrorCode PffParticlesAdvect(PffParticles p, PetscInt chU, PetscReal dt, Pf
   nsub = cur + n;
   act  = nsub + n;
   bl   = act + n;
+  ord  = bl + n;
+  nliq = PffAdvectOrder(p, chU, ord);
   PetscCall(PetscMalloc1(PetscMax(p->nlocal, 1), &blocks));
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
     PffBlockInfo info;
@@ -104,13 +153,18 @@ PetscErrorCode PffParticlesAdvect(PffParticles p, PetscInt chU, PetscReal dt, Pf
     blocks[lb].h     = info.h;
   }
 
-  /* sub-step counts from the velocity at the start */
-  PetscCall(PffGridInterpolateFrom(p->grid, chU, n, p->s.x, p->blk, k1));
+  /* sub-step counts from the velocity at the start, sampled in the order of ord (the first sub-step's k1) */
   PetscReal *x = p->s.x;
+  for (PetscInt j = 0; j < n; j++) {
+    for (int a = 0; a < 3; a++) xa[3 * j + a] = x[3 * ord[j] + a];
+    bl[j] = p->blk[ord[j]];
+  }
+  PetscCall(PffAdvectSample(p, chU, nliq, n, xa, bl, k1));
 #pragma omp parallel for reduction(max : maxsub) schedule(static)
-  for (PetscInt i = 0; i < n; i++) {
+  for (PetscInt j = 0; j < n; j++) {
+    const PetscInt  i = ord[j];
     const PetscReal speed =
-        PetscSqrtReal(k1[3 * i] * k1[3 * i] + k1[3 * i + 1] * k1[3 * i + 1] + k1[3 * i + 2] * k1[3 * i + 2]);
+        PetscSqrtReal(k1[3 * j] * k1[3 * j] + k1[3 * j + 1] * k1[3 * j + 1] + k1[3 * j + 2] * k1[3 * j + 2]);
     const PetscReal cells = speed * dt / (p->substepCfl * blocks[p->blk[i]].h);
     PetscInt        m =
         cells < (PetscReal)PFF_PARTICLES_MAX_SUBSTEPS ? (PetscInt)PetscCeilReal(cells) : PFF_PARTICLES_MAX_SUBSTEPS;
@@ -122,16 +176,19 @@ PetscErrorCode PffParticlesAdvect(PffParticles p, PetscInt chU, PetscReal dt, Pf
   }
 
   for (PetscInt sub = 0; sub < maxsub; sub++) {
-    PetscInt m = 0;
-    for (PetscInt i = 0; i < n; i++)
-      if (nsub[i] > sub) act[m++] = i;
-    /* k1 (already sampled for the first sub-step, where every particle is active in order) */
+    PetscInt m = 0, m0 = 0;
+    for (PetscInt j = 0; j < n; j++)
+      if (nsub[ord[j]] > sub) {
+        act[m++] = ord[j];
+        if (j < nliq) m0 = m;
+      }
+    /* k1 (already sampled for the first sub-step, where every particle is active in the order of ord) */
     if (sub > 0) {
       for (PetscInt j = 0; j < m; j++) {
         for (int a = 0; a < 3; a++) xa[3 * j + a] = x[3 * act[j] + a];
         bl[j] = cur[act[j]];
       }
-      PetscCall(PffGridInterpolateFrom(p->grid, chU, m, xa, bl, k1));
+      PetscCall(PffAdvectSample(p, chU, m0, m, xa, bl, k1));
     }
     /* k2 at x + dt/2 k1, k3 at x + 3 dt/4 k2 */
     for (int stage = 0; stage < 2; stage++) {
@@ -143,7 +200,7 @@ PetscErrorCode PffParticlesAdvect(PffParticles p, PetscInt chU, PetscReal dt, Pf
         for (int a = 0; a < 3; a++) xs[3 * j + a] = x[3 * i + a] + f * hsub[i] * kp[3 * j + a];
         nclamp += PffAdvectFix(p, blocks, level, cur[i], &xs[3 * j], &bl[j]);
       }
-      PetscCall(PffGridInterpolateFrom(p->grid, chU, m, xs, bl, stage == 0 ? k2 : k3));
+      PetscCall(PffAdvectSample(p, chU, m0, m, xs, bl, stage == 0 ? k2 : k3));
     }
 #pragma omp parallel for reduction(+ : nclamp) schedule(static)
     for (PetscInt j = 0; j < m; j++) {

@@ -8,7 +8,8 @@
    v_p = (1, -2, 0.5) to 1e-6, on the 2-level periodic grid and on a grid walled in z (the test owns
    the wall ghost faces and sets them to the constant, as boundary conditions would).
    Advection: a uniform field moving 2.5 cells per step in a periodic domain (velocity channel of
-   width 4) moves every particle by u t (mod period) to 1e-9 of the domain size after 4 steps; a rigid
+   width 4) moves every particle by u t (mod period) to 1e-9 of the domain size after 4 steps, and with
+   one field per particle type (PffParticlesAdvectPerType) each type by its own u t; a rigid
    rotation in a walled box keeps every particle inside and the count; zero velocity with a sphere
    solid leaves no particle inside the sphere, and pushed equals the number that were inside.
 
@@ -38,6 +39,15 @@ static PetscErrorCode SeedRemember(const PetscReal x[3], PetscInt *type, PetscRe
   (void)ctx;
   *type = PFF_PARTICLE_LIQUID;
   for (int a = 0; a < 3; a++) v[a] = x[a];
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* v = x as SeedRemember; liquid where x < 0.5, air elsewhere */
+static PetscErrorCode SeedRememberMixed(const PetscReal x[3], PetscInt *type, PetscReal v[3], void *ctx)
+{
+  PetscFunctionBeginUser;
+  PetscCall(SeedRemember(x, type, v, ctx));
+  if (x[0] >= 0.5) *type = PFF_PARTICLE_AIR;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -205,46 +215,57 @@ static PetscErrorCode TestConstantVelocity(PetscInt nlevels, PetscBool wallz)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-static PetscErrorCode TestUniformAdvection(void)
+/* perType: liquid particles (x < 0.5 at seeding) move through one uniform field, air particles through
+   another (PffParticlesAdvectPerType); otherwise every particle through the first (PffParticlesAdvect). */
+static PetscErrorCode TestUniformAdvection(PetscBool perType)
 {
   const PetscInt   nb[3]       = {3, 2, 2};
   const PetscBool  periodic[3] = {PETSC_TRUE, PETSC_TRUE, PETSC_TRUE};
-  const PetscReal  origin[3] = {0.125, -0.5, 0}, u[3] = {1.25, -0.625, 0.5};
+  const PetscReal  origin[3] = {0.125, -0.5, 0}, uv[2][3] = {{1.25, -0.625, 0.5}, {-0.75, 1.0, -0.625}};
   const PetscInt   nsteps = 4;
   PffTestCtx       ctx;
   PffParticles     part;
   PffParticleStats st;
-  PetscInt         chU;
+  PetscInt         chU[2];
   PetscReal        err = 0;
   PetscInt64       c0[2], c1[2];
 
   PetscFunctionBeginUser;
   PetscCall(PffTestCreateGrid(PETSC_COMM_WORLD, nb, periodic, origin, 1.0 / 16, N0, 1, 0, 0, 3, &ctx));
-  PetscCall(PffGridAddChannel(ctx.grid, "u", PFF_CHANNEL_FACE, 4, &chU));
-  PetscCall(PffGridFillChannel(ctx.grid, chU, Constant, (void *)u));
-  PetscCall(PffGridHaloBegin(ctx.grid, chU));
-  PetscCall(PffGridHaloEnd(ctx.grid, chU));
-  PetscCall(CreateParticles(&ctx, "1", SeedRemember, &part));
+  for (PetscInt t = 0; t < 2; t++) {
+    PetscCall(PffGridAddChannel(ctx.grid, t ? "u_air" : "u", PFF_CHANNEL_FACE, 4, &chU[t]));
+    PetscCall(PffGridFillChannel(ctx.grid, chU[t], Constant, (void *)uv[t]));
+    PetscCall(PffGridHaloBegin(ctx.grid, chU[t]));
+    PetscCall(PffGridHaloEnd(ctx.grid, chU[t]));
+  }
+  PetscCall(CreateParticles(&ctx, "1", perType ? SeedRememberMixed : SeedRemember, &part));
   PetscCall(PffParticlesGetTotals(part, NULL, c0, NULL));
-  const PetscReal speed = PetscSqrtReal(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]), dt = 2.5 * ctx.h0 / speed;
-  for (PetscInt s = 0; s < nsteps; s++) PetscCall(PffParticlesAdvect(part, chU, dt, NULL, NULL, &st));
+  const PetscReal *u = uv[0], speed = PetscSqrtReal(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]), dt = 2.5 * ctx.h0 / speed;
+  for (PetscInt s = 0; s < nsteps; s++) {
+    if (perType)
+      PetscCall(PffParticlesAdvectPerType(part, chU, dt, NULL, NULL, &st));
+    else
+      PetscCall(PffParticlesAdvect(part, chU[0], dt, NULL, NULL, &st));
+  }
   PetscCall(PffParticlesGetTotals(part, NULL, c1, NULL));
   PffParticleArrays a;
   PetscCall(PffParticlesGetArrays(part, &a));
   for (PetscInt i = 0; i < a.n; i++)
     for (int d = 0; d < 3; d++) {
-      const PetscReal L = ctx.blen * (PetscReal)ctx.nb[d];
-      PetscReal       e = a.x[3 * i + d] - (a.v[3 * i + d] + u[d] * dt * (PetscReal)nsteps);
+      const PetscReal  L  = ctx.blen * (PetscReal)ctx.nb[d];
+      const PetscReal *ui = uv[perType && a.type[i] == PFF_PARTICLE_AIR];
+      PetscReal        e  = a.x[3 * i + d] - (a.v[3 * i + d] + ui[d] * dt * (PetscReal)nsteps);
       e -= L * PetscFloorReal(e / L + 0.5);
       err = PetscMax(err, PetscAbsReal(e) / L);
     }
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &err, 1, MPIU_REAL, MPI_MAX, ctx.comm));
-  PetscCheck(c0[0] == c1[0], ctx.comm, PETSC_ERR_PLIB, "advection changed the particle count");
+  PetscCheck(c0[0] == c1[0] && c0[1] == c1[1], ctx.comm, PETSC_ERR_PLIB, "advection changed the particle count");
+  PetscCheck(!perType || (c1[0] > 0 && c1[1] > 0), ctx.comm, PETSC_ERR_PLIB, "the per-type test needs both types");
   PetscCheck(err <= 1e-9, ctx.comm, PETSC_ERR_PLIB, "uniform advection error %g (relative to the period)", (double)err);
   PetscCall(PetscPrintf(ctx.comm,
-                        "advect uniform: %" PetscInt64_FMT " particles, %" PetscInt_FMT
+                        "advect uniform%s: %" PetscInt64_FMT " + %" PetscInt64_FMT " particles, %" PetscInt_FMT
                         " sub-steps per step, max error %.1e of the period\n",
-                        c1[0], st.substeps, (double)err));
+                        perType ? " (one field per type)" : "", c1[0], c1[1], st.substeps, (double)err));
   PetscCall(PffParticlesDestroy(&part));
   PetscCall(PffGridDestroy(&ctx.grid));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -354,7 +375,8 @@ int main(int argc, char **argv)
   PetscCall(TestKernelSum(2, -1));
   PetscCall(TestConstantVelocity(2, PETSC_FALSE));
   PetscCall(TestConstantVelocity(1, PETSC_TRUE));
-  PetscCall(TestUniformAdvection());
+  PetscCall(TestUniformAdvection(PETSC_FALSE));
+  PetscCall(TestUniformAdvection(PETSC_TRUE));
   PetscCall(TestWalledRotationAndSolid());
   PetscCall(PetscFinalize());
   return 0;

@@ -1,0 +1,146 @@
+/* Extrapolation of the liquid velocity into the air (PF-FLIP Sec. 3.7): "the liquid velocity is
+   extrapolated into the air phase by a few cells to ensure that liquid particles are advected with
+   the corresponding velocities". It serves the Advect stage: liquid particles sample the result,
+   air particles the mixture velocity u of the projection.
+
+   Layer 0 is the set of liquid faces, open faces with phi_f >= 1/2; they keep u. Layer L = 1..N:
+   every open face not yet valid whose valid face-neighbours of the same component (the 6 neighbours
+   in that component's lattice) number k > 0 takes their mean and becomes valid for layer L + 1.
+   Validity is read from layer L - 1 only, so the result depends neither on the loop order nor on the
+   rank count. Faces beyond N layers keep u; closed faces (walls, solids) are never sources and hold 0.
+
+   Ghosts come from the grid's halo exchange of the mask m (1 valid, 0 not) and of m u. Across a
+   level boundary a ghost is an interpolation (coarser neighbour; weights leave [0, 1] where the grid
+   extrapolates linearly near the neighbour's edge) or a mean (finer neighbour) of both; it counts as
+   valid when its interpolated mask is >= 1/2 (at least half the weight on valid faces) and its value
+   is (m u)/m, the mean of the valid sources only. Same-level ghosts have m in {0, 1} and are exact. */
+#include "flowimpl.h"
+
+/* A face made valid in the current layer is marked pending (m = -1 < 1/2): a neighbour read in place
+   (same level, same rank) then still sees it as invalid, as a copied ghost would. */
+#define PFF_EXTRAP_PENDING -1.0f
+
+/* Layer 0: m = 1 on open liquid faces, ul = m u. */
+static PetscErrorCode PffExtrapolateInit(PffGrid grid, const PetscInt ch[5], PetscInt nlocal)
+{
+  PetscFunctionBeginUser;
+  for (PetscInt lb = 0; lb < nlocal; lb++)
+    for (PetscInt d = 0; d < 3; d++) {
+      float   *a[5];
+      PetscInt n3 = 0;
+      PetscCall(PffFlowGridBlockData_Private(grid, lb, d, 5, ch, a, &n3));
+      const float *u = a[0], *phi = a[1], *open = a[2];
+      float       *m = a[3], *ul = a[4];
+      for (PetscInt c = 0; c < n3; c++) {
+        const PetscBool valid = open[c] > 0 && phi[c] >= 0.5f;
+        m[c]                  = valid ? 1.0f : 0.0f;
+        ul[c]                 = valid ? u[c] : 0.0f;
+      }
+    }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* One layer on component d of local block lb; ghosts of m and ul are current. Returns the faces it
+   made valid (marked pending). */
+static PetscErrorCode PffExtrapolateLayerBlock(PffGrid grid, const PetscInt ch[5], PetscInt lb, PetscInt d,
+                                               PetscInt *count)
+{
+  PffBlockInfo   info;
+  const PffView *vm, *vu;
+  float         *a[5];
+  PetscInt       added = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetBlockInfo(grid, lb, &info));
+  PetscCall(PffFlowGridBlockData_Private(grid, lb, d, 5, ch, a, NULL));
+  PetscCall(PffGridGetBlockViews(grid, ch[3], lb, d, &vm));
+  PetscCall(PffGridGetBlockViews(grid, ch[4], lb, d, &vu));
+  const float   *open = a[2];
+  float         *m = a[3], *ul = a[4];
+  const PetscInt n = info.n;
+  for (PetscInt k = 0; k < n; k++)
+    for (PetscInt j = 0; j < n; j++)
+      for (PetscInt i = 0; i < n; i++) {
+        const PetscInt c = i + n * (j + n * k);
+        if (m[c] != 0 || !(open[c] > 0)) continue;
+        PetscReal sum = 0;
+        PetscInt  cnt = 0;
+        for (PetscInt q = 0; q < 6; q++) {
+          const PetscInt  s = q % 2 ? 1 : -1, ax = q / 2;
+          const PetscInt  ii = i + (ax == 0 ? s : 0), jj = j + (ax == 1 ? s : 0), kk = k + (ax == 2 ? s : 0);
+          const PetscReal mq = *PffViewsAt(vm, ii, jj, kk, n);
+          if (!(mq >= 0.5)) continue;
+          sum += (PetscReal)*PffViewsAt(vu, ii, jj, kk, n) / mq;
+          cnt++;
+        }
+        if (!cnt) continue;
+        ul[c] = (float)(sum / (PetscReal)cnt);
+        m[c]  = PFF_EXTRAP_PENDING;
+        added++;
+      }
+  *count += added;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Pending faces become valid; after the last layer, faces that never became valid take u (0 if closed). */
+static PetscErrorCode PffExtrapolateFinishLayer(PffGrid grid, const PetscInt ch[5], PetscInt nlocal, PetscBool last)
+{
+  PetscFunctionBeginUser;
+  for (PetscInt lb = 0; lb < nlocal; lb++)
+    for (PetscInt d = 0; d < 3; d++) {
+      float   *a[5];
+      PetscInt n3 = 0;
+      PetscCall(PffFlowGridBlockData_Private(grid, lb, d, 5, ch, a, &n3));
+      const float *u = a[0], *open = a[2];
+      float       *m = a[3], *ul = a[4];
+      for (PetscInt c = 0; c < n3; c++) {
+        if (m[c] == PFF_EXTRAP_PENDING) m[c] = 1.0f;
+        if (last && m[c] == 0) ul[c] = open[c] > 0 ? u[c] : 0.0f;
+      }
+    }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffExtrapolateLiquidVelocity(PffGrid grid, PetscInt chU, PetscInt chPhiF, PetscInt chOpen,
+                                            PetscInt layers, PetscInt chMask, PetscInt chUl, PetscInt64 *faces)
+{
+  const PetscInt ch[5] = {chU, chPhiF, chOpen, chMask, chUl};
+  PetscInt       nlocal, added = 0;
+  MPI_Comm       comm;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetComm(grid, &comm));
+  PetscCheck(layers >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "extrapolation layers %" PetscInt_FMT " must be >= 0",
+             layers);
+  for (PetscInt k = 0; k < 5; k++) {
+    const char    *name;
+    PffChannelKind kind;
+    PetscCall(PffGridGetChannelInfo(grid, ch[k], &name, &kind, NULL, NULL));
+    PetscCheck(kind == PFF_CHANNEL_FACE, comm, PETSC_ERR_ARG_WRONG, "extrapolation channel %s must be a face channel",
+               name);
+  }
+  PetscCheck(chMask != chUl && chUl != chU, comm, PETSC_ERR_ARG_WRONG,
+             "extrapolation needs distinct mask, source and result channels");
+  PetscCall(PetscLogEventBegin(PFF_FlowExtrap, 0, 0, 0, 0));
+  PetscCall(PffGridGetLocalBlocks(grid, &nlocal));
+  PetscCall(PffExtrapolateInit(grid, ch, nlocal));
+  for (PetscInt l = 1; l <= layers; l++) {
+    PetscCall(PffGridHaloBegin(grid, chMask));
+    PetscCall(PffGridHaloBegin(grid, chUl));
+    PetscCall(PffGridHaloEnd(grid, chMask));
+    PetscCall(PffGridHaloEnd(grid, chUl));
+    for (PetscInt lb = 0; lb < nlocal; lb++)
+      for (PetscInt d = 0; d < 3; d++) PetscCall(PffExtrapolateLayerBlock(grid, ch, lb, d, &added));
+    PetscCall(PffExtrapolateFinishLayer(grid, ch, nlocal, (PetscBool)(l == layers)));
+  }
+  if (layers == 0) PetscCall(PffExtrapolateFinishLayer(grid, ch, nlocal, PETSC_TRUE));
+  PetscCall(PffGridHaloBegin(grid, chUl));
+  PetscCall(PffGridHaloEnd(grid, chUl));
+  PetscCall(PetscLogEventEnd(PFF_FlowExtrap, 0, 0, 0, 0));
+  if (faces) {
+    PetscInt64 g = added;
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &g, 1, MPIU_INT64, MPI_SUM, comm));
+    *faces = g;
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
