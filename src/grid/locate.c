@@ -52,22 +52,20 @@ PetscErrorCode PffGridLocate(PffGrid g, const PetscReal x[3], PetscInt *gid, Pet
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Trilinear interpolation at block-index position sp (finest-cell units) on the lattice of local
-   block lb, whose 27 views reach width cells beyond it. */
-static PetscReal PffInterpolateInBlock(PffGrid g, const PffChannel *c, PetscInt lb, const PetscReal sp[3],
-                                       PetscInt comp)
+/* Trilinear interpolation at lp, the position in cell units of local block lb's level relative to
+   its lower corner (n cells per axis, hole bits of its 26 neighbour regions), on the block's
+   lattice, whose 27 views reach width cells beyond it. */
+static PetscReal PffInterpolateInBlock(const PffChannel *c, PetscInt lb, PetscInt n, PetscInt holes,
+                                       const PetscReal lp[3], PetscInt comp)
 {
-  const PetscInt gid = g->lgid[lb], level = g->level[gid], n = g->n0 >> level;
-  const PetscInt holes = g->lholes[lb]; /* bit r: region r is a wall or inactive */
   const PffView *views = &c->views[(lb * c->ncomp + comp) * 27];
-  PetscInt       ijk[3], i0[3], i1[3], side[3];
+  PetscInt       i0[3], i1[3], side[3];
   PetscReal      t[3], o[3];
   PetscBool      clamp[3][2] = {{PETSC_FALSE, PETSC_FALSE}, {PETSC_FALSE, PETSC_FALSE}, {PETSC_FALSE, PETSC_FALSE}};
 
-  PffGridBlockIJK_Private(g, gid, ijk);
   for (int a = 0; a < 3; a++) {
     o[a]              = PffChannelOffset_Private(c->kind, comp, a);
-    const PetscReal s = (sp[a] - (PetscReal)(ijk[a] * g->n0)) / (PetscReal)((PetscInt)1 << level) - o[a];
+    const PetscReal s = lp[a] - o[a];
     i0[a]             = (PetscInt)PetscFloorReal(s);
     t[a]              = s - (PetscReal)i0[a];
     i1[a]             = i0[a] + 1;
@@ -118,6 +116,22 @@ static PetscReal PffInterpolateInBlock(PffGrid g, const PffChannel *c, PetscInt 
   return v;
 }
 
+/* Every component of channel c at block-index position sp (finest-cell units) in local block lb:
+   the block's place and level are looked up once per point. Division by 2^level is exact, so the
+   values are those of dividing per component. */
+static inline void PffInterpolatePoint(PffGrid g, const PffChannel *c, PetscInt lb, const PetscReal sp[3],
+                                       PetscReal val[])
+{
+  const PetscInt  gid = g->lgid[lb], level = g->level[gid], n = g->n0 >> level, holes = g->lholes[lb];
+  const PetscReal inv = 1.0 / (PetscReal)((PetscInt)1 << level);
+  PetscInt        ijk[3];
+  PetscReal       lp[3];
+
+  PffGridBlockIJK_Private(g, gid, ijk);
+  for (int a = 0; a < 3; a++) lp[a] = (sp[a] - (PetscReal)(ijk[a] * g->n0)) * inv;
+  for (PetscInt comp = 0; comp < c->ncomp; comp++) val[comp] = PffInterpolateInBlock(c, lb, n, holes, lp, comp);
+}
+
 PetscErrorCode PffGridInterpolate(PffGrid g, PetscInt ch, PetscInt np, const PetscReal x[], PetscReal val[])
 {
   PffChannel *c = NULL;
@@ -134,8 +148,7 @@ PetscErrorCode PffGridInterpolate(PffGrid g, PetscInt ch, PetscInt np, const Pet
     PetscCheck(lb >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
                "point (%g, %g, %g) is not in a block owned by this rank", (double)x[3 * p], (double)x[3 * p + 1],
                (double)x[3 * p + 2]);
-    for (PetscInt comp = 0; comp < c->ncomp; comp++)
-      val[p * c->ncomp + comp] = PffInterpolateInBlock(g, c, lb, sp, comp);
+    PffInterpolatePoint(g, c, lb, sp, &val[p * c->ncomp]);
   }
   PetscCall(PetscLogEventEnd(PFF_GridInterp, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -168,8 +181,7 @@ PetscErrorCode PffGridInterpolateFrom(PffGrid g, PetscInt ch, PetscInt np, const
           "point %" PetscInt_FMT " lies %g cells outside its block, beyond the halo of channel %s", p,
           (double)(PetscMax(lo - sp[d], sp[d] - lo - (PetscReal)g->n0) / (PetscReal)((PetscInt)1 << level)), c->name);
     }
-    for (PetscInt comp = 0; comp < c->ncomp; comp++)
-      val[p * c->ncomp + comp] = PffInterpolateInBlock(g, c, lb[p], sp, comp);
+    PffInterpolatePoint(g, c, lb[p], sp, &val[p * c->ncomp]);
   }
   PetscCall(PetscLogEventEnd(PFF_GridInterp, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);
