@@ -119,8 +119,9 @@ PetscErrorCode PffFlowSetSolid(PffFlow f, PffSolidFn fn, void *ctx)
 PetscErrorCode PffFlowSetPrescribedVelocity(PffFlow f, PffVelocityFn fn, void *ctx)
 {
   PetscFunctionBeginUser;
-  f->prescribed    = fn;
-  f->prescribedCtx = ctx;
+  f->prescribed      = fn;
+  f->prescribedCtx   = ctx;
+  f->prescribedNextT = PETSC_MAX_REAL;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

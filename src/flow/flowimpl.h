@@ -22,6 +22,7 @@ struct _n_PffFlow {
   void         *solidCtx;
   PffVelocityFn prescribed;
   void         *prescribedCtx;
+  PetscReal     prescribedNextT, prescribedNextU; /* the field's speed at prescribedNextT, sampled last step */
 
   /* channels */
   PetscInt chMass, chUt, chU, chPhiF, chBeta, chOpen, chPhi, chP, chCdiv, chVort;

@@ -109,25 +109,37 @@ static PetscErrorCode PffFlowChooseDt(PffFlow f, PetscReal umax, PetscReal dtmax
    it obeys the CFL number for that maximum (umax only grows as dt does not, so this ends). */
 static PetscErrorCode PffFlowPrescribedDt(PffFlow f, PetscReal dtmax, PetscReal *umax, PetscReal *dt)
 {
-  PetscReal u = 0, d;
+  PetscReal u = 0, ue = 0, d;
+  PetscBool settled = PETSC_FALSE;
 
   PetscFunctionBeginUser;
-  PetscCall(PffFlowPrescribe_Private(f, f->t));
-  PetscCall(PffFlowGetDiagnostics(f, &u, NULL));
+  /* the speed at t is the previous step's sample at its t + dt (each fill costs sin/cos per face) */
+  if (f->prescribedNextT == f->t)
+    u = f->prescribedNextU;
+  else {
+    PetscCall(PffFlowPrescribe_Private(f, f->t));
+    PetscCall(PffFlowGetDiagnostics(f, &u, NULL));
+  }
   PetscCall(PffFlowChooseDt(f, u, dtmax, &d));
-  for (PetscInt it = 0; it < 20; it++) {
-    PetscReal um = u, ue, dn;
-    PetscCall(PffFlowPrescribe_Private(f, f->t + 0.5 * d));
-    PetscCall(PffFlowGetDiagnostics(f, &um, NULL));
+  for (PetscInt it = 0; it < 20 && !settled; it++) {
+    PetscReal um, dn;
+    /* t + dt first, so that the grid holds the mid-step field the advection uses when d settles */
     PetscCall(PffFlowPrescribe_Private(f, f->t + d));
     PetscCall(PffFlowGetDiagnostics(f, &ue, NULL));
+    PetscCall(PffFlowPrescribe_Private(f, f->t + 0.5 * d));
+    PetscCall(PffFlowGetDiagnostics(f, &um, NULL));
     u = PetscMax(u, PetscMax(um, ue));
     PetscCall(PffFlowChooseDt(f, u, dtmax, &dn));
-    if (dn >= d * (1 - 1e-12)) break;
-    d = dn;
+    if (dn >= d * (1 - 1e-12))
+      settled = PETSC_TRUE;
+    else
+      d = dn;
   }
-  *umax = u;
-  *dt   = d;
+  if (!settled) PetscCall(PffFlowPrescribe_Private(f, f->t + 0.5 * d));
+  f->prescribedNextT = settled ? f->t + d : PETSC_MAX_REAL;
+  f->prescribedNextU = ue;
+  *umax              = u;
+  *dt                = d;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -173,9 +185,9 @@ PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
   st->cfl  = umax * dt / h0;
 
   if (f->prescribed) {
-    /* the field at mid-step: second order in time for the time-reversing benchmarks */
+    /* the field at mid-step (filled by PffFlowPrescribedDt): second order in time for the
+       time-reversing benchmarks */
     PetscCall(PffStageBegin(PFF_STAGE_FORCES, &t0));
-    PetscCall(PffFlowPrescribe_Private(f, f->t + 0.5 * dt));
     PetscCall(PffGridHaloBegin(f->grid, f->chU));
     PetscCall(PffGridHaloEnd(f->grid, f->chU));
     PetscCall(PffStageEnd(st, PFF_STAGE_FORCES, t0));
