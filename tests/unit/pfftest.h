@@ -29,6 +29,34 @@ typedef struct {
   PetscReal          origin[3], h0, blen;
 } PffTestCtx;
 
+/* A grid of nb blocks of n0 cells with nlevels levels and the requested level of every block
+   (request, -1 inactive); fills ctx. */
+static inline PetscErrorCode PffTestCreateGridFromMap(MPI_Comm comm, const PetscInt nb[3], const PetscBool periodic[3],
+                                                      const PetscReal origin[3], PetscReal h0, PetscInt n0,
+                                                      PetscInt nlevels, const PetscInt request[], PffTestCtx *ctx)
+{
+  const PetscInt cells[3] = {n0 * nb[0], n0 * nb[1], n0 * nb[2]};
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscMemzero(ctx, sizeof(*ctx)));
+  PetscCall(PffGridCreate(comm, &ctx->grid));
+  PetscCall(PffGridSetCells(ctx->grid, cells));
+  PetscCall(PffGridSetBlockSize(ctx->grid, n0));
+  PetscCall(PffGridSetLevels(ctx->grid, nlevels));
+  PetscCall(PffGridSetDomain(ctx->grid, origin, h0));
+  PetscCall(PffGridSetPeriodic(ctx->grid, periodic));
+  PetscCall(PffGridSetRefinementMap(ctx->grid, request));
+  PetscCall(PffGridSetUp(ctx->grid));
+  ctx->comm = comm;
+  PetscCallMPI(MPI_Comm_rank(comm, &ctx->rank));
+  PetscCall(PffGridGetRaster(ctx->grid, ctx->nb, &ctx->level, &ctx->owner));
+  PetscCall(PffGridGetSizes(ctx->grid, NULL, NULL, ctx->origin, &ctx->h0, ctx->periodic));
+  PetscCall(PffGridGetLocalBlocks(ctx->grid, &ctx->nlocal));
+  ctx->nblocks = nb[0] * nb[1] * nb[2];
+  ctx->blen    = (PetscReal)n0 * ctx->h0;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /* A grid of nb blocks of n0 cells. With uniform >= 0 every block has that level; otherwise levels grow
    with the distance from a random block, with random jumps, so every level and every kind of level
    step occurs and grading has work to do. inactive: percentage of blocks requested inactive. */
@@ -36,8 +64,7 @@ static inline PetscErrorCode PffTestCreateGrid(MPI_Comm comm, const PetscInt nb[
                                                const PetscReal origin[3], PetscReal h0, PetscInt n0, PetscInt nlevels,
                                                PetscInt uniform, PetscInt inactive, uint64_t seed, PffTestCtx *ctx)
 {
-  const PetscInt cells[3] = {n0 * nb[0], n0 * nb[1], n0 * nb[2]};
-  const PetscInt nblocks  = nb[0] * nb[1] * nb[2];
+  const PetscInt nblocks = nb[0] * nb[1] * nb[2];
   PetscInt      *request;
 
   PetscFunctionBeginUser;
@@ -53,22 +80,9 @@ static inline PetscErrorCode PffTestCreateGrid(MPI_Comm comm, const PetscInt nb[
     request[b]       = uniform >= 0 ? uniform : PetscMax(0, PetscMin(nlevels - 1, l));
     if ((PetscInt)((h >> 32) % 100) < inactive) request[b] = -1;
   }
-  PetscCall(PffGridCreate(comm, &ctx->grid));
-  PetscCall(PffGridSetCells(ctx->grid, cells));
-  PetscCall(PffGridSetBlockSize(ctx->grid, n0));
-  PetscCall(PffGridSetLevels(ctx->grid, uniform >= 0 ? uniform + 1 : nlevels));
-  PetscCall(PffGridSetDomain(ctx->grid, origin, h0));
-  PetscCall(PffGridSetPeriodic(ctx->grid, periodic));
-  PetscCall(PffGridSetRefinementMap(ctx->grid, request));
-  PetscCall(PffGridSetUp(ctx->grid));
+  PetscCall(
+      PffTestCreateGridFromMap(comm, nb, periodic, origin, h0, n0, uniform >= 0 ? uniform + 1 : nlevels, request, ctx));
   PetscCall(PetscFree(request));
-  ctx->comm = comm;
-  PetscCallMPI(MPI_Comm_rank(comm, &ctx->rank));
-  PetscCall(PffGridGetRaster(ctx->grid, ctx->nb, &ctx->level, &ctx->owner));
-  PetscCall(PffGridGetSizes(ctx->grid, NULL, NULL, ctx->origin, &ctx->h0, ctx->periodic));
-  PetscCall(PffGridGetLocalBlocks(ctx->grid, &ctx->nlocal));
-  ctx->nblocks = nblocks;
-  ctx->blen    = (PetscReal)n0 * ctx->h0;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -310,7 +310,7 @@ static PetscErrorCode TestRule(MPI_Comm comm)
 /* Fine (level 0) blocks below y = 0.5 at x < 0.5 and above it at x >= 0.5, coarse (level 1) elsewhere. */
 static PetscErrorCode CreateTwoLevelGrid(MPI_Comm comm, PffTestCtx *t)
 {
-  const PetscInt  cells[3]    = {N0 * NB, N0 * NB, N0 * NB};
+  const PetscInt  nb[3]       = {NB, NB, NB};
   const PetscBool periodic[3] = {PETSC_FALSE, PETSC_FALSE, PETSC_TRUE};
   const PetscReal origin[3]   = {0, 0, 0};
   PetscInt        level[NB * NB * NB];
@@ -320,21 +320,7 @@ static PetscErrorCode CreateTwoLevelGrid(MPI_Comm comm, PffTestCtx *t)
     for (PetscInt j = 0; j < NB; j++)
       for (PetscInt i = 0; i < NB; i++)
         level[i + NB * (j + NB * k)] = ((i < NB / 2 && j == 1) || (i >= NB / 2 && j == 2)) ? 0 : 1;
-  PetscCall(PffGridCreate(comm, &t->grid));
-  PetscCall(PffGridSetCells(t->grid, cells));
-  PetscCall(PffGridSetBlockSize(t->grid, N0));
-  PetscCall(PffGridSetLevels(t->grid, 2));
-  PetscCall(PffGridSetDomain(t->grid, origin, 1.0 / (N0 * NB)));
-  PetscCall(PffGridSetPeriodic(t->grid, periodic));
-  PetscCall(PffGridSetRefinementMap(t->grid, level));
-  PetscCall(PffGridSetUp(t->grid));
-  t->comm = comm;
-  PetscCallMPI(MPI_Comm_rank(comm, &t->rank));
-  PetscCall(PffGridGetRaster(t->grid, t->nb, &t->level, &t->owner));
-  PetscCall(PffGridGetSizes(t->grid, NULL, NULL, t->origin, &t->h0, t->periodic));
-  PetscCall(PffGridGetLocalBlocks(t->grid, &t->nlocal));
-  t->nblocks = NB * NB * NB;
-  t->blen    = (PetscReal)N0 * t->h0;
+  PetscCall(PffTestCreateGridFromMap(comm, nb, periodic, origin, 1.0 / (N0 * NB), N0, 2, level, t));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

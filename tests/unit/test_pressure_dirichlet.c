@@ -53,7 +53,7 @@ static PetscReal RandomVelocity(const PetscReal x[3], PetscInt comp, void *vctx)
    so that every level boundary is a d-face. */
 static PetscErrorCode CreateGrid(MPI_Comm comm, PetscBool graded, PetscInt d, PffTestCtx *t)
 {
-  const PetscInt  cells[3] = {NB * N0, NB * N0, NB * N0}, map[NB] = {0, 1, 2, 2};
+  const PetscInt  nb[3] = {NB, NB, NB}, map[NB] = {0, 1, 2, 2};
   const PetscBool per[3]    = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
   const PetscReal origin[3] = {0, 0, 0};
   PetscInt        request[NB * NB * NB];
@@ -63,22 +63,7 @@ static PetscErrorCode CreateGrid(MPI_Comm comm, PetscBool graded, PetscInt d, Pf
     const PetscInt ijk[3] = {b % NB, (b / NB) % NB, b / (NB * NB)};
     request[b]            = graded ? map[ijk[d]] : 0;
   }
-  PetscCall(PetscMemzero(t, sizeof(*t)));
-  PetscCall(PffGridCreate(comm, &t->grid));
-  PetscCall(PffGridSetCells(t->grid, cells));
-  PetscCall(PffGridSetBlockSize(t->grid, N0));
-  PetscCall(PffGridSetLevels(t->grid, graded ? 3 : 1));
-  PetscCall(PffGridSetDomain(t->grid, origin, 1.0 / (NB * N0)));
-  PetscCall(PffGridSetPeriodic(t->grid, per));
-  PetscCall(PffGridSetRefinementMap(t->grid, request));
-  PetscCall(PffGridSetUp(t->grid));
-  t->comm = comm;
-  PetscCallMPI(MPI_Comm_rank(comm, &t->rank));
-  PetscCall(PffGridGetRaster(t->grid, t->nb, &t->level, &t->owner));
-  PetscCall(PffGridGetSizes(t->grid, NULL, NULL, t->origin, &t->h0, t->periodic));
-  PetscCall(PffGridGetLocalBlocks(t->grid, &t->nlocal));
-  t->nblocks = NB * NB * NB;
-  t->blen    = N0 * t->h0;
+  PetscCall(PffTestCreateGridFromMap(comm, nb, per, origin, 1.0 / (NB * N0), N0, graded ? 3 : 1, request, t));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
