@@ -20,8 +20,14 @@
    (same level, same rank) then still sees it as invalid, as a copied ghost would. */
 #define PFF_EXTRAP_PENDING -1.0f
 
-/* Layer 0: m = 1 on open liquid faces, ul = m u. */
-static PetscErrorCode PffExtrapolateInit(PffGrid grid, const PetscInt ch[5], PetscInt nlocal)
+typedef enum {
+  PFF_EXTRAP_INIT,   /* layer 0: m = 1 on open liquid faces, ul = m u */
+  PFF_EXTRAP_COMMIT, /* pending faces become valid */
+  PFF_EXTRAP_LAST    /* the same, then faces never made valid take u (0 if closed) */
+} PffExtrapPass;
+
+/* A face-by-face pass over every owned face of every component. */
+static PetscErrorCode PffExtrapolatePass(PffGrid grid, const PetscInt ch[5], PetscInt nlocal, PffExtrapPass pass)
 {
   PetscFunctionBeginUser;
   for (PetscInt lb = 0; lb < nlocal; lb++)
@@ -32,9 +38,14 @@ static PetscErrorCode PffExtrapolateInit(PffGrid grid, const PetscInt ch[5], Pet
       const float *u = a[0], *phi = a[1], *open = a[2];
       float       *m = a[3], *ul = a[4];
       for (PetscInt c = 0; c < n3; c++) {
-        const PetscBool valid = open[c] > 0 && phi[c] >= 0.5f;
-        m[c]                  = valid ? 1.0f : 0.0f;
-        ul[c]                 = valid ? u[c] : 0.0f;
+        if (pass == PFF_EXTRAP_INIT) {
+          const PetscBool valid = open[c] > 0 && phi[c] >= 0.5f;
+          m[c]                  = valid ? 1.0f : 0.0f;
+          ul[c]                 = valid ? u[c] : 0.0f;
+          continue;
+        }
+        if (m[c] == PFF_EXTRAP_PENDING) m[c] = 1.0f;
+        if (pass == PFF_EXTRAP_LAST && m[c] == 0) ul[c] = open[c] > 0 ? u[c] : 0.0f;
       }
     }
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -82,25 +93,6 @@ static PetscErrorCode PffExtrapolateLayerBlock(PffGrid grid, const PetscInt ch[5
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Pending faces become valid; after the last layer, faces that never became valid take u (0 if closed). */
-static PetscErrorCode PffExtrapolateFinishLayer(PffGrid grid, const PetscInt ch[5], PetscInt nlocal, PetscBool last)
-{
-  PetscFunctionBeginUser;
-  for (PetscInt lb = 0; lb < nlocal; lb++)
-    for (PetscInt d = 0; d < 3; d++) {
-      float   *a[5];
-      PetscInt n3 = 0;
-      PetscCall(PffFlowGridBlockData_Private(grid, lb, d, 5, ch, a, &n3));
-      const float *u = a[0], *open = a[2];
-      float       *m = a[3], *ul = a[4];
-      for (PetscInt c = 0; c < n3; c++) {
-        if (m[c] == PFF_EXTRAP_PENDING) m[c] = 1.0f;
-        if (last && m[c] == 0) ul[c] = open[c] > 0 ? u[c] : 0.0f;
-      }
-    }
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
 PetscErrorCode PffExtrapolateLiquidVelocity(PffGrid grid, PetscInt chU, PetscInt chPhiF, PetscInt chOpen,
                                             PetscInt layers, PetscInt chMask, PetscInt chUl, PetscInt64 *faces)
 {
@@ -123,7 +115,7 @@ PetscErrorCode PffExtrapolateLiquidVelocity(PffGrid grid, PetscInt chU, PetscInt
              "extrapolation needs distinct mask, source and result channels");
   PetscCall(PetscLogEventBegin(PFF_FlowExtrap, 0, 0, 0, 0));
   PetscCall(PffGridGetLocalBlocks(grid, &nlocal));
-  PetscCall(PffExtrapolateInit(grid, ch, nlocal));
+  PetscCall(PffExtrapolatePass(grid, ch, nlocal, PFF_EXTRAP_INIT));
   for (PetscInt l = 1; l <= layers; l++) {
     PetscCall(PffGridHaloBegin(grid, chMask));
     PetscCall(PffGridHaloBegin(grid, chUl));
@@ -131,9 +123,9 @@ PetscErrorCode PffExtrapolateLiquidVelocity(PffGrid grid, PetscInt chU, PetscInt
     PetscCall(PffGridHaloEnd(grid, chUl));
     for (PetscInt lb = 0; lb < nlocal; lb++)
       for (PetscInt d = 0; d < 3; d++) PetscCall(PffExtrapolateLayerBlock(grid, ch, lb, d, &added));
-    PetscCall(PffExtrapolateFinishLayer(grid, ch, nlocal, (PetscBool)(l == layers)));
+    PetscCall(PffExtrapolatePass(grid, ch, nlocal, l == layers ? PFF_EXTRAP_LAST : PFF_EXTRAP_COMMIT));
   }
-  if (layers == 0) PetscCall(PffExtrapolateFinishLayer(grid, ch, nlocal, PETSC_TRUE));
+  if (layers == 0) PetscCall(PffExtrapolatePass(grid, ch, nlocal, PFF_EXTRAP_LAST));
   PetscCall(PffGridHaloBegin(grid, chUl));
   PetscCall(PffGridHaloEnd(grid, chUl));
   PetscCall(PetscLogEventEnd(PFF_FlowExtrap, 0, 0, 0, 0));
