@@ -155,11 +155,15 @@ PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const PetscInt chU[PFF_
 
   /* sub-step counts from the velocity at the start, sampled in the order of ord (the first sub-step's k1) */
   PetscReal *x = p->s.x;
-  for (PetscInt j = 0; j < n; j++) {
-    for (int a = 0; a < 3; a++) xa[3 * j + a] = x[3 * ord[j] + a];
-    bl[j] = p->blk[ord[j]];
+  if (nliq == n) /* one channel for both types: ord is the identity, no packed copy */
+    PetscCall(PffAdvectSample(p, chU, n, n, x, p->blk, k1));
+  else {
+    for (PetscInt j = 0; j < n; j++) {
+      for (int a = 0; a < 3; a++) xa[3 * j + a] = x[3 * ord[j] + a];
+      bl[j] = p->blk[ord[j]];
+    }
+    PetscCall(PffAdvectSample(p, chU, nliq, n, xa, bl, k1));
   }
-  PetscCall(PffAdvectSample(p, chU, nliq, n, xa, bl, k1));
 #pragma omp parallel for reduction(max : maxsub) schedule(static)
   for (PetscInt j = 0; j < n; j++) {
     const PetscInt  i = ord[j];

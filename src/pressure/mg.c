@@ -167,13 +167,8 @@ static PetscErrorCode PffMGSetUp(PC pc)
 
   PetscFunctionBeginUser;
   PetscCall(PCShellGetContext(pc, &mg));
-  if (!mg->optionsRead) { /* chosen by PCSetType after PffPressureSetFromOptions */
-    PffGrid grid;
-    PetscCall(PffMGQueryGrid(pc, &grid));
-    PetscCheck(grid != NULL, PetscObjectComm((PetscObject)pc), PETSC_ERR_ORDER,
-               "pffmg needs the grid: use it through PffPressure (-pressure_pc_type pffmg)");
-    PetscCall(PffPressureMGSetFromOptions_Private(pc, grid));
-  }
+  /* chosen by PCSetType after PffPressureSetFromOptions */
+  if (!mg->optionsRead) PetscCall(PffPressureMGSetFromOptions_Private(pc));
   PetscCall(PetscLogEventBegin(PFF_MGSetUp, 0, 0, 0, 0));
   PetscCall(PCGetOperators(pc, NULL, &A));
   if (mg->built && mg->lev[0].A != NULL && mg->lev[0].A != A) PetscCall(PffMGDestroyLevels_Private(mg));
@@ -289,15 +284,17 @@ PetscErrorCode PffPressureMGIsActive_Private(PC pc, PetscBool *active)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Options of pffmg under the pressure KSP's prefix; also hands the grid to the PC. */
-PetscErrorCode PffPressureMGSetFromOptions_Private(PC pc, PffGrid grid)
+/* Options of pffmg under the pressure KSP's prefix, and the grid PffPressureCreate composed with the PC. */
+PetscErrorCode PffPressureMGSetFromOptions_Private(PC pc)
 {
   PffMG      *mg;
   const char *prefix;
 
   PetscFunctionBeginUser;
   PetscCall(PffMGGetContext(pc, &mg));
-  mg->grid = grid;
+  PetscCall(PffMGQueryGrid(pc, &mg->grid));
+  PetscCheck(mg->grid != NULL, PetscObjectComm((PetscObject)pc), PETSC_ERR_ORDER,
+             "pffmg needs the grid: use it through PffPressure (-pressure_pc_type pffmg)");
   PetscCall(PCGetOptionsPrefix(pc, &prefix));
   PetscOptionsBegin(mg->comm, prefix, "Adaptive multigrid preconditioner (pffmg)", "PC");
   PetscCall(PetscOptionsEnum(

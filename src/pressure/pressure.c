@@ -99,7 +99,7 @@ PetscErrorCode PffPressureSetFromOptions(PffPressure ps)
     PetscBool mg;
     PetscCall(KSPGetPC(ps->ksp, &pc));
     PetscCall(PffPressureMGIsActive_Private(pc, &mg));
-    if (mg) PetscCall(PffPressureMGSetFromOptions_Private(pc, ps->grid));
+    if (mg) PetscCall(PffPressureMGSetFromOptions_Private(pc));
   }
   PetscFunctionReturn(PETSC_SUCCESS);
 }

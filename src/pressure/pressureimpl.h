@@ -95,5 +95,5 @@ PETSC_INTERN PetscErrorCode PffPressureVecToChannel_Private(PffPressure, Vec, Pf
 PETSC_INTERN PetscErrorCode PffPressureMaxDivergenceVec_Private(PffPressure, Vec, PetscReal *);
 PETSC_INTERN PetscErrorCode PffPressureMGRegister_Private(void);
 PETSC_INTERN PetscErrorCode PffPressureMGIsActive_Private(PC, PetscBool *);
-PETSC_INTERN PetscErrorCode PffPressureMGSetFromOptions_Private(PC, PffGrid);
+PETSC_INTERN PetscErrorCode PffPressureMGSetFromOptions_Private(PC);
 PETSC_INTERN PetscErrorCode PffPressureMGComposeGrid_Private(PC, PffGrid);
