@@ -445,6 +445,8 @@ static PetscErrorCode Bench(PetscInt N)
   PetscCall(CaseSetUp(&t, 4, &c));
   PetscInt npcs = 5;
   PetscCall(PetscOptionsGetInt(NULL, NULL, "-bench_npcs", &npcs, NULL));
+  PetscCheck(npcs >= 1 && npcs <= 5, PETSC_COMM_WORLD, PETSC_ERR_ARG_OUTOFRANGE,
+             "-bench_npcs %" PetscInt_FMT " is invalid: must be in [1, 5]", npcs);
   for (PetscInt k = 0; k < npcs; k++) {
     PffPressure    ps;
     KSP            ksp;

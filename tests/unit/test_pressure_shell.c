@@ -209,6 +209,10 @@ static PetscErrorCode TestEquality(PetscInt g, PetscBool dirichlet)
     PetscCall(PCSetType(pc, PCJACOBI));
     PetscCall(KSPSetTolerances(ksp, 1e-8, 1e-50, PETSC_DEFAULT, 5000));
     PetscCall(KSPSolve(ksp, b, sol));
+    KSPConvergedReason reason;
+    PetscCall(KSPGetConvergedReason(ksp, &reason));
+    PetscCheck(reason > 0, PETSC_COMM_WORLD, PETSC_ERR_NOT_CONVERGED, "%s: Jacobi-CG with %s did not converge (%s)",
+               GridNames[g], k == 0 ? "(A, A)" : "(S, S)", KSPConvergedReasons[reason]);
     PetscCall(KSPGetIterationNumber(ksp, &its[k]));
     PetscCall(KSPDestroy(&ksp));
     PetscCall(VecDestroy(&b));
