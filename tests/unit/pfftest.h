@@ -29,6 +29,21 @@ typedef struct {
   PetscReal          origin[3], h0, blen;
 } PffTestCtx;
 
+/* A key from a sample position (quarter-cell lattice of the finest cells), a component and a purpose:
+   the same value on every rank count and partition. */
+static inline uint64_t PffTestPositionKey(const PffTestCtx *t, const PetscReal x[3], PetscInt comp, uint64_t purpose)
+{
+  uint64_t q[3];
+  for (int a = 0; a < 3; a++) q[a] = (uint64_t)llround((x[a] - t->origin[a]) / (0.25 * t->h0));
+  return PffTestKey(purpose, q[0] + 1000003ULL * (uint64_t)comp, q[1], q[2]);
+}
+
+/* Uniform in [0, 1) from a key (its 53 high bits). */
+static inline PetscReal PffTestUniform01(uint64_t key)
+{
+  return (PetscReal)(key >> 11) / 9007199254740992.0;
+}
+
 /* A grid of nb blocks of n0 cells with nlevels levels and the requested level of every block
    (request, -1 inactive); fills ctx. */
 static inline PetscErrorCode PffTestCreateGridFromMap(MPI_Comm comm, const PetscInt nb[3], const PetscBool periodic[3],

@@ -22,13 +22,6 @@ static PetscBool OnLowerWall(const PffTestCtx *t, const PetscReal x[3], PetscInt
   return (PetscBool)(!t->periodic[comp] && PetscAbsReal(x[comp] - t->origin[comp]) < 1e-3 * t->h0);
 }
 
-static uint64_t PositionKey(const PffTestCtx *t, const PetscReal x[3], PetscInt comp, uint64_t purpose)
-{
-  uint64_t q[3];
-  for (int a = 0; a < 3; a++) q[a] = (uint64_t)llround((x[a] - t->origin[a]) / (0.25 * t->h0));
-  return PffTestKey(purpose, q[0] + 1000003ULL * (uint64_t)comp, q[1], q[2]);
-}
-
 static PetscReal BetaField(const PetscReal x[3], PetscInt comp, void *vctx)
 {
   const Case *c = (const Case *)vctx;
@@ -39,7 +32,7 @@ static PetscReal BetaField(const PetscReal x[3], PetscInt comp, void *vctx)
     return r2 < PetscSqr(c->radius) ? 1e-3 : 1.0;
   }
   case 2:
-    return 1e-3 + (1 - 1e-3) * (PetscReal)(PositionKey(c->t, x, comp, 7) >> 11) / 9007199254740992.0;
+    return 1e-3 + (1 - 1e-3) * (PetscReal)(PffTestPositionKey(c->t, x, comp, 7) >> 11) / 9007199254740992.0;
   case 3:
     return x[1] < 0.5 ? 1e-3 : 1.0;
   case 4: /* water (rho 1000) with 16 air bubbles of radius 0.06 L */
@@ -62,7 +55,7 @@ static PetscReal RandomVelocity(const PetscReal x[3], PetscInt comp, void *vctx)
 {
   const Case *c = (const Case *)vctx;
   if (OnLowerWall(c->t, x, comp)) return 0;
-  return (PetscReal)(PositionKey(c->t, x, comp, 11) >> 11) / 9007199254740992.0 - 0.5;
+  return (PetscReal)(PffTestPositionKey(c->t, x, comp, 11) >> 11) / 9007199254740992.0 - 0.5;
 }
 
 static PetscReal Gravity(const PetscReal x[3], PetscInt comp, void *vctx)
@@ -74,15 +67,6 @@ static PetscReal Gravity(const PetscReal x[3], PetscInt comp, void *vctx)
 static PetscReal GravityNoise(const PetscReal x[3], PetscInt comp, void *vctx)
 {
   return Gravity(x, comp, vctx) + 0.1 * RandomVelocity(x, comp, vctx);
-}
-
-static PetscReal One(const PetscReal x[3], PetscInt comp, void *vctx)
-{
-  return 1.0;
-}
-static PetscReal Zero(const PetscReal x[3], PetscInt comp, void *vctx)
-{
-  return 0.0;
 }
 
 /* Adds the channels and fills beta, open (all 1), p = 0, c_div = 0. */
@@ -100,9 +84,9 @@ static PetscErrorCode CaseSetUp(PffTestCtx *t, PetscInt kind, Case *c)
   PetscCall(PffGridAddChannel(t->grid, "p", PFF_CHANNEL_CELL, 1, &c->pCh));
   PetscCall(PffGridAddChannel(t->grid, "cdiv", PFF_CHANNEL_CELL, 1, &c->cdivCh));
   PetscCall(PffGridFillChannel(t->grid, c->betaCh, BetaField, c));
-  PetscCall(PffGridFillChannel(t->grid, c->openCh, One, c));
-  PetscCall(PffGridFillChannel(t->grid, c->pCh, Zero, c));
-  PetscCall(PffGridFillChannel(t->grid, c->cdivCh, Zero, c));
+  PetscCall(PffGridFillChannel(t->grid, c->openCh, PffTestOne, c));
+  PetscCall(PffGridFillChannel(t->grid, c->pCh, PffTestZero, c));
+  PetscCall(PffGridFillChannel(t->grid, c->cdivCh, PffTestZero, c));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -479,7 +463,7 @@ static PetscErrorCode Bench(PetscInt N)
       PffPressureStats st;
       PetscCall(KSPSetTolerances(ksp, tol == 0 ? 1e-4 : 1e-8, 1e-50, PETSC_DEFAULT, 10000));
       PetscCall(PffGridFillChannel(t.grid, c.uCh, GravityNoise, &c));
-      PetscCall(PffGridFillChannel(t.grid, c.pCh, Zero, &c));
+      PetscCall(PffGridFillChannel(t.grid, c.pCh, PffTestZero, &c));
       PetscCall(PffPressureProject(ps, c.uCh, c.dt, -1, c.pCh, &st));
       PetscCall(
           PetscPrintf(PETSC_COMM_WORLD,

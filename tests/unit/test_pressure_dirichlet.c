@@ -24,16 +24,9 @@ typedef struct {
   const PffTestCtx *t;
 } Case;
 
-static uint64_t PositionKey(const PffTestCtx *t, const PetscReal x[3], PetscInt comp, uint64_t purpose)
-{
-  uint64_t q[3];
-  for (int a = 0; a < 3; a++) q[a] = (uint64_t)llround((x[a] - t->origin[a]) / (0.25 * t->h0));
-  return PffTestKey(purpose, q[0] + 1000003ULL * (uint64_t)comp, q[1], q[2]);
-}
-
 static PetscReal Random01(const PffTestCtx *t, const PetscReal x[3], PetscInt comp, uint64_t purpose)
 {
-  return (PetscReal)(PositionKey(t, x, comp, purpose) >> 11) / 9007199254740992.0;
+  return PffTestUniform01(PffTestPositionKey(t, x, comp, purpose));
 }
 
 static PetscReal BetaField(const PetscReal x[3], PetscInt comp, void *vctx)

@@ -16,22 +16,10 @@ typedef struct {
   PetscReal         closedFraction;     /* of the other faces, closed at random */
 } Fill;
 
-static uint64_t PositionKey(const PffTestCtx *t, const PetscReal x[3], PetscInt comp, uint64_t purpose)
-{
-  uint64_t q[3];
-  for (int a = 0; a < 3; a++) q[a] = (uint64_t)llround((x[a] - t->origin[a]) / (0.25 * t->h0));
-  return PffTestKey(purpose, q[0] + 1000003ULL * (uint64_t)comp, q[1], q[2]);
-}
-
-static PetscReal Uniform01(uint64_t key)
-{
-  return (PetscReal)(key >> 11) / 9007199254740992.0;
-}
-
 static PetscReal RandomBeta(const PetscReal x[3], PetscInt comp, void *vctx)
 {
   const Fill *f = (const Fill *)vctx;
-  return 1e-3 + (1 - 1e-3) * Uniform01(PositionKey(f->t, x, comp, 7));
+  return 1e-3 + (1 - 1e-3) * PffTestUniform01(PffTestPositionKey(f->t, x, comp, 7));
 }
 
 static PetscReal OpenField(const PetscReal x[3], PetscInt comp, void *vctx)
@@ -41,19 +29,14 @@ static PetscReal OpenField(const PetscReal x[3], PetscInt comp, void *vctx)
   for (int a = 0; a < 3; a++)
     if (x[a] < f->boxlo[a] - 1e-9 || x[a] > f->boxhi[a] + 1e-9) solid = PETSC_FALSE;
   if (solid) return 0.0;
-  return Uniform01(PositionKey(f->t, x, comp, 13)) < f->closedFraction ? 0.0 : 1.0;
+  return PffTestUniform01(PffTestPositionKey(f->t, x, comp, 13)) < f->closedFraction ? 0.0 : 1.0;
 }
 
 static PetscReal RandomVelocity(const PetscReal x[3], PetscInt comp, void *vctx)
 {
   const Fill *f = (const Fill *)vctx;
   if (!f->t->periodic[comp] && PetscAbsReal(x[comp] - f->t->origin[comp]) < 1e-3 * f->t->h0) return 0;
-  return Uniform01(PositionKey(f->t, x, comp, 11)) - 0.5;
-}
-
-static PetscReal Zero(const PetscReal x[3], PetscInt comp, void *vctx)
-{
-  return 0.0;
+  return PffTestUniform01(PffTestPositionKey(f->t, x, comp, 11)) - 0.5;
 }
 
 /* x_i from the global cell number i, so the same vector on every partition. */
@@ -65,7 +48,7 @@ static PetscErrorCode RandomCellVec(Vec x, uint64_t seed)
   PetscFunctionBeginUser;
   PetscCall(VecGetOwnershipRange(x, &lo, &hi));
   PetscCall(VecGetArrayWrite(x, &a));
-  for (PetscInt i = lo; i < hi; i++) a[i - lo] = Uniform01(PffTestKey(seed, (uint64_t)i, 0, 0)) - 0.5;
+  for (PetscInt i = lo; i < hi; i++) a[i - lo] = PffTestUniform01(PffTestKey(seed, (uint64_t)i, 0, 0)) - 0.5;
   PetscCall(VecRestoreArrayWrite(x, &a));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -256,7 +239,7 @@ static PetscErrorCode TestProjection(PetscInt g, PCType pctype, PetscBool dirich
     PetscBool        isshell;
     MatNullSpace     nsp;
     PetscCall(PffGridFillChannel(pb.t.grid, pb.uCh, RandomVelocity, &pb.f));
-    PetscCall(PffGridFillChannel(pb.t.grid, pb.pCh, Zero, &pb.f));
+    PetscCall(PffGridFillChannel(pb.t.grid, pb.pCh, PffTestZero, &pb.f));
     PetscCall(PetscOptionsSetValue(NULL, "-pressure_operator", k == 0 ? "aij" : "shell"));
     PetscCall(PffPressureCreate(pb.t.grid, &ps));
     PetscCall(PffPressureSetFromOptions(ps));
