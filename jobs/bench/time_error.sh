@@ -6,9 +6,10 @@
 # rt3d error = max |y/W - reference| over t/t0 <= 3 (De Rosis & Enan 2021, Table IX) and whether
 # the curve stays inside the band of the eight published models; shear error = the relative phi
 # error after 2 periods. Plots: time_error.png and rt3d_spike.png in the same directory.
-#   bash jobs/bench/time_error.sh                 all runs (about 2 hours on 2 cores)
+#   bash jobs/bench/time_error.sh                 all runs (200^3 alone takes about 18 h on 2 cores)
 #   PFF_RT_SIZES="16 32" PFF_SHEAR_SIZES="48" bash jobs/bench/time_error.sh    a subset
-#   PFF_RESUME=1 PFF_RT_SIZES=64 PFF_SHEAR_SIZES= bash jobs/bench/time_error.sh  continue a killed run
+#   PFF_RESUME=1 PFF_RT_SIZES=64 PFF_SHEAR_SIZES=" " bash jobs/bench/time_error.sh  continue a killed run
+#   (an empty size list means the default sizes; a blank " " means none)
 #   PFF_BENCH_ARGS="-pressure_pc_type gamg" ...                                  extra pfflip options
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/../setup.sh"
