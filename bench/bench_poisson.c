@@ -110,23 +110,29 @@ static inline PetscReal Random01(uint64_t seed, uint64_t id, uint64_t purpose, u
   return (PetscReal)(Hash64(Hash64(Hash64(seed) ^ id) ^ (purpose << 32 | counter)) >> 11) / 9007199254740992.0;
 }
 
-/* Centre of the cell of level ln that contains the point x (origin 0). */
+/* Centre of the cell of size h that contains the point x (origin 0). */
 static void CellCentreAt(const PetscReal x[3], PetscReal h, PetscReal c[3])
 {
   for (PetscInt a = 0; a < 3; a++) c[a] = (PetscFloorReal(x[a] / h) + 0.5) * h;
 }
 
+static PetscReal Zero(const PetscReal x[3], PetscInt comp, void *ctx)
+{
+  (void)x, (void)comp, (void)ctx;
+  return 0;
+}
+
 /* beta = 1/rho_f on the lower faces of the owned cells and the random u* (0 on the lower walls). */
 static PetscErrorCode FillProblem(PffGrid grid, const BenchOptions *o, PetscInt betaCh, PetscInt uCh)
 {
-  PetscInt        nb[3], nlocal, n0;
+  PetscInt        nb[3], nlocal;
   const PetscInt *level;
   PetscBool       periodic[3];
   PetscReal       h0;
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetRaster(grid, nb, &level, NULL));
-  PetscCall(PffGridGetSizes(grid, &n0, NULL, NULL, &h0, periodic));
+  PetscCall(PffGridGetSizes(grid, NULL, NULL, NULL, &h0, periodic));
   PetscCall(PffGridGetLocalBlocks(grid, &nlocal));
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo info;
@@ -252,7 +258,6 @@ static PetscErrorCode BenchGrid(MPI_Comm comm, const BenchOptions *o, PetscInt N
     PetscReal        bnorm, rnorm, relres;
     PetscBool        avail = PETSC_FALSE;
     char             ratio[32];
-    PetscInt         nlocal;
 
     /* PffPressureCreate first: the pressure module may register its own PC types there */
     PetscCall(PffPressureCreate(grid, &ps));
@@ -273,14 +278,7 @@ static PetscErrorCode BenchGrid(MPI_Comm comm, const BenchOptions *o, PetscInt N
     PetscLogDouble setupFirst = 0, setupMin = PETSC_MAX_REAL, solveMin = PETSC_MAX_REAL;
     for (PetscInt rep = 0; rep < o->repeat; rep++) {
       PetscCall(FillProblem(grid, o, betaCh, uCh)); /* the projection overwrote u */
-      PetscCall(PffGridGetLocalBlocks(grid, &nlocal));
-      for (PetscInt lb = 0; lb < nlocal; lb++) {
-        PffBlockInfo info;
-        float       *pd;
-        PetscCall(PffGridGetBlockInfo(grid, lb, &info));
-        PetscCall(PffGridGetBlockData(grid, pCh, lb, 0, &pd));
-        for (PetscInt q = 0; q < info.n * info.n * info.n; q++) pd[q] = 0;
-      }
+      PetscCall(PffGridFillChannel(grid, pCh, Zero, NULL));
       PetscCall(PffPressureSetCoefficients(ps, betaCh, -1));
       PetscCall(PffPressureProject(ps, uCh, 1.0, -1, pCh, &st));
       if (rep == 0) setupFirst = st.setupTime;
