@@ -78,7 +78,7 @@ int main(int argc, char **argv)
         PetscCallMPI(MPI_Barrier(PETSC_COMM_WORLD));
         const double t0 = MPI_Wtime();
         if (k == 0)
-          PetscCall(PffParticlesP2G(part, density, chMass, chMom));
+          PetscCall(PffParticlesP2G(part, density, chMass, chMom, -1));
         else if (k == 1)
           PetscCall(PffParticlesG2P(part, chU, chDU, alpha));
         else

@@ -9,15 +9,19 @@
 typedef struct _n_PffFlow *PffFlow;
 
 /* Defaults, named after their options. */
-#define PFF_FLOW_CFL_DEFAULT 1.0              /* -flow_cfl, at most 4 */
-#define PFF_FLOW_ALPHA_PHI_DEFAULT 1.0        /* -flow_alpha_phi (Eq. 7) */
-#define PFF_FLOW_DELTA_PHI_DEFAULT 0.2        /* -flow_delta_phi (Sec. 3.4) */
-#define PFF_FLOW_FLIP_DEFAULT 0.99            /* -flow_flip: FLIP ratio where no viscosity is given */
-#define PFF_FLOW_VOLCORR_DEFAULT 0.2          /* -flow_volume_correction kappa of c_div */
+#define PFF_FLOW_CFL_DEFAULT 1.0       /* -flow_cfl, at most 4 */
+#define PFF_FLOW_ALPHA_PHI_DEFAULT 1.0 /* -flow_alpha_phi (Eq. 7) */
+#define PFF_FLOW_DELTA_PHI_DEFAULT 0.2 /* -flow_delta_phi (Sec. 3.4) */
+#define PFF_FLOW_FLIP_DEFAULT 0.99     /* -flow_flip: FLIP ratio where no viscosity is given */
+#define PFF_FLOW_VOLCORR_DEFAULT 0.5   /* -flow_volume_correction: kappa, share of the volume error removed per step */
+#define PFF_FLOW_VOLCORR_MAXDISP_DEFAULT 0.5  /* -flow_volume_correction_max_displacement, in cells */
+#define PFF_FLOW_VOLCORR_RTOL_DEFAULT 1e-3    /* -flow_volume_correction_rtol of its solve */
 #define PFF_FLOW_EXTRAPOLATE_LAYERS_DEFAULT 3 /* -flow_extrapolate_layers: the paper's "a few cells" (Sec. 3.7) */
 
 /* Prescribed face velocity (e.g. the shear benchmark): component comp at x and time t. */
 typedef PetscReal (*PffVelocityFn)(const PetscReal x[3], PetscInt comp, PetscReal t, void *ctx);
+
+#define PFF_FLOW_NSTAGES 8
 
 /* What one step did; the scene prints it in the progress line. */
 typedef struct {
@@ -26,18 +30,22 @@ typedef struct {
   PetscInt64       particles;
   PetscInt64       bubblesDeleted, dropletCandidates; /* escaped particles this step (Sec. 3.4) */
   PffPressureStats pressure;                          /* its = 0 when the solve is off */
+  PffPressureStats correction;                        /* the volume-correction solve (its = 0 when off) */
+  PetscReal        volumeRatio[2]; /* min and max particle volume fraction s of a cell before the correction */
+  PetscReal        correctionMax;  /* largest |d| / h of the correction displacement before its bound */
   PffParticleStats advect;
-  PetscLogDouble   stageTime[8]; /* wall seconds per stage, see PffFlowStageNames */
+  PetscLogDouble   stageTime[PFF_FLOW_NSTAGES]; /* wall seconds per stage, see PffFlowStageNames */
 } PffFlowStepStats;
 
-#define PFF_FLOW_NSTAGES 7
-PETSC_EXTERN const char *const PffFlowStageNames[]; /* P2G, PhaseField, Forces, Pressure, G2P, Advect, Escaped */
+PETSC_EXTERN const char
+    *const PffFlowStageNames[]; /* P2G, PhaseField, Forces, Pressure, G2P, Advect, Escaped, Correction */
 
 /* Life cycle. Create borrows the grid, which must be set up (the flow adds its channels in SetUp).
    SetFromOptions reads
    -rho_liquid, -rho_gas (> 0), -nu_liquid, -nu_gas (>= 0; 0 = no physical viscosity: FLIP ratio -flow_flip),
    -gravity gx,gy,gz, -flow_cfl (0, 4], -flow_dt_max, -flow_alpha_phi (> 0), -flow_delta_phi [0, 0.5),
-   -flow_flip [0, 1], -flow_pressure (bool, default true), -flow_volume_correction [0, 1],
+   -flow_flip [0, 1], -flow_pressure (bool, default true), -flow_volume_correction [0, 1] (0 = off),
+   -flow_volume_correction_max_displacement (cells, > 0), -flow_volume_correction_rtol (0, 1),
    -flow_delete_bubbles (bool, default true), -flow_extrapolate_layers (>= 0; 0 = off), and the particle and
    pressure options. */
 PETSC_EXTERN PetscErrorCode PffFlowCreate(PffGrid grid, PffFlow *flow);

@@ -1,7 +1,8 @@
 /* PffFlow life cycle and options. */
 #include "flowimpl.h"
 
-const char *const PffFlowStageNames[] = {"P2G", "PhaseField", "Forces", "Pressure", "G2P", "Advect", "Escaped", NULL};
+const char *const PffFlowStageNames[] = {"P2G",    "PhaseField", "Forces",     "Pressure", "G2P",
+                                         "Advect", "Escaped",    "Correction", NULL};
 
 PetscErrorCode PffFlowCreate(PffGrid grid, PffFlow *flow)
 {
@@ -21,12 +22,13 @@ PetscErrorCode PffFlowCreate(PffGrid grid, PffFlow *flow)
   f->deltaPhi                 = PFF_FLOW_DELTA_PHI_DEFAULT;
   f->flip                     = PFF_FLOW_FLIP_DEFAULT;
   f->volCorr                  = PFF_FLOW_VOLCORR_DEFAULT;
-  f->volCorrGas               = PETSC_TRUE;
+  f->volCorrMaxDisp           = PFF_FLOW_VOLCORR_MAXDISP_DEFAULT;
+  f->volCorrRtol              = PFF_FLOW_VOLCORR_RTOL_DEFAULT;
   f->usePressure              = PETSC_TRUE;
   f->deleteBubbles            = PETSC_TRUE;
   f->extrapLayers             = PFF_FLOW_EXTRAPOLATE_LAYERS_DEFAULT;
   f->chMass = f->chUt = f->chU = f->chPhiF = f->chBeta = f->chOpen = f->chPhi = f->chP = f->chCdiv = f->chVort = -1;
-  f->chUl = f->chUlMask = -1;
+  f->chUl = f->chUlMask = f->chVol = f->chVolRef = f->chQ = f->chUa = -1;
   PetscCall(PffParticlesCreate(grid, &f->part));
   PetscCall(PffPressureCreate(grid, &f->press));
   *flow = f;
@@ -61,12 +63,15 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
                              f->flip, &f->flip, NULL));
   PetscCall(PetscOptionsBool("-flow_pressure", "Solve the pressure projection", "PffFlowSetFromOptions", f->usePressure,
                              &f->usePressure, NULL));
-  PetscCall(PetscOptionsReal("-flow_volume_correction", "Volume-correction gain kappa of c_div",
-                             "PffFlowSetFromOptions", f->volCorr, &f->volCorr, NULL));
-  PetscCall(PetscOptionsBool("-flow_volume_correction_gas",
-                             "Volume correction also in gas cells (off for large density ratios, where the gas cells' "
-                             "raw mass holds liquid kernel tails)",
-                             "PffFlowSetFromOptions", f->volCorrGas, &f->volCorrGas, NULL));
+  PetscCall(
+      PetscOptionsReal("-flow_volume_correction",
+                       "Volume correction: share kappa of each cell's particle-volume error removed per step (0: off)",
+                       "PffFlowSetFromOptions", f->volCorr, &f->volCorr, NULL));
+  PetscCall(PetscOptionsReal("-flow_volume_correction_max_displacement",
+                             "Largest volume-correction displacement of a face per step, in cells",
+                             "PffFlowSetFromOptions", f->volCorrMaxDisp, &f->volCorrMaxDisp, NULL));
+  PetscCall(PetscOptionsReal("-flow_volume_correction_rtol", "Relative tolerance of the volume-correction solve",
+                             "PffFlowSetFromOptions", f->volCorrRtol, &f->volCorrRtol, NULL));
   PetscCall(PetscOptionsBool("-flow_delete_bubbles", "Delete escaped air particles deep in liquid (Sec. 3.4)",
                              "PffFlowSetFromOptions", f->deleteBubbles, &f->deleteBubbles, NULL));
   PetscCall(PetscOptionsInt("-flow_extrapolate_layers",
@@ -97,6 +102,11 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
              "-flow_flip %g is invalid: must be in [0, 1]", (double)f->flip);
   PetscCheck(f->volCorr >= 0 && f->volCorr <= 1, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-flow_volume_correction %g is invalid: must be in [0, 1]", (double)f->volCorr);
+  PetscCheck(f->volCorrMaxDisp > 0 && f->volCorrMaxDisp <= 1, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-flow_volume_correction_max_displacement %g is invalid: must be in (0, 1] cells",
+             (double)f->volCorrMaxDisp);
+  PetscCheck(f->volCorrRtol > 0 && f->volCorrRtol < 1, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-flow_volume_correction_rtol %g is invalid: must be in (0, 1)", (double)f->volCorrRtol);
   PetscCheck(f->extrapLayers >= 0, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-flow_extrapolate_layers %" PetscInt_FMT " is invalid: must be >= 0", f->extrapLayers);
   PetscCall(PffParticlesSetFromOptions(f->part));
@@ -147,7 +157,6 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
   PetscCall(PffGridAddChannel(f->grid, "open", PFF_CHANNEL_FACE, 1, &f->chOpen));
   PetscCall(PffGridAddChannel(f->grid, "phi", PFF_CHANNEL_CELL, 1, &f->chPhi));
   PetscCall(PffGridAddChannel(f->grid, "p", PFF_CHANNEL_CELL, 1, &f->chP));
-  PetscCall(PffGridAddChannel(f->grid, "cdiv", PFF_CHANNEL_CELL, 1, &f->chCdiv));
   PetscCall(PffGridAddChannel(f->grid, "vorticity", PFF_CHANNEL_CELL, 1, &f->chVort));
   /* a prescribed field moves both phases alike; without layers nothing is allocated */
   if (!f->prescribed && f->extrapLayers > 0) {
@@ -156,12 +165,26 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
     PetscCall(PffGridSetChannelOutput(f->grid, f->chUl, PETSC_FALSE));
     PetscCall(PffGridSetChannelOutput(f->grid, f->chUlMask, PETSC_FALSE));
   }
+  /* the volume correction needs the projection and moves particles, so a prescribed field has none */
+  if (!f->prescribed && f->usePressure && f->volCorr > 0) {
+    PetscCall(PffGridAddChannel(f->grid, "volume", PFF_CHANNEL_FACE, 1, &f->chVol));
+    PetscCall(PffGridAddChannel(f->grid, "volume_ref", PFF_CHANNEL_FACE, 1, &f->chVolRef));
+    PetscCall(PffGridAddChannel(f->grid, "cdiv", PFF_CHANNEL_CELL, 1, &f->chCdiv));
+    PetscCall(PffGridAddChannel(f->grid, "correction_potential", PFF_CHANNEL_CELL, 1, &f->chQ));
+    PetscCall(PffGridAddChannel(f->grid, "velocity_gas", PFF_CHANNEL_FACE, width, &f->chUa));
+    /* the liquid's advection channel carries the liquid displacement even without extrapolation */
+    if (f->chUl < 0) PetscCall(PffGridAddChannel(f->grid, "velocity_liquid", PFF_CHANNEL_FACE, width, &f->chUl));
+    const PetscInt work[] = {f->chVol, f->chVolRef, f->chCdiv, f->chQ, f->chUa, f->chUl};
+    for (size_t k = 0; k < PETSC_STATIC_ARRAY_LENGTH(work); k++)
+      PetscCall(PffGridSetChannelOutput(f->grid, work[k], PETSC_FALSE));
+  }
   /* working channels stay out of frames (checkpoints keep everything) */
-  const PetscInt hidden[] = {f->chMass, f->chUt, f->chPhiF, f->chBeta, f->chOpen, f->chCdiv};
+  const PetscInt hidden[] = {f->chMass, f->chUt, f->chPhiF, f->chBeta, f->chOpen};
   for (size_t k = 0; k < PETSC_STATIC_ARRAY_LENGTH(hidden); k++)
     PetscCall(PffGridSetChannelOutput(f->grid, hidden[k], PETSC_FALSE));
   PetscCall(PffParticlesGetKernelSum(f->part, &f->rho0));
   PetscCall(PffFlowOpenFaces_Private(f));
+  if (f->chVolRef >= 0) PetscCall(PffFlowReferenceVolume_Private(f));
   if (!f->prescribed && f->usePressure) PetscCall(PffPressureSetUp(f->press));
   f->setupcalled = PETSC_TRUE;
   PetscFunctionReturn(PETSC_SUCCESS);

@@ -13,8 +13,8 @@ struct _n_PffFlow {
 
   /* physics and numerics */
   PetscReal rho[PFF_PARTICLE_NTYPES], nu[PFF_PARTICLE_NTYPES], gravity[3];
-  PetscReal cfl, dtMax, alphaPhi, deltaPhi, flip, volCorr;
-  PetscBool volCorrGas; /* c_div also in gas cells (docs/decisions.md) */
+  PetscReal cfl, dtMax, alphaPhi, deltaPhi, flip;
+  PetscReal volCorr, volCorrMaxDisp, volCorrRtol; /* -flow_volume_correction* (correction.c) */
   PetscBool usePressure, deleteBubbles;
   PetscReal rho0; /* kernel sum rho~_0 (Eq. 7) */
 
@@ -27,6 +27,7 @@ struct _n_PffFlow {
   /* channels */
   PetscInt chMass, chUt, chU, chPhiF, chBeta, chOpen, chPhi, chP, chCdiv, chVort;
   PetscInt chUl, chUlMask; /* liquid velocity extrapolated into the air and its validity (only with layers > 0) */
+  PetscInt chVol, chVolRef, chQ, chUa; /* volume weights, their lattice target, correction potential, gas advection */
   PetscInt extrapLayers;   /* -flow_extrapolate_layers (Sec. 3.7) */
   PetscInt uWidth;
 
@@ -58,7 +59,10 @@ static inline PetscErrorCode PffFlowBlockData_Private(PffFlow f, PetscInt lb, Pe
 
 /* phase.c */
 PETSC_INTERN PetscErrorCode PffFlowPhaseField_Private(PffFlow);
-PETSC_INTERN PetscErrorCode PffFlowVolumeCorrection_Private(PffFlow, PetscReal dt);
+/* correction.c */
+PETSC_INTERN PetscErrorCode PffFlowReferenceVolume_Private(PffFlow);
+PETSC_INTERN PetscErrorCode PffFlowVolumeCorrection_Private(PffFlow, PffFlowStepStats *);
+PETSC_INTERN PetscErrorCode PffFlowCorrectionVelocity_Private(PffFlow, PetscReal dt, PetscBool extrapolated);
 /* fields.c */
 PETSC_INTERN PetscErrorCode PffFlowFaceVelocity_Private(PffFlow, PetscReal dt);
 PETSC_INTERN PetscErrorCode PffFlowOpenFaces_Private(PffFlow);

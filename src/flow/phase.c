@@ -1,10 +1,11 @@
 /* Phase field (PF-FLIP Sec. 3.3, Eq. 7) from the raw face densities of P2G, cell tags, face
-   densities and coefficients (Eq. 9), and the volume-correction term c_div of Eq. 8.
+   densities and coefficients (Eq. 9).
 
    chMass holds rho~ normalised so that a uniform lattice of liquid particles gives rho_l rho~_0
    (see PffParticlesP2G); Eq. 7 is then applied literally with rho~_min = eta_phi rho_g rho~_0 and
    eta_phi = log(rho_l / rho_g). A cell's phase value is the mean over its open faces; cells below
-   1/2 are air. Faces between two liquid cells get phi = 1, between two air cells phi = 0. */
+   1/2 are air. Faces between two liquid cells get phi = 1, between two air cells phi = 0, and the cell
+   values are then taken again from the cleaned faces. */
 #include "flowimpl.h"
 
 static inline PetscReal PffPhi(PetscReal rt, PetscReal rtmin, PetscReal scale)
@@ -13,23 +14,11 @@ static inline PetscReal PffPhi(PetscReal rt, PetscReal rtmin, PetscReal scale)
   return PetscMin(PetscSqrtReal(PetscMax(rt - rtmin, 0) / scale), 1.0);
 }
 
-/* face phi from the raw density; then the cell mean over open faces */
-static PetscErrorCode PffFlowRawPhase(PffFlow f, PetscInt nlocal)
+/* Cell phi = mean of the face phi over the cell's open faces (chPhiF's halo current); a cell with every
+   face closed (inside a solid) keeps the plain mean. */
+static PetscErrorCode PffFlowCellPhase(PffFlow f, PetscInt nlocal)
 {
-  const PetscReal eta = PetscLogReal(f->rho[0] / f->rho[1]), rtmin = eta * f->rho[1] * f->rho0,
-                  scale = f->alphaPhi * f->rho0 * f->rho[0];
-
   PetscFunctionBeginUser;
-  const PetscInt ch[2] = {f->chMass, f->chPhiF};
-  for (PetscInt lb = 0; lb < nlocal; lb++)
-    for (PetscInt d = 0; d < 3; d++) {
-      float   *a[2];
-      PetscInt n3 = 0;
-      PetscCall(PffFlowBlockData_Private(f, lb, d, 2, ch, a, &n3));
-      for (PetscInt c = 0; c < n3; c++) a[1][c] = (float)PffPhi(a[0][c], rtmin, scale);
-    }
-  PetscCall(PffGridHaloBegin(f->grid, f->chPhiF));
-  PetscCall(PffGridHaloEnd(f->grid, f->chPhiF));
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo   info;
     const PffView *vphi[3], *vopen[3];
@@ -55,10 +44,31 @@ static PetscErrorCode PffFlowRawPhase(PffFlow f, PetscInt nlocal)
             w += olo + ohi;
             all += lo + hi;
           }
-          /* a cell with every face closed (inside a solid) keeps the plain mean */
           cell[i + n * (j + n * k)] = (float)(w > 0 ? sum / w : all / 6);
         }
   }
+  PetscCall(PffGridHaloBegin(f->grid, f->chPhi));
+  PetscCall(PffGridHaloEnd(f->grid, f->chPhi));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* face phi from the raw density (Eq. 7) */
+static PetscErrorCode PffFlowRawPhase(PffFlow f, PetscInt nlocal)
+{
+  const PetscReal eta = PetscLogReal(f->rho[0] / f->rho[1]), rtmin = eta * f->rho[1] * f->rho0,
+                  scale = f->alphaPhi * f->rho0 * f->rho[0];
+
+  PetscFunctionBeginUser;
+  const PetscInt ch[2] = {f->chMass, f->chPhiF};
+  for (PetscInt lb = 0; lb < nlocal; lb++)
+    for (PetscInt d = 0; d < 3; d++) {
+      float   *a[2];
+      PetscInt n3 = 0;
+      PetscCall(PffFlowBlockData_Private(f, lb, d, 2, ch, a, &n3));
+      for (PetscInt c = 0; c < n3; c++) a[1][c] = (float)PffPhi(a[0][c], rtmin, scale);
+    }
+  PetscCall(PffGridHaloBegin(f->grid, f->chPhiF));
+  PetscCall(PffGridHaloEnd(f->grid, f->chPhiF));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -70,8 +80,7 @@ PetscErrorCode PffFlowPhaseField_Private(PffFlow f)
   PetscCall(PetscLogEventBegin(PFF_PhaseField, 0, 0, 0, 0));
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
   PetscCall(PffFlowRawPhase(f, nlocal));
-  PetscCall(PffGridHaloBegin(f->grid, f->chPhi));
-  PetscCall(PffGridHaloEnd(f->grid, f->chPhi));
+  PetscCall(PffFlowCellPhase(f, nlocal));
   /* tags clean the face values away from the interface; density and beta follow (Eq. 9) */
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo   info;
@@ -100,42 +109,12 @@ PetscErrorCode PffFlowPhaseField_Private(PffFlow f)
           }
     }
   }
+  /* the cell values again, from the cleaned faces: away from the interface they are exactly 0 or 1, so
+     FLIP noise in the bulk (where the clamp of Eq. 7 cuts only the upper half of the fluctuations) does
+     not bias sum(phi V) or the escaped-particle test */
+  PetscCall(PffGridHaloBegin(f->grid, f->chPhiF));
+  PetscCall(PffGridHaloEnd(f->grid, f->chPhiF));
+  PetscCall(PffFlowCellPhase(f, nlocal));
   PetscCall(PetscLogEventEnd(PFF_PhaseField, 0, 0, 0, 0));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-/* c_div (Eq. 8, after Losasso et al. 2008): where a cell lies inside one phase (all its lower faces
-   have phi 1, or all 0), the raw density over its target rho rho~_0 measures how compressed the
-   particles are; c_div = -kappa max(ratio - 1, 0) / dt makes the projection spread them again.
-   With -flow_volume_correction_gas false only liquid cells get it: a gas cell's raw mass includes
-   the kernel tails of nearby liquid particles, up to rho_l / rho_g times the gas target, which at
-   1000:1 turned the correction into a 2e4 /s source beside every bubble (docs/decisions.md). */
-PetscErrorCode PffFlowVolumeCorrection_Private(PffFlow f, PetscReal dt)
-{
-  PetscInt nlocal;
-
-  PetscFunctionBeginUser;
-  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
-  const PetscInt ch[2] = {f->chMass, f->chPhiF};
-  for (PetscInt lb = 0; lb < nlocal; lb++) {
-    float   *cdiv, *m[3], *phi[3], *a[2];
-    PetscInt n3 = 0;
-    PetscCall(PffFlowBlockData_Private(f, lb, 0, 1, &f->chCdiv, &cdiv, &n3));
-    for (PetscInt d = 0; d < 3; d++) {
-      PetscCall(PffFlowBlockData_Private(f, lb, d, 2, ch, a, NULL));
-      m[d]   = a[0];
-      phi[d] = a[1];
-    }
-    for (PetscInt c = 0; c < n3; c++) {
-      const PetscReal s = (PetscReal)(phi[0][c] + phi[1][c] + phi[2][c]);
-      if (!(s == 3 || (s == 0 && f->volCorrGas))) {
-        cdiv[c] = 0;
-        continue;
-      }
-      const PetscReal target = (s == 3 ? f->rho[0] : f->rho[1]) * f->rho0;
-      const PetscReal ratio  = (PetscReal)(m[0][c] + m[1][c] + m[2][c]) / (3 * target);
-      cdiv[c]                = (float)(-f->volCorr * PetscMax(ratio - 1, 0) / dt);
-    }
-  }
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -22,7 +22,8 @@ enum {
   PFF_STAGE_PRESSURE,
   PFF_STAGE_G2P,
   PFF_STAGE_ADVECT,
-  PFF_STAGE_ESCAPED
+  PFF_STAGE_ESCAPED,
+  PFF_STAGE_CORRECTION
 };
 
 static PetscErrorCode PffStageBegin(PetscInt s, PetscLogDouble *t0)
@@ -51,7 +52,7 @@ static PetscErrorCode PffFlowTransfer(PffFlow f, PffFlowStepStats *st)
 
   PetscFunctionBeginUser;
   PetscCall(PffStageBegin(PFF_STAGE_P2G, &t0));
-  PetscCall(PffParticlesP2G(f->part, f->rho, f->chMass, f->chUt));
+  PetscCall(PffParticlesP2G(f->part, f->rho, f->chMass, f->chUt, f->chVol));
   PetscCall(PffStageEnd(st, PFF_STAGE_P2G, t0));
   PetscCall(PffStageBegin(PFF_STAGE_PHASE, &t0));
   PetscCall(PffFlowPhaseField_Private(f));
@@ -91,8 +92,8 @@ static PetscErrorCode PffFlowChooseDt(PffFlow f, PetscReal umax, PetscReal dtmax
   if (numax > 0 && !f->prescribed) d = PetscMin(d, h0 * h0 / (6 * numax));
   d = PetscMin(d, f->dtMax);
   /* the time to the next output (or the end) in one step if it fits, in two equal ones if it fits in
-     two: no sliver step is left before it. A sliver would inflate c_div (which scales with 1/dt) into
-     a large velocity that the FLIP ratio (alpha -> 1 as dt -> 0) keeps on the particles. */
+     two: no sliver step is left before it (a sliver once inflated a velocity-based volume correction,
+     which scaled with 1/dt; the displacement of correction.c does not, but a sliver is still wasted work) */
   if (dtmax <= d)
     d = dtmax;
   else if (dtmax < 2 * d)
@@ -145,18 +146,26 @@ static PetscErrorCode PffFlowPrescribedDt(PffFlow f, PetscReal dtmax, PetscReal 
 
 /* RK3 advection (Sec. 3.7) through the projected velocity: liquid particles through the liquid
    velocity extrapolated into the air by -flow_extrapolate_layers faces, air particles through u. A
-   prescribed field and zero layers use u for both (chUl is then not allocated). */
+   prescribed field and zero layers use u for both (chUl is then not allocated). With the volume
+   correction both channels carry its displacement as d / dt (correction.c). */
 static PetscErrorCode PffFlowAdvect(PffFlow f, PetscReal dt, PffFlowStepStats *st)
 {
-  PetscInt ch[PFF_PARTICLE_NTYPES] = {f->chU, f->chU};
+  PetscInt  ch[PFF_PARTICLE_NTYPES] = {f->chU, f->chU};
+  PetscBool extrapolated            = PETSC_FALSE;
 
   PetscFunctionBeginUser;
-  if (f->chUl >= 0) {
+  if (f->chUlMask >= 0) {
     PetscInt64 faces = 0;
     PetscCall(PffExtrapolateLiquidVelocity(f->grid, f->chU, f->chPhiF, f->chOpen, f->extrapLayers, f->chUlMask, f->chUl,
                                            &faces));
     PetscCall(PetscInfo(NULL, "liquid velocity extrapolated to %" PetscInt64_FMT " air faces\n", faces));
     ch[PFF_PARTICLE_LIQUID] = f->chUl;
+    extrapolated            = PETSC_TRUE;
+  }
+  if (f->chUa >= 0) {
+    PetscCall(PffFlowCorrectionVelocity_Private(f, dt, extrapolated));
+    ch[PFF_PARTICLE_LIQUID] = f->chUl;
+    ch[PFF_PARTICLE_AIR]    = f->chUa;
   }
   PetscCall(PffParticlesAdvectPerType(f->part, ch, dt, f->solid, f->solidCtx, &st->advect));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -196,13 +205,12 @@ PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
 
     PetscCall(PffStageBegin(PFF_STAGE_FORCES, &t0));
     PetscCall(PffFlowFaceVelocity_Private(f, dt));
-    PetscCall(PffFlowVolumeCorrection_Private(f, dt));
     PetscCall(PffStageEnd(st, PFF_STAGE_FORCES, t0));
 
     PetscCall(PffStageBegin(PFF_STAGE_PRESSURE, &t0));
     if (f->usePressure) {
       PetscCall(PffPressureSetCoefficients(f->press, f->chBeta, f->chOpen));
-      PetscCall(PffPressureProject(f->press, f->chU, dt, f->volCorr > 0 ? f->chCdiv : -1, f->chP, &st->pressure));
+      PetscCall(PffPressureProject(f->press, f->chU, dt, -1, f->chP, &st->pressure));
     }
     PetscCall(PffGridHaloBegin(f->grid, f->chU));
     PetscCall(PffGridHaloEnd(f->grid, f->chU));
@@ -219,6 +227,12 @@ PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
     PetscCall(PffStageBegin(PFF_STAGE_ESCAPED, &t0));
     PetscCall(PffFlowEscaped_Private(f, &st->bubblesDeleted, &st->dropletCandidates));
     PetscCall(PffStageEnd(st, PFF_STAGE_ESCAPED, t0));
+
+    if (f->chVol >= 0) {
+      PetscCall(PffStageBegin(PFF_STAGE_CORRECTION, &t0));
+      PetscCall(PffFlowVolumeCorrection_Private(f, st));
+      PetscCall(PffStageEnd(st, PFF_STAGE_CORRECTION, t0));
+    }
   }
 
   PetscCall(PffStageBegin(PFF_STAGE_ADVECT, &t0));

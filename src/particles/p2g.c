@@ -89,42 +89,47 @@ static PetscErrorCode PffZeroWithGhosts(PffGrid grid, PetscInt ch, PetscInt nloc
 
 /* Splats the particles [i0, i1) of one block into the views of its three face components. */
 static void PffSplatBlock(const PffParticleSoA *s, PetscInt i0, PetscInt i1, const PffBlockInfo *info,
-                          const PffView *vm[3], const PffView *vp[3], const PetscReal density[])
+                          const PffView *vm[3], const PffView *vp[3], const PffView *vv[3], const PetscReal density[])
 {
   const PetscReal ih = 1.0 / info->h, norm = 1.0 / (PetscReal)((PetscInt64)1 << (3 * info->level));
   const PetscInt  n = info->n;
 
   for (PetscInt i = i0; i < i1; i++) {
-    const PetscReal m = density[s->type[i]] * (PetscReal)((PetscInt64)1 << (3 * s->level[i])) * norm;
+    const PetscReal vol = (PetscReal)((PetscInt64)1 << (3 * s->level[i])) * norm, rho = density[s->type[i]];
     PetscReal       sp[3];
     for (int a = 0; a < 3; a++) sp[a] = (s->x[3 * i + a] - info->lo[a]) * ih;
     for (int d = 0; d < 3; d++) {
       PetscInt  c0[3];
-      PetscReal q2[3][2];
+      PetscReal q2[3][2], lin[3][2];
       for (int a = 0; a < 3; a++) {
         const PetscReal f = sp[a] - (a == d ? 0.0 : 0.5), fl = PetscFloorReal(f), t = f - fl;
-        c0[a]    = (PetscInt)fl;
-        q2[a][0] = t * t;
-        q2[a][1] = (1 - t) * (1 - t);
+        c0[a]     = (PetscInt)fl;
+        q2[a][0]  = t * t;
+        q2[a][1]  = (1 - t) * (1 - t);
+        lin[a][0] = 1 - t;
+        lin[a][1] = t;
       }
       PetscReal w[8];
       for (int q = 0; q < 8; q++) {
         const PetscReal r = 1 - (q2[0][q & 1] + q2[1][(q >> 1) & 1] + q2[2][(q >> 2) & 1]);
-        w[q]              = r > 0 ? r * r * r * m : 0;
+        w[q]              = r > 0 ? r * r * r * vol : 0;
       }
-      const PetscReal vd = s->v[3 * i + d];
+      const PetscReal rvd = rho * s->v[3 * i + d];
       for (int q = 0; q < 8; q++) {
-        if (w[q] == 0) continue;
+        if (w[q] == 0 && !vv) continue;
         const PetscInt ii = c0[0] + (q & 1), jj = c0[1] + ((q >> 1) & 1), kk = c0[2] + ((q >> 2) & 1);
-        *PffViewsAt(vm[d], ii, jj, kk, n) += (float)w[q];
-        *PffViewsAt(vp[d], ii, jj, kk, n) += (float)(w[q] * vd);
+        *PffViewsAt(vm[d], ii, jj, kk, n) += (float)(w[q] * rho);
+        *PffViewsAt(vp[d], ii, jj, kk, n) += (float)(w[q] * rvd);
+        if (vv)
+          *PffViewsAt(vv[d], ii, jj, kk, n) +=
+              (float)(vol * lin[0][q & 1] * lin[1][(q >> 1) & 1] * lin[2][(q >> 2) & 1]);
       }
     }
   }
 }
 
 PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTICLE_NTYPES], PetscInt chMass,
-                               PetscInt chMom)
+                               PetscInt chMom, PetscInt chVolume)
 {
   PffBlockInfo   *info;
   const PffView **views;
@@ -133,20 +138,25 @@ PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTI
 
   PetscFunctionBeginUser;
   PetscCall(PffParticlesCheckBinned_Private(p, "PffParticlesP2G"));
-  PetscCheck(chMass != chMom, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "P2G needs two different channels");
+  PetscCheck(chMass != chMom && chVolume != chMass && chVolume != chMom, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
+             "P2G needs different channels for mass, momentum and volume");
   PetscCall(PffCheckFaceChannel(p->grid, chMass, "P2G mass"));
   PetscCall(PffCheckFaceChannel(p->grid, chMom, "P2G momentum"));
+  if (chVolume >= 0) PetscCall(PffCheckFaceChannel(p->grid, chVolume, "P2G volume"));
+  const PetscInt nv = chVolume >= 0 ? 3 : 0, stride = 6 + nv;
   PetscCall(PetscLogEventBegin(PFF_P2G, 0, 0, 0, 0));
-  PetscCall(PetscMalloc3(nlocal, &info, 6 * nlocal, &views, nlocal, &order));
+  PetscCall(PetscMalloc3(nlocal, &info, stride * nlocal, &views, nlocal, &order));
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PetscCall(PffGridGetBlockInfo(p->grid, lb, &info[lb]));
     for (PetscInt comp = 0; comp < 3; comp++) {
-      PetscCall(PffGridGetBlockViews(p->grid, chMass, lb, comp, &views[6 * lb + comp]));
-      PetscCall(PffGridGetBlockViews(p->grid, chMom, lb, comp, &views[6 * lb + 3 + comp]));
+      PetscCall(PffGridGetBlockViews(p->grid, chMass, lb, comp, &views[stride * lb + comp]));
+      PetscCall(PffGridGetBlockViews(p->grid, chMom, lb, comp, &views[stride * lb + 3 + comp]));
+      if (nv) PetscCall(PffGridGetBlockViews(p->grid, chVolume, lb, comp, &views[stride * lb + 6 + comp]));
     }
   }
   PetscCall(PffZeroWithGhosts(p->grid, chMass, nlocal, info));
   PetscCall(PffZeroWithGhosts(p->grid, chMom, nlocal, info));
+  if (nv) PetscCall(PffZeroWithGhosts(p->grid, chVolume, nlocal, info));
 
   /* blocks sorted by colour (counting sort) */
   PetscInt *colour;
@@ -175,7 +185,8 @@ PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTI
 #pragma omp parallel for schedule(dynamic, 1)
     for (PetscInt e = cstart[c]; e < cstart[c + 1]; e++) {
       const PetscInt lb = order[e];
-      PffSplatBlock(s, start[lb], start[lb + 1], &info[lb], &views[6 * lb], &views[6 * lb + 3], density);
+      PffSplatBlock(s, start[lb], start[lb + 1], &info[lb], &views[stride * lb], &views[stride * lb + 3],
+                    nv ? &views[stride * lb + 6] : NULL, density);
     }
   }
   PetscCall(PetscFree3(info, views, order));
@@ -184,6 +195,10 @@ PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTI
   PetscCall(PffGridHaloReverseEnd(p->grid, chMass));
   PetscCall(PffGridHaloReverseBegin(p->grid, chMom));
   PetscCall(PffGridHaloReverseEnd(p->grid, chMom));
+  if (nv) {
+    PetscCall(PffGridHaloReverseBegin(p->grid, chVolume));
+    PetscCall(PffGridHaloReverseEnd(p->grid, chVolume));
+  }
   PetscCall(PetscLogEventEnd(PFF_P2G, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -67,6 +67,15 @@ static PetscErrorCode PffParticleSoAFree(PffParticleSoA *s)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+PetscErrorCode PffParticlesSetJitter(PffParticles p, PetscReal jitter)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(jitter >= 0 && jitter <= 1, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+             "particle jitter %g is invalid: must be in [0, 1]", (double)jitter);
+  p->jitter = jitter;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffParticlesDestroy(PffParticles *part)
 {
   PetscFunctionBeginUser;

@@ -94,7 +94,7 @@ static PetscErrorCode TestKernelSum(PetscInt nlevels, PetscInt uniform)
   PetscCall(PffGridAddChannel(ctx.grid, "mom", PFF_CHANNEL_FACE, 1, &chMom));
   PetscCall(CreateParticles(&ctx, "0", SeedLiquid, &part));
   PetscCall(PffParticlesGetKernelSum(part, &rho0));
-  PetscCall(PffParticlesP2G(part, density, chMass, chMom));
+  PetscCall(PffParticlesP2G(part, density, chMass, chMom, -1));
   for (PetscInt lb = 0; lb < ctx.nlocal; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(ctx.grid, lb, &info));
@@ -177,7 +177,7 @@ static PetscErrorCode TestConstantVelocity(PetscInt nlevels, PetscBool wallz)
   PetscCall(PffGridAddChannel(ctx.grid, "u", PFF_CHANNEL_FACE, 2, &chU));
   PetscCall(PffGridAddChannel(ctx.grid, "du", PFF_CHANNEL_FACE, 2, &chDU));
   PetscCall(CreateParticles(&ctx, "1", SeedLiquid, &part));
-  PetscCall(PffParticlesP2G(part, density, chMass, chMom));
+  PetscCall(PffParticlesP2G(part, density, chMass, chMom, -1));
   for (PetscInt lb = 0; lb < ctx.nlocal; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(ctx.grid, lb, &info));

@@ -1,0 +1,212 @@
+/* Volume correction (the c_div of PF-FLIP Eq. 8, after Losasso et al. 2008), applied as a particle
+   displacement instead of a velocity (docs/flow.md, "Volume correction").
+
+   P2G also splats the type-blind volume weight W_f = sum_p w_fp V_p. Its target W_ref is what the same
+   P2G gives for the regular lattice of 8 particles per cell in every fluid cell of the grid, splatted
+   once at set-up: rho~_0 in the interior, less beside walls and solids, and whatever the cross-level
+   splatting gives at level boundaries, so all three cancel from the ratio. A cell's particle volume
+   fraction is s = sum W / sum W_ref over its open faces, i.e. the liquid fraction W_l / W_ref plus
+   the gas fraction W_g / W_ref, each phase's raw density against its own target (mass / rho_type),
+   interface cells included. Every fluid cell wants s = 1.
+
+   The correction is the projection of Eq. 8 with u* = 0, dt = 1 and c_div = -kappa (s - 1): on this
+   step's coefficients beta = 1/rho it gives a face field d = -beta G q with D d = kappa (s - 1), a
+   displacement in metres that spreads over-dense cells (s > 1) and pulls under-dense ones together.
+   It is bounded per face by -flow_volume_correction_max_displacement cells and is added to the
+   advection velocity as d / dt only: it moves the particles by d in the step, whatever dt is, and
+   never enters u, the FLIP update or the particle velocities. */
+#include "flowimpl.h"
+
+static PetscErrorCode PffReferenceSeed(const PetscReal x[3], PetscInt *type, PetscReal v[3], void *ctx)
+{
+  PffFlow   f = (PffFlow)ctx;
+  PetscReal grad[3];
+
+  PetscFunctionBeginUser;
+  v[0] = v[1] = v[2] = 0;
+  /* the scenes seed nothing inside a solid (distance < 0) */
+  *type = f->solid && f->solid(x, grad, f->solidCtx) < 0 ? -1 : PFF_PARTICLE_LIQUID;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowReferenceVolume_Private(PffFlow f)
+{
+  PffParticles    ref;
+  const PetscReal one[PFF_PARTICLE_NTYPES] = {1, 1};
+
+  PetscFunctionBeginUser;
+  PetscCall(PffParticlesCreate(f->grid, &ref));
+  PetscCall(PffParticlesSetJitter(ref, 0));
+  PetscCall(PffParticlesSeed(ref, PffReferenceSeed, f));
+  /* mass and momentum land in working channels that every step overwrites */
+  PetscCall(PffParticlesP2G(ref, one, f->chMass, f->chUt, f->chVolRef));
+  PetscCall(PffParticlesDestroy(&ref));
+  PetscCall(PffGridHaloBegin(f->grid, f->chVolRef));
+  PetscCall(PffGridHaloEnd(f->grid, f->chVolRef));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* c_div per fluid cell: -kappa (s - 1) in liquid cells (cell phi >= 1/2) and -kappa (s - s_gas) - c0
+   in gas cells, where s_gas is the gas cells' mean s (so that deleted bubbles rarefy the gas, not the
+   whole box) and c0 hands the liquid's net volume change to the gas cells, so that sum(c_div V) = 0
+   and the liquid reaches its target in a closed box too. 0 in cells closed on every face. The extreme
+   s of any fluid cell into srange. */
+static PetscErrorCode PffCorrectionSource(PffFlow f, PetscReal srange[2])
+{
+  PetscInt  nlocal;
+  PetscReal sum[4] = {0, 0, 0, 0}; /* gas cells: sum W V, sum W_ref V, sum V; liquid cells: sum c_div V */
+
+  PetscFunctionBeginUser;
+  srange[0] = PETSC_MAX_REAL;
+  srange[1] = 0;
+  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  /* first pass: s into c_div (-1 where no face is open), the totals */
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo   info;
+    const PffView *vw[3], *vr[3], *vo[3];
+    float         *cdiv, *phi;
+    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+    PetscCall(PffGridGetBlockData(f->grid, f->chCdiv, lb, 0, &cdiv));
+    PetscCall(PffGridGetBlockData(f->grid, f->chPhi, lb, 0, &phi));
+    for (PetscInt d = 0; d < 3; d++) {
+      PetscCall(PffGridGetBlockViews(f->grid, f->chVol, lb, d, &vw[d]));
+      PetscCall(PffGridGetBlockViews(f->grid, f->chVolRef, lb, d, &vr[d]));
+      PetscCall(PffGridGetBlockViews(f->grid, f->chOpen, lb, d, &vo[d]));
+    }
+    const PetscInt  n  = info.n;
+    const PetscReal vc = info.h * info.h * info.h;
+    for (PetscInt k = 0; k < n; k++)
+      for (PetscInt j = 0; j < n; j++)
+        for (PetscInt i = 0; i < n; i++) {
+          const PetscInt c = i + n * (j + n * k);
+          PetscReal      w = 0, wref = 0;
+          for (PetscInt d = 0; d < 3; d++)
+            for (PetscInt up = 0; up < 2; up++) {
+              const PetscInt ii = i + (up && d == 0), jj = j + (up && d == 1), kk = k + (up && d == 2);
+              if (*PffViewsAt(vo[d], ii, jj, kk, n) <= 0) continue;
+              w += *PffViewsAt(vw[d], ii, jj, kk, n);
+              wref += *PffViewsAt(vr[d], ii, jj, kk, n);
+            }
+          if (wref <= 0) {
+            cdiv[c] = -1;
+            continue;
+          }
+          const PetscReal s = w / wref;
+          srange[0]         = PetscMin(srange[0], s);
+          srange[1]         = PetscMax(srange[1], s);
+          cdiv[c]           = (float)s;
+          if (phi[c] >= 0.5)
+            sum[3] += -f->volCorr * (s - 1) * vc;
+          else {
+            sum[0] += w * vc;
+            sum[1] += wref * vc;
+            sum[2] += vc;
+          }
+        }
+  }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, sum, 4, MPIU_REAL, MPI_SUM, f->comm));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &srange[0], 1, MPIU_REAL, MPI_MIN, f->comm));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &srange[1], 1, MPIU_REAL, MPI_MAX, f->comm));
+  const PetscReal sgas = sum[1] > 0 ? sum[0] / sum[1] : 1, c0 = sum[2] > 0 ? sum[3] / sum[2] : 0;
+  /* second pass: s -> c_div */
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    float   *cdiv, *phi;
+    PetscInt n3 = 0;
+    PetscCall(PffFlowBlockData_Private(f, lb, 0, 1, &f->chCdiv, &cdiv, &n3));
+    PetscCall(PffGridGetBlockData(f->grid, f->chPhi, lb, 0, &phi));
+    for (PetscInt c = 0; c < n3; c++) {
+      const PetscReal s = cdiv[c];
+      if (s < 0)
+        cdiv[c] = 0;
+      else if (phi[c] >= 0.5)
+        cdiv[c] = (float)(-f->volCorr * (s - 1));
+      else
+        cdiv[c] = (float)(-f->volCorr * (s - sgas) - c0);
+    }
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The displacement into face channel chD, from solver ps and potential chQ (its previous
+   value the initial guess), bounded per face; the largest |d| / h before the bound into dmax. */
+static PetscErrorCode PffCorrectionDisplacement(PffFlow f, PffPressure ps, PetscInt chD, PetscInt chQ,
+                                                PffPressureStats *st, PetscReal *dmax)
+{
+  KSP       ksp;
+  PetscReal rtol, atol, dtol, m = 0;
+  PetscInt  maxit, nlocal;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  for (PetscInt lb = 0; lb < nlocal; lb++)
+    for (PetscInt d = 0; d < 3; d++) {
+      float   *u;
+      PetscInt n3 = 0;
+      PetscCall(PffFlowBlockData_Private(f, lb, d, 1, &chD, &u, &n3));
+      PetscCall(PetscArrayzero(u, n3));
+    }
+  /* a fraction of a cell needs no 1e-8: the solve runs at its own tolerance, then the pressure's is back */
+  PetscCall(PffPressureGetKSP(ps, &ksp));
+  PetscCall(KSPGetTolerances(ksp, &rtol, &atol, &dtol, &maxit));
+  PetscCall(KSPSetTolerances(ksp, f->volCorrRtol, atol, dtol, maxit));
+  PetscCall(PffPressureProject(ps, chD, 1.0, f->chCdiv, chQ, st));
+  PetscCall(KSPSetTolerances(ksp, rtol, atol, dtol, maxit));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+    const PetscReal bound = f->volCorrMaxDisp * info.h;
+    for (PetscInt d = 0; d < 3; d++) {
+      float   *u;
+      PetscInt n3 = 0;
+      PetscCall(PffFlowBlockData_Private(f, lb, d, 1, &chD, &u, &n3));
+      for (PetscInt c = 0; c < n3; c++) {
+        m    = PetscMax(m, PetscAbsReal((PetscReal)u[c]) / info.h);
+        u[c] = (float)PetscMax(-bound, PetscMin(bound, (PetscReal)u[c]));
+      }
+    }
+  }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &m, 1, MPIU_REAL, MPI_MAX, f->comm));
+  *dmax = PetscMax(*dmax, m);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowVolumeCorrection_Private(PffFlow f, PffFlowStepStats *st)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffGridHaloBegin(f->grid, f->chVol));
+  PetscCall(PffGridHaloEnd(f->grid, f->chVol));
+  PetscCall(PffCorrectionSource(f, st->volumeRatio));
+  st->correctionMax = 0;
+  /* on the step's own operator (beta = 1/rho): no set-up, and the gas yields where the liquid moves */
+  PetscCall(PffCorrectionDisplacement(f, f->press, f->chUt, f->chQ, &st->correction, &st->correctionMax));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The advection channels with the displacement as velocity d / dt: chUa = u + d / dt for the gas,
+   chUl = (the extrapolated liquid velocity, or u without extrapolation) + d / dt; halos exchanged. */
+PetscErrorCode PffFlowCorrectionVelocity_Private(PffFlow f, PetscReal dt, PetscBool extrapolated)
+{
+  PetscInt        nlocal;
+  const PetscReal idt = 1.0 / dt;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  for (PetscInt lb = 0; lb < nlocal; lb++)
+    for (PetscInt d = 0; d < 3; d++) {
+      const PetscInt ch[4] = {f->chUt, f->chU, f->chUa, f->chUl};
+      float         *a[4];
+      PetscInt       n3 = 0;
+      PetscCall(PffFlowBlockData_Private(f, lb, d, 4, ch, a, &n3));
+      const float *disp = a[0], *u = a[1];
+      float       *ua = a[2], *ul = a[3];
+      for (PetscInt c = 0; c < n3; c++) {
+        ua[c] = (float)(u[c] + idt * disp[c]);
+        ul[c] = (float)((extrapolated ? ul[c] : u[c]) + idt * disp[c]);
+      }
+    }
+  PetscCall(PffGridHaloBegin(f->grid, f->chUa));
+  PetscCall(PffGridHaloEnd(f->grid, f->chUa));
+  PetscCall(PffGridHaloBegin(f->grid, f->chUl));
+  PetscCall(PffGridHaloEnd(f->grid, f->chUl));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
