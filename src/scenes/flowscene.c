@@ -274,7 +274,6 @@ static PetscErrorCode PffFlowSceneStart(PffFlowScene *fs)
       fs->volumeStart[k] = extra[k];
       fs->driftMax[k]    = extra[PFF_PARTICLE_NTYPES + k];
     }
-    fs->volumeFromCheckpoint = PETSC_TRUE;
   } else {
     PetscCall(PffFlowGetPhaseVolumes(fs->flow, &v[PFF_PARTICLE_LIQUID], &v[PFF_PARTICLE_AIR]));
     for (PetscInt k = 0; k < PFF_PARTICLE_NTYPES; k++) fs->volumeStart[k] = v[k];

@@ -46,7 +46,6 @@ struct _PffFlowScene {
      bounds -sim_max_volume_drift and -sim_max_gas_volume_drift (0: no check) */
   PetscReal volumeStart[PFF_PARTICLE_NTYPES], drift[PFF_PARTICLE_NTYPES], driftMax[PFF_PARTICLE_NTYPES];
   PetscReal driftBound[PFF_PARTICLE_NTYPES];
-  PetscBool volumeFromCheckpoint; /* a restart found V0 and the max drift in its checkpoint */
 };
 
 /* Sets option key to value when the user has not set it (scene defaults derived from physics). */
