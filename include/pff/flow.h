@@ -91,3 +91,10 @@ PETSC_EXTERN PetscErrorCode PffFlowGetDiagnostics(PffFlow flow, PetscReal *umax,
 PETSC_EXTERN PetscErrorCode PffExtrapolateLiquidVelocity(PffGrid grid, PetscInt chU, PetscInt chPhiF, PetscInt chOpen,
                                                          PetscInt layers, PetscInt chMask, PetscInt chUl,
                                                          PetscInt64 *faces);
+
+/* Volumes of the two phases from the current cell phase field (as left by the last step, PffFlowSeed or
+   PffFlowUpdateFields; not recomputed here): liquid = sum phi_c V_c and gas = sum (1 - phi_c) V_c over the
+   fluid cells, those with at least one open face; cells with every face closed (inside a solid) count for
+   neither, so liquid + gas is the fluid volume of the domain. Either output may be NULL. After
+   PffFlowSetUp. Collective. */
+PETSC_EXTERN PetscErrorCode PffFlowGetPhaseVolumes(PffFlow flow, PetscReal *liquid, PetscReal *gas);

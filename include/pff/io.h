@@ -35,6 +35,10 @@ PETSC_EXTERN PetscErrorCode PffIOWriteCheckpoint(PffGrid grid, PffParticles part
    or a mismatch is one error naming the file and what is wrong. Collective. */
 PETSC_EXTERN PetscErrorCode PffIOReadCheckpoint(PffGrid grid, PffParticles particles, const char path[],
                                                 PetscReal *time, PetscInt *step, PetscInt nextra, PetscReal extra[]);
+/* The number of extra values a checkpoint holds (0 when it has none), so that a reader can accept
+   checkpoints of an older layout. A file that is not a checkpoint is one error naming it. Collective
+   on the grid's communicator. */
+PETSC_EXTERN PetscErrorCode PffIOGetCheckpointExtraCount(PffGrid grid, const char path[], PetscInt *nextra);
 
 /* Reads a frame written by PffIOWriteFrame (or a checkpoint) into grid, which must have been set up with
    the same block raster (cells, block size, levels per block); it may run on a different number of

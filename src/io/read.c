@@ -420,3 +420,25 @@ PetscErrorCode PffIOReadCheckpoint(PffGrid grid, PffParticles particles, const c
   PetscCall(PffIOReadFile(grid, particles, path, PETSC_TRUE, time, step, nextra, extra));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
+
+PetscErrorCode PffIOGetCheckpointExtraCount(PffGrid grid, const char path[], PetscInt *nextra)
+{
+  MPI_Comm  comm;
+  hid_t     file;
+  int       mark = 0, fextra = 0;
+  PetscBool found;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffIOInitialize_Private());
+  PetscCall(PffIOGetComm_Private(grid, &comm));
+  PetscCall(PffIOOpenFrame(comm, path, &file));
+  PetscCall(PffH5ReadAttribute_Private(file, "checkpoint", H5T_NATIVE_INT, 0, &mark, &found));
+  if (found && mark == 1) PetscCall(PffH5ReadAttribute_Private(file, "nextra", H5T_NATIVE_INT, 0, &fextra, &found));
+  PffCallHDF5(H5Fclose(file));
+  PetscCheck(mark == 1, comm, PETSC_ERR_FILE_UNEXPECTED,
+             "file %s is a frame, not a checkpoint (no root attribute checkpoint = 1); write it with "
+             "PffIOWriteCheckpoint",
+             path);
+  *nextra = found ? fextra : 0;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}

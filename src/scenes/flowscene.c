@@ -36,6 +36,11 @@ PetscErrorCode PffFlowSceneDomain(PffFlowScene *fs, PetscReal lo[3], PetscReal h
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Per phase (PFF_PARTICLE_LIQUID, PFF_PARTICLE_AIR): the option of its volume-drift bound and its name. */
+static const char *const PffFlowSceneDriftKeys[PFF_PARTICLE_NTYPES]  = {"-sim_max_volume_drift",
+                                                                        "-sim_max_gas_volume_drift"};
+static const char *const PffFlowScenePhaseNames[PFF_PARTICLE_NTYPES] = {"liquid", "gas"};
+
 static PetscErrorCode PffFlowSceneSetFromOptions(PffScene s)
 {
   PffFlowScene *fs = (PffFlowScene *)s->data;
@@ -63,6 +68,14 @@ static PetscErrorCode PffFlowSceneSetFromOptions(PffScene s)
                              "Fail at the end unless the liquid particle count is unchanged and the gas count changed "
                              "only by deleted bubbles (for tests)",
                              NULL, fs->checkParticles, &fs->checkParticles, NULL));
+  PetscCall(PetscOptionsReal("-sim_max_volume_drift",
+                             "Fail as soon as the liquid volume drift |V - V0| / V0 after a step exceeds this (0: no "
+                             "check; for tests)",
+                             NULL, fs->driftBound[PFF_PARTICLE_LIQUID], &fs->driftBound[PFF_PARTICLE_LIQUID], NULL));
+  PetscCall(PetscOptionsReal("-sim_max_gas_volume_drift",
+                             "Fail as soon as the gas volume drift |V - V0| / V0 after a step exceeds this (0: no "
+                             "check; for tests)",
+                             NULL, fs->driftBound[PFF_PARTICLE_AIR], &fs->driftBound[PFF_PARTICLE_AIR], NULL));
   PetscOptionsEnd();
   if (fs->restart[0]) {
     PetscMPIInt rank;
@@ -80,6 +93,10 @@ static PetscErrorCode PffFlowSceneSetFromOptions(PffScene s)
              "-sim_output_interval %g is invalid: must be >= 0", (double)fs->outputInterval);
   PetscCheck(fs->maxSteps >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-sim_max_steps %" PetscInt_FMT " is invalid: must be >= 0", fs->maxSteps);
+  for (PetscInt k = 0; k < PFF_PARTICLE_NTYPES; k++)
+    PetscCheck(!PetscIsInfOrNanReal(fs->driftBound[k]) && fs->driftBound[k] >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE,
+               "%s %g is invalid: must be finite and >= 0 (0: no check)", PffFlowSceneDriftKeys[k],
+               (double)fs->driftBound[k]);
   /* grid, flow and scene set-up are validated here, before the driver checks unused options */
   PetscCall(PffGridCreate(s->comm, &fs->grid));
   PetscCall(PffGridSetFromOptions(fs->grid));
@@ -124,26 +141,75 @@ static PetscErrorCode PffFlowSceneCount(PffFlowScene *fs, PetscInt64 count[PFF_P
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Volumes of the phases in the fluid cells (PffFlowGetPhaseVolumes) from the phase field now on the grid,
+   their drifts (V - V0) / V0 since the reference and the max |drift| so far. A phase without volume at
+   the start has drift 0. Collective. */
+static PetscErrorCode PffFlowSceneVolumes(PffFlowScene *fs)
+{
+  PetscReal v[PFF_PARTICLE_NTYPES];
+
+  PetscFunctionBeginUser;
+  PetscCall(PffFlowGetPhaseVolumes(fs->flow, &v[PFF_PARTICLE_LIQUID], &v[PFF_PARTICLE_AIR]));
+  fs->liquidVolume = v[PFF_PARTICLE_LIQUID];
+  fs->gasVolume    = v[PFF_PARTICLE_AIR];
+  for (PetscInt k = 0; k < PFF_PARTICLE_NTYPES; k++) {
+    const PetscReal v0 = fs->volumeStart[k];
+    fs->drift[k]       = v0 > 0 ? (v[k] - v0) / v0 : 0;
+    fs->driftMax[k]    = PetscMax(fs->driftMax[k], PetscAbsReal(fs->drift[k]));
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* With -sim_max_volume_drift or -sim_max_gas_volume_drift, a drift of the latest row past its bound
+   fails the run (after the row is written, so the CSV shows it). Collective (the drifts are global). */
+static PetscErrorCode PffFlowSceneCheckDrift(PffFlowScene *fs, PetscInt step)
+{
+  const PetscReal v[PFF_PARTICLE_NTYPES] = {fs->liquidVolume, fs->gasVolume};
+
+  PetscFunctionBeginUser;
+  for (PetscInt k = 0; k < PFF_PARTICLE_NTYPES; k++) {
+    const PetscReal v0 = fs->volumeStart[k], bound = fs->driftBound[k];
+    PetscCheck(bound == 0 || PetscAbsReal(fs->drift[k]) <= bound, fs->scene->comm, PETSC_ERR_NOT_CONVERGED,
+               "%s: the %s volume drifted by %.3e (V %.9e, V0 %.9e) at step %" PetscInt_FMT ", beyond the bound %g",
+               PffFlowSceneDriftKeys[k], PffFlowScenePhaseNames[k], (double)fs->drift[k], (double)v[k], (double)v0,
+               step, (double)bound);
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /* The conservation line of every fluid run: particles are created only by the seed and removed only
    by bubble deletion (Sec. 3.4), so the liquid count is constant and the gas count drops by the
-   deleted bubbles. Counts are exact; the liquid volume sum(phi V) is printed to 4 digits (its drift
-   comes from the phase field, not from lost particles). With -sim_check_particles a broken count
-   fails the run. Collective. */
+   deleted bubbles. Counts are exact; the volume drifts (V - V0) / V0 of the fluid cells are printed to
+   3 digits, at the end and as the max |drift| over the rows since the seed (their drift comes from the
+   phase field, not from lost particles). With -sim_check_particles a broken count fails the run; with
+   -sim_max_volume_drift or -sim_max_gas_volume_drift a drift past the bound has already failed it
+   (PffFlowSceneCheckDrift), except a max carried from the run a checkpoint continues, which fails here.
+   Collective. */
 static PetscErrorCode PffFlowSceneConservation(PffFlowScene *fs)
 {
   const PetscInt64 *c0 = fs->countStart, *c1 = fs->countEnd;
-  const PetscReal   drift = fs->volumeStart > 0 ? (fs->liquidVolume - fs->volumeStart) / fs->volumeStart : 0;
-  const PetscBool   ok    = (PetscBool)(c1[PFF_PARTICLE_LIQUID] == c0[PFF_PARTICLE_LIQUID] &&
-                                   c1[PFF_PARTICLE_AIR] == c0[PFF_PARTICLE_AIR] - fs->bubblesDeletedRun);
+  const PetscReal  *dmax = fs->driftMax, *bound = fs->driftBound;
+  const PetscBool   counts  = (PetscBool)(c1[PFF_PARTICLE_LIQUID] == c0[PFF_PARTICLE_LIQUID] &&
+                                       c1[PFF_PARTICLE_AIR] == c0[PFF_PARTICLE_AIR] - fs->bubblesDeletedRun);
+  PetscBool         volumes = PETSC_TRUE;
 
   PetscFunctionBeginUser;
+  for (PetscInt k = 0; k < PFF_PARTICLE_NTYPES; k++)
+    if (bound[k] > 0 && dmax[k] > bound[k]) volumes = PETSC_FALSE;
   PetscCall(PetscPrintf(fs->scene->comm,
                         "conservation: liquid particles %" PetscInt64_FMT " (start %" PetscInt64_FMT
                         ")  gas particles %" PetscInt64_FMT " (start %" PetscInt64_FMT ", %" PetscInt64_FMT
-                        " deleted as bubbles)  liquid volume drift %.2e  %s\n",
+                        " deleted as bubbles)  liquid volume drift %.2e (max |drift| %.2e)  gas volume drift %.2e "
+                        "(max |drift| %.2e)  %s\n",
                         c1[PFF_PARTICLE_LIQUID], c0[PFF_PARTICLE_LIQUID], c1[PFF_PARTICLE_AIR], c0[PFF_PARTICLE_AIR],
-                        fs->bubblesDeletedRun, (double)drift, ok ? "ok" : "BROKEN"));
-  PetscCheck(!fs->checkParticles || ok, fs->scene->comm, PETSC_ERR_PLIB,
+                        fs->bubblesDeletedRun, (double)fs->drift[PFF_PARTICLE_LIQUID],
+                        (double)dmax[PFF_PARTICLE_LIQUID], (double)fs->drift[PFF_PARTICLE_AIR],
+                        (double)dmax[PFF_PARTICLE_AIR], counts && volumes ? "ok" : "BROKEN"));
+  for (PetscInt k = 0; k < PFF_PARTICLE_NTYPES; k++)
+    PetscCheck(bound[k] == 0 || dmax[k] <= bound[k], fs->scene->comm, PETSC_ERR_NOT_CONVERGED,
+               "%s: the %s volume drift reached %.3e since the seed (before the restart), beyond the bound %g",
+               PffFlowSceneDriftKeys[k], PffFlowScenePhaseNames[k], (double)dmax[k], (double)bound[k]);
+  PetscCheck(!fs->checkParticles || counts, fs->scene->comm, PETSC_ERR_PLIB,
              "-sim_check_particles: particles were lost or created: liquid %" PetscInt64_FMT " -> %" PetscInt64_FMT
              ", gas %" PetscInt64_FMT " -> %" PetscInt64_FMT " with %" PetscInt64_FMT " deleted as bubbles",
              c0[PFF_PARTICLE_LIQUID], c1[PFF_PARTICLE_LIQUID], c0[PFF_PARTICLE_AIR], c1[PFF_PARTICLE_AIR],
@@ -151,66 +217,94 @@ static PetscErrorCode PffFlowSceneConservation(PffFlowScene *fs)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* The extra values of a scene checkpoint: the reference volumes V0 and the max |drift| so far, liquid
+   then gas, so that a restarted run measures its drift since the seed, as the uninterrupted run would. */
+#define PFF_FLOW_SCENE_NEXTRA 4
+
 /* <output_dir>/checkpoint.h5, written to a temporary name and renamed by the io module. */
 static PetscErrorCode PffFlowSceneCheckpoint(PffFlowScene *fs)
 {
-  char         path[PETSC_MAX_PATH_LEN];
-  PetscReal    t;
-  PetscInt     step;
-  PffParticles p;
+  const PetscReal extra[PFF_FLOW_SCENE_NEXTRA] = {fs->volumeStart[PFF_PARTICLE_LIQUID],
+                                                  fs->volumeStart[PFF_PARTICLE_AIR], fs->driftMax[PFF_PARTICLE_LIQUID],
+                                                  fs->driftMax[PFF_PARTICLE_AIR]};
+  char            path[PETSC_MAX_PATH_LEN];
+  PetscReal       t;
+  PetscInt        step;
+  PffParticles    p;
 
   PetscFunctionBeginUser;
   PetscCall(PffFlowGetTime(fs->flow, &t, &step));
   PetscCall(PffFlowGetParticles(fs->flow, &p));
   PetscCall(PetscSNPrintf(path, sizeof(path), "%s/checkpoint.h5", fs->scene->outdir));
-  PetscCall(PffIOWriteCheckpoint(fs->grid, p, path, t, step, 0, NULL, fs->scene->name));
+  PetscCall(PffIOWriteCheckpoint(fs->grid, p, path, t, step, PFF_FLOW_SCENE_NEXTRA, extra, fs->scene->name));
   PetscCall(PetscPrintf(fs->scene->comm, "checkpoint %s at step %" PetscInt_FMT "\n", path, step));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 /* Seeds, or continues from -sim_restart: particles and fields from the checkpoint, then the fields
-   that derive from the particles. */
+   that derive from the particles. The reference volumes V0 are those after the seed; a restart takes
+   them and the max |drift| so far from the checkpoint. A checkpoint without them (written before they
+   were stored) gives the volumes at the restart as V0, and the run says so. */
 static PetscErrorCode PffFlowSceneStart(PffFlowScene *fs)
 {
+  PetscReal v[PFF_PARTICLE_NTYPES];
+
   PetscFunctionBeginUser;
   if (!fs->restart[0]) {
     PetscCall(PffFlowSeed(fs->flow, fs->ops.seed, fs->ctx));
+    PetscCall(PffFlowGetPhaseVolumes(fs->flow, &v[PFF_PARTICLE_LIQUID], &v[PFF_PARTICLE_AIR]));
+    for (PetscInt k = 0; k < PFF_PARTICLE_NTYPES; k++) fs->volumeStart[k] = v[k];
     PetscFunctionReturn(PETSC_SUCCESS);
   }
   PffParticles p;
-  PetscReal    t;
-  PetscInt     step;
+  PetscReal    t, extra[PFF_FLOW_SCENE_NEXTRA];
+  PetscInt     step, nextra;
   PetscCall(PffFlowGetParticles(fs->flow, &p));
-  PetscCall(PffIOReadCheckpoint(fs->grid, p, fs->restart, &t, &step, 0, NULL));
+  PetscCall(PffIOGetCheckpointExtraCount(fs->grid, fs->restart, &nextra));
+  /* any other count is the reader's error: the checkpoint is not one of a fluid scene */
+  if (nextra != 0) nextra = PFF_FLOW_SCENE_NEXTRA;
+  PetscCall(PffIOReadCheckpoint(fs->grid, p, fs->restart, &t, &step, nextra, extra));
   PetscCall(PffFlowSetTime(fs->flow, t, step));
   PetscCall(PffFlowUpdateFields(fs->flow, PETSC_FALSE));
   fs->restarted = PETSC_TRUE;
   PetscCall(PetscPrintf(fs->scene->comm, "restarted from %s at step %" PetscInt_FMT ", t %.6e\n", fs->restart, step,
                         (double)t));
+  if (nextra) {
+    for (PetscInt k = 0; k < PFF_PARTICLE_NTYPES; k++) {
+      fs->volumeStart[k] = extra[k];
+      fs->driftMax[k]    = extra[PFF_PARTICLE_NTYPES + k];
+    }
+  } else {
+    PetscCall(PffFlowGetPhaseVolumes(fs->flow, &v[PFF_PARTICLE_LIQUID], &v[PFF_PARTICLE_AIR]));
+    for (PetscInt k = 0; k < PFF_PARTICLE_NTYPES; k++) fs->volumeStart[k] = v[k];
+    PetscCall(PetscPrintf(fs->scene->comm,
+                          "restart: %s holds no reference volumes; volume drifts are measured from the restart\n",
+                          fs->restart));
+  }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 static PetscErrorCode PffFlowSceneDiagRow(PffFlowScene *fs, PetscInt step, PetscReal t, const PffFlowStepStats *st,
                                           PetscLogDouble wall)
 {
-  PetscReal umaxGrid, vol;
+  PetscReal umaxGrid;
   char      extra[512] = "";
 
   PetscFunctionBeginUser;
-  PetscCall(PffFlowGetDiagnostics(fs->flow, &umaxGrid, &vol));
-  fs->umaxGrid     = umaxGrid;
-  fs->liquidVolume = vol;
-  if (fs->volumeStart == 0) fs->volumeStart = vol;
+  PetscCall(PffFlowGetDiagnostics(fs->flow, &umaxGrid, NULL));
+  fs->umaxGrid = umaxGrid;
+  PetscCall(PffFlowSceneVolumes(fs));
   if (fs->ops.diagnose) PetscCall(fs->ops.diagnose(fs, t, extra, sizeof(extra)));
   if (fs->diag) {
     fprintf(fs->diag,
             "%" PetscInt_FMT ",%.9e,%.9e,%.6e,%.6e,%" PetscInt64_FMT ",%" PetscInt_FMT
-            ",%.3e,%.6e,%.9e,%" PetscInt64_FMT ",%" PetscInt64_FMT ",%.4e%s\n",
+            ",%.3e,%.6e,%.9e,%" PetscInt64_FMT ",%" PetscInt64_FMT ",%.4e,%.9e%s\n",
             step, (double)t, (double)(t / fs->timeUnit), (double)st->dt, (double)st->cfl, st->particles,
-            st->pressure.its, (double)st->pressure.rnorm, (double)umaxGrid, (double)vol, st->bubblesDeleted,
-            st->dropletCandidates, (double)wall, extra);
+            st->pressure.its, (double)st->pressure.rnorm, (double)umaxGrid, (double)fs->liquidVolume,
+            st->bubblesDeleted, st->dropletCandidates, (double)wall, (double)fs->gasVolume, extra);
     fflush(fs->diag);
   }
+  PetscCall(PffFlowSceneCheckDrift(fs, step));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -240,7 +334,7 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
     if (!fs->restarted)
       fprintf(fs->diag,
               "step,t,t_over_t0,dt,cfl,particles,ksp_its,ksp_rnorm,umax_grid,liquid_volume,bubbles_deleted,"
-              "droplet_candidates,wall_s%s\n",
+              "droplet_candidates,wall_s,gas_volume%s\n",
               fs->ops.diagHeader ? fs->ops.diagHeader : "");
   }
   PetscCall(PffFlowGetTime(fs->flow, &t, &step));

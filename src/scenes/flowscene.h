@@ -34,11 +34,18 @@ struct _PffFlowScene {
   PetscBool frames, frameParticles, restarted, checkParticles;
   char      restart[PETSC_MAX_PATH_LEN];
   FILE     *diag;
-  PetscReal umaxGrid, liquidVolume; /* of the latest diagnostics row (PffFlowGetDiagnostics) */
+  /* of the latest diagnostics row: max |u| on the grid (PffFlowGetDiagnostics), liquid and gas volume of
+     the fluid cells (PffFlowGetPhaseVolumes) */
+  PetscReal umaxGrid, liquidVolume, gasVolume;
   /* particle bookkeeping of this run (since the seed or the restart): counts per type at the start
      and at the end, and the gas particles deleted as bubbles in between; set before ops.finish */
   PetscInt64 countStart[PFF_PARTICLE_NTYPES], countEnd[PFF_PARTICLE_NTYPES], bubblesDeletedRun;
-  PetscReal  volumeStart; /* liquid volume of the first diagnostics row */
+  /* volume bookkeeping per phase (index PFF_PARTICLE_LIQUID, PFF_PARTICLE_AIR), since the seed: the
+     reference volumes V0 (after the seed; carried through checkpoints), the relative drift (V - V0) / V0
+     of the latest row, its max |.| over the rows so far (also carried through checkpoints) and the
+     bounds -sim_max_volume_drift and -sim_max_gas_volume_drift (0: no check) */
+  PetscReal volumeStart[PFF_PARTICLE_NTYPES], drift[PFF_PARTICLE_NTYPES], driftMax[PFF_PARTICLE_NTYPES];
+  PetscReal driftBound[PFF_PARTICLE_NTYPES];
 };
 
 /* Sets option key to value when the user has not set it (scene defaults derived from physics). */

@@ -3,11 +3,11 @@
    carved out of them (-gas_<i>_*) and static solids (-solid_<i>_*); everything else in the domain is
    gas. A dam break, a drop into a pool or rising bubbles need no C.
 
-   Besides the common columns the diagnostics CSV has the gas volume V_g = sum (1 - phi) V over the
-   cells and the mean height of the gas particles, y_g = sum_p y_p / N_gas. For bubbles in a closed
-   tank y_g is their mean height, so its growth is the mean rise (V_g also counts the thin layer at
-   the walls where the truncated kernel lowers phi, y_g does not). The final values are printed to 4
-   and 6 digits, which do not depend on the rank count. */
+   Besides the common columns (among them the gas volume V_g = sum (1 - phi) V over the fluid cells,
+   PffFlowGetPhaseVolumes) the diagnostics CSV has the mean height of the gas particles,
+   y_g = sum_p y_p / N_gas. For bubbles in a closed tank y_g is their mean height, so its growth is the
+   mean rise (V_g also counts the thin layer at the walls where the truncated kernel lowers phi, y_g
+   does not). The final values are printed to 4 and 6 digits, which do not depend on the rank count. */
 #include "flowscene.h"
 #include "geometry.h"
 
@@ -45,59 +45,46 @@ static PetscErrorCode PffFluidSeed(const PetscReal x[3], PetscInt *type, PetscRe
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Gas volume from the cell phase field and mean height of the gas particles. Collective. */
-static PetscErrorCode PffFluidGas(PffFlowScene *fs, PetscReal *vol, PetscReal *yg)
+/* Mean height of the gas particles. Collective. */
+static PetscErrorCode PffFluidGasHeight(PffFlowScene *fs, PetscReal *yg)
 {
-  PetscInt          nlocal, chPhi;
-  PetscReal         s[3] = {0, 0, 0}; /* gas volume, sum of gas particle heights, gas particles */
+  PetscReal         s[2] = {0, 0}; /* sum of gas particle heights, gas particles */
   PffParticles      p;
   PffParticleArrays a;
 
   PetscFunctionBeginUser;
-  PetscCall(PffFlowGetChannels(fs->flow, &chPhi, NULL, NULL, NULL));
-  PetscCall(PffGridGetLocalBlocks(fs->grid, &nlocal));
-  for (PetscInt lb = 0; lb < nlocal; lb++) {
-    PffBlockInfo info;
-    float       *phi;
-    PetscCall(PffGridGetBlockInfo(fs->grid, lb, &info));
-    PetscCall(PffGridGetBlockData(fs->grid, chPhi, lb, 0, &phi));
-    const PetscInt n3 = info.n * info.n * info.n;
-    PetscReal      g  = 0;
-    for (PetscInt c = 0; c < n3; c++) g += 1 - (PetscReal)phi[c];
-    s[0] += g * info.h * info.h * info.h;
-  }
   PetscCall(PffFlowGetParticles(fs->flow, &p));
   PetscCall(PffParticlesGetArrays(p, &a));
   for (PetscInt i = 0; i < a.n; i++) {
     if (a.type[i] != PFF_PARTICLE_AIR) continue;
-    s[1] += a.x[3 * i + 1];
-    s[2] += 1;
+    s[0] += a.x[3 * i + 1];
+    s[1] += 1;
   }
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, s, 3, MPIU_REAL, MPI_SUM, fs->scene->comm));
-  *vol = s[0];
-  *yg  = s[2] > 0 ? s[1] / s[2] : 0;
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, s, 2, MPIU_REAL, MPI_SUM, fs->scene->comm));
+  *yg = s[1] > 0 ? s[0] / s[1] : 0;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 static PetscErrorCode PffFluidDiagnose(PffFlowScene *fs, PetscReal t, char row[], size_t len)
 {
-  PetscReal vol, yg;
+  PetscReal yg;
 
   PetscFunctionBeginUser;
-  PetscCall(PffFluidGas(fs, &vol, &yg));
-  PetscCall(PetscSNPrintf(row, len, ",%.9e,%.9e", (double)vol, (double)yg));
+  PetscCall(PffFluidGasHeight(fs, &yg));
+  PetscCall(PetscSNPrintf(row, len, ",%.9e", (double)yg));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* the gas volume is the driver's, of the final diagnostics row */
 static PetscErrorCode PffFluidFinish(PffFlowScene *fs)
 {
-  PetscReal vol, yg, t;
+  PetscReal yg, t;
 
   PetscFunctionBeginUser;
-  PetscCall(PffFluidGas(fs, &vol, &yg));
+  PetscCall(PffFluidGasHeight(fs, &yg));
   PetscCall(PffFlowGetTime(fs->flow, &t, NULL));
-  PetscCall(PetscPrintf(fs->scene->comm, "fluid: gas volume %.4e  mean gas particle y %.6e  at t %.4e\n", (double)vol,
-                        (double)yg, (double)t));
+  PetscCall(PetscPrintf(fs->scene->comm, "fluid: gas volume %.4e  mean gas particle y %.6e  at t %.4e\n",
+                        (double)fs->gasVolume, (double)yg, (double)t));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -113,7 +100,7 @@ static PetscErrorCode PffFluidDestroy(PffFlowScene *fs)
 PetscErrorCode PffSceneCreate_Fluid(PffScene s)
 {
   PffFluid             *fl;
-  const PffFlowSceneOps ops = {NULL,           PffFluidSetUp,  PffFluidSeed, ",gas_volume,gas_y_mean", PffFluidDiagnose,
+  const PffFlowSceneOps ops = {NULL,           PffFluidSetUp,  PffFluidSeed, ",gas_y_mean", PffFluidDiagnose,
                                PffFluidFinish, PffFluidDestroy};
 
   PetscFunctionBeginUser;

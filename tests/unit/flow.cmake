@@ -3,3 +3,6 @@ pff_add_unit(test_flow_viscosity RANKS 1 2)
 # flow: liquid-velocity extrapolation into the air (Sec. 3.7): slab layers, the layer rule against a serial
 # reference, and two levels.
 pff_add_unit(test_flow_extrapolate RANKS 1 2 4)
+# flow: liquid and gas volumes of the fluid cells (PffFlowGetPhaseVolumes, issue 10): closed box half full, with a
+# solid cube and on two levels.
+pff_add_unit(test_flow_volumes RANKS 1 2 4)

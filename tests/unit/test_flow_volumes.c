@@ -1,0 +1,102 @@
+/* Unit test of PffFlowGetPhaseVolumes (the phase volumes of the drift checks, issue 10) at any rank count.
+
+   A closed unit box (16^3 cells, 8^3 blocks, no periodic axis), liquid seeded below y = 1/2 and gas
+   above, at rest; the volumes are those of the phase field after PffFlowSeed. Three cases:
+     - uniform grid: liquid + gas is the box volume 1 to rounding (every cell has an open face), and the
+       liquid volume is 1/2 within 2% (the truncated kernel at the walls lowers phi in a thin layer);
+     - with a solid cube [1/4, 1/2]^3 (4^3 cells whose faces are all closed): liquid + gas is
+       1 - 1/64 to rounding, the liquid volume 1/2 - 1/64 within 2%;
+     - two levels (the blocks with x >= 1/2 coarse): liquid + gas is 1 to rounding, liquid 1/2 within 2%.
+   Each case prints both volumes to 6 digits, the same on any number of ranks, and fails through
+   PetscCheck.
+
+   Sample run:  mpiexec -n 4 ./test_flow_volumes
+   Prints three lines (the same on any number of ranks). */
+#include <pff.h>
+
+static const char help[] = "Liquid and gas volumes of the fluid cells (PffFlowGetPhaseVolumes).\n";
+
+static const PetscReal SolidLo = 0.25, SolidHi = 0.5;
+
+/* Signed distance to the solid cube, negative inside (the gradient is not needed here). */
+static PetscReal SolidCube(const PetscReal x[3], PetscReal grad[3], void *ctx)
+{
+  PetscReal out = 0, in = -PETSC_MAX_REAL;
+
+  (void)ctx;
+  for (int a = 0; a < 3; a++) {
+    const PetscReal d = PetscMax(SolidLo - x[a], x[a] - SolidHi);
+    out += PetscMax(d, 0) * PetscMax(d, 0);
+    in = PetscMax(in, d);
+    if (grad) grad[a] = 0;
+  }
+  return out > 0 ? PetscSqrtReal(out) : in;
+}
+
+static PetscErrorCode SeedHalf(const PetscReal x[3], PetscInt *type, PetscReal v[3], void *ctx)
+{
+  const PetscBool solid = *(const PetscBool *)ctx;
+
+  PetscFunctionBeginUser;
+  v[0] = v[1] = v[2] = 0;
+  if (solid && SolidCube(x, NULL, NULL) < 0)
+    *type = -1;
+  else
+    *type = x[1] < 0.5 ? PFF_PARTICLE_LIQUID : PFF_PARTICLE_AIR;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode RunCase(MPI_Comm comm, const char name[], PetscBool solid, PetscBool twoLevels)
+{
+  PffGrid         grid;
+  PffFlow         flow;
+  const PetscInt  cells[3]    = {16, 16, 16};
+  const PetscBool periodic[3] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
+  const PetscReal origin[3]   = {0, 0, 0};
+  /* raster 2 x 2 x 2, x fastest: the blocks with x >= 1/2 at level 1 */
+  const PetscInt  levels[8] = {0, 1, 0, 1, 0, 1, 0, 1};
+  const PetscReal fluid = 1 - (solid ? PetscPowReal(SolidHi - SolidLo, 3) : 0), liquidRef = fluid - 0.5;
+  PetscReal       liquid, gas;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridCreate(comm, &grid));
+  PetscCall(PffGridSetCells(grid, cells));
+  PetscCall(PffGridSetBlockSize(grid, 8));
+  PetscCall(PffGridSetLevels(grid, twoLevels ? 2 : 1));
+  PetscCall(PffGridSetDomain(grid, origin, 1.0 / 16));
+  PetscCall(PffGridSetPeriodic(grid, periodic));
+  if (twoLevels) PetscCall(PffGridSetRefinementMap(grid, levels));
+  PetscCall(PffGridSetUp(grid));
+  PetscCall(PffFlowCreate(grid, &flow));
+  PetscCall(PffFlowSetFromOptions(flow));
+  if (solid) PetscCall(PffFlowSetSolid(flow, SolidCube, NULL));
+  PetscCall(PffFlowSetUp(flow));
+  PetscCall(PffFlowSeed(flow, SeedHalf, &solid));
+  PetscCall(PffFlowGetPhaseVolumes(flow, &liquid, &gas));
+  PetscCall(PetscPrintf(comm, "%s: liquid %.6f  gas %.6f  fluid %.6f (expected %.6f)\n", name, (double)liquid,
+                        (double)gas, (double)(liquid + gas), (double)fluid));
+  PetscCheck(PetscAbsReal(liquid + gas - fluid) <= 1e-12, comm, PETSC_ERR_PLIB,
+             "%s: liquid + gas = %.15g, expected the fluid volume %.15g", name, (double)(liquid + gas), (double)fluid);
+  PetscCheck(PetscAbsReal(liquid - liquidRef) <= 0.02 * liquidRef, comm, PETSC_ERR_PLIB,
+             "%s: liquid volume %g is not within 2%% of %g", name, (double)liquid, (double)liquidRef);
+  PetscCall(PffFlowDestroy(&flow));
+  PetscCall(PffGridDestroy(&grid));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+int main(int argc, char **argv)
+{
+  MPI_Comm comm;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscInitialize(&argc, &argv, NULL, help));
+  comm = PETSC_COMM_WORLD;
+  PetscCall(PetscOptionsSetValue(NULL, "-rho_liquid", "1000"));
+  PetscCall(PetscOptionsSetValue(NULL, "-rho_gas", "1"));
+  PetscCall(PetscOptionsSetValue(NULL, "-gravity", "0,-9.81,0"));
+  PetscCall(RunCase(comm, "uniform", PETSC_FALSE, PETSC_FALSE));
+  PetscCall(RunCase(comm, "solid cube", PETSC_TRUE, PETSC_FALSE));
+  PetscCall(RunCase(comm, "two levels", PETSC_FALSE, PETSC_TRUE));
+  PetscCall(PetscFinalize());
+  return 0;
+}
