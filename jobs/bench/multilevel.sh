@@ -8,6 +8,7 @@
 # of the conservation line at the end of the run.
 #   bash jobs/bench/multilevel.sh
 #   PFF_CONFIGS="dam_break_small_3lev" PFF_RANKS=4 PFF_REFERENCE=0 bash jobs/bench/multilevel.sh
+#   PFF_STEPS=0 PFF_BENCH_ARGS="-sim_t_end 0.5" ...     to an end time instead (extra pfflip options)
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/../setup.sh"
 out=${PFF_BENCH_DIR:-$PFF_ROOT/output/bench}/multilevel
@@ -25,7 +26,7 @@ run() {
   shift 2
   rm -rf "$dir" && mkdir -p "$dir"
   "${PFF_MPIEXEC[@]}" -n "$ranks" "$PFF_BUILD_DIR/bin/pfflip" -options_file_yaml "$PFF_ROOT/config/$config.yaml" \
-    -output_dir "$dir" -sim_frames false -sim_max_steps "$steps" "$@" >"$dir/log.txt" 2>&1 || echo "run failed" >>"$dir/log.txt"
+    -output_dir "$dir" -sim_frames false -sim_max_steps "$steps" ${PFF_BENCH_ARGS:-} "$@" >"$dir/log.txt" 2>&1 || echo "run failed" >>"$dir/log.txt"
   /usr/bin/python3 - "$label" "$dir" <<'PY' | tee -a "$table"
 import csv, glob, re, sys
 label, d = sys.argv[1], sys.argv[2]
