@@ -112,6 +112,10 @@ PETSC_EXTERN PetscErrorCode PffGridSetRefinementFunction(PffGrid grid, PffRefine
 /* Refinement from an explicit requested-level map over the raster (copied); -1 = inactive. */
 PETSC_EXTERN PetscErrorCode PffGridSetRefinementMap(PffGrid grid, const PetscInt level[]);
 
+/* Finest-level cells per axis as set (-grid_cells); also before SetUp, e.g. to place a refinement
+   function's geometry in the domain. Not collective. */
+PETSC_EXTERN PetscErrorCode PffGridGetCells(PffGrid grid, PetscInt cells[3]);
+
 /* The grid's (duplicated) communicator; borrowed. Not collective. */
 PETSC_EXTERN PetscErrorCode PffGridGetComm(PffGrid grid, MPI_Comm *comm);
 

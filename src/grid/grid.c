@@ -293,6 +293,13 @@ static PetscErrorCode PffGridCheckSetUp(PffGrid g)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+PetscErrorCode PffGridGetCells(PffGrid g, PetscInt cells[3])
+{
+  PetscFunctionBeginUser;
+  for (int d = 0; d < 3; d++) cells[d] = g->cells[d];
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffGridGetComm(PffGrid g, MPI_Comm *comm)
 {
   PetscFunctionBeginUser;

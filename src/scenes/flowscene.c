@@ -26,13 +26,14 @@ PetscErrorCode PffFlowSceneDefaultReal(const char key[], PetscReal value)
 
 PetscErrorCode PffFlowSceneDomain(PffFlowScene *fs, PetscReal lo[3], PetscReal hi[3])
 {
-  PetscInt  nb[3], n0;
+  PetscInt  cells[3];
   PetscReal h0;
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridGetRaster(fs->grid, nb, NULL, NULL));
-  PetscCall(PffGridGetSizes(fs->grid, &n0, NULL, lo, &h0, NULL));
-  for (int a = 0; a < 3; a++) hi[a] = lo[a] + h0 * (PetscReal)(nb[a] * n0);
+  /* from the set parameters, so that it also serves before PffGridSetUp (ops.gridsetup) */
+  PetscCall(PffGridGetCells(fs->grid, cells));
+  PetscCall(PffGridGetSizes(fs->grid, NULL, NULL, lo, &h0, NULL));
+  for (int a = 0; a < 3; a++) hi[a] = lo[a] + h0 * (PetscReal)cells[a];
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -100,6 +101,7 @@ static PetscErrorCode PffFlowSceneSetFromOptions(PffScene s)
   /* grid, flow and scene set-up are validated here, before the driver checks unused options */
   PetscCall(PffGridCreate(s->comm, &fs->grid));
   PetscCall(PffGridSetFromOptions(fs->grid));
+  if (fs->ops.gridsetup) PetscCall(fs->ops.gridsetup(fs));
   PetscCall(PffGridSetUp(fs->grid));
   PetscCall(PffFlowCreate(fs->grid, &fs->flow));
   PetscCall(PffFlowSetFromOptions(fs->flow));

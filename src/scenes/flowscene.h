@@ -10,6 +10,9 @@ typedef struct {
   /* set defaults of grid/flow options in the database (only where the user set none) and read the
      scene's own options; called before the grid and flow read theirs */
   PetscErrorCode (*setfromoptions)(PffFlowScene *);
+  /* after the grid has read its options and before it is set up: what shapes the raster, such as a
+     refinement function (PffGridSetRefinementFunction); PffFlowSceneDomain already works here */
+  PetscErrorCode (*gridsetup)(PffFlowScene *);
   /* after the grid is set up: the seeding function and anything else (solids, prescribed velocity) */
   PetscErrorCode (*setup)(PffFlowScene *);
   PffSeedFn seed;
@@ -52,5 +55,5 @@ struct _PffFlowScene {
 PETSC_INTERN PetscErrorCode PffFlowSceneDefault(const char key[], const char value[]);
 PETSC_INTERN PetscErrorCode PffFlowSceneDefaultReal(const char key[], PetscReal value);
 PETSC_INTERN PetscErrorCode PffFlowSceneCreate_Private(PffScene, const PffFlowSceneOps *, void *ctx);
-/* Domain box of the grid. */
+/* Domain box of the grid (also before PffGridSetUp). */
 PETSC_INTERN PetscErrorCode PffFlowSceneDomain(PffFlowScene *, PetscReal lo[3], PetscReal hi[3]);

@@ -7,15 +7,71 @@
    PffFlowGetPhaseVolumes) the diagnostics CSV has the mean height of the gas particles,
    y_g = sum_p y_p / N_gas. For bubbles in a closed tank y_g is their mean height, so its growth is the
    mean rise (V_g also counts the thin layer at the walls where the truncated kernel lowers phi, y_g
-   does not). The final values are printed to 4 and 6 digits, which do not depend on the rank count. */
+   does not). The final values are printed to 4 and 6 digits, which do not depend on the rank count.
+
+   Static multi-level grids (-fluid_refine surface): the finest level follows the initial liquid
+   surface and the level grows by one every -fluid_refine_band block lengths away from it, as
+   -grid_refine does for a plane or a sphere:
+
+     level(block) = min(L - 1, floor(dist(block, surface) / (band * block length))),
+
+   with dist a lower bound from PffGeometryLiquidBoxDistance (the CSG signed distance of the liquid
+   and gas regions, faces on the domain walls excluded), so a block is never coarser than the exact
+   distance asks. The raster then gets the grid's 2:1 grading. Every rank evaluates the same pure
+   function of the block box, so the raster does not depend on the rank count. */
 #include "flowscene.h"
 #include "geometry.h"
 
+typedef enum { PFF_FLUID_REFINE_NONE, PFF_FLUID_REFINE_SURFACE } PffFluidRefineType;
+static const char *const PffFluidRefineTypes[] = {"none", "surface", "PffFluidRefineType", "PFF_FLUID_REFINE_", NULL};
+
 typedef struct {
-  PffGeometry geo;
+  PffGeometry        geo;
+  PffFluidRefineType refine;
+  PetscReal          band; /* width of a level band, in block lengths */
 } PffFluid;
 
-static PetscErrorCode PffFluidSetUp(PffFlowScene *fs)
+static PetscErrorCode PffFluidSetFromOptions(PffFlowScene *fs)
+{
+  PffFluid *fl     = (PffFluid *)fs->ctx;
+  PetscEnum refine = (PetscEnum)fl->refine;
+  PetscBool bandSet;
+
+  PetscFunctionBeginUser;
+  PetscOptionsBegin(fs->scene->comm, NULL, "Fluid scene", "PffScene");
+  PetscCall(PetscOptionsEnum("-fluid_refine",
+                             "Static refinement: none, or surface (finest level at the initial liquid surface, one "
+                             "level coarser every -fluid_refine_band block lengths away from it, up to -grid_levels)",
+                             NULL, PffFluidRefineTypes, refine, &refine, NULL));
+  PetscCall(PetscOptionsReal("-fluid_refine_band", "Width of each level band, in block lengths (-fluid_refine surface)",
+                             NULL, fl->band, &fl->band, &bandSet));
+  PetscOptionsEnd();
+  fl->refine = (PffFluidRefineType)refine;
+  PetscCheck(fl->band > 0 && PetscIsNormalReal(fl->band), fs->scene->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-fluid_refine_band %g is invalid: must be positive", (double)fl->band);
+  PetscCheck(!bandSet || fl->refine == PFF_FLUID_REFINE_SURFACE, fs->scene->comm, PETSC_ERR_ARG_WRONG,
+             "-fluid_refine_band has no effect without -fluid_refine surface");
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The PffRefineFn of -fluid_refine surface (ctx = the PffFluid). */
+static PetscErrorCode PffFluidRefine(PffGrid grid, const PetscReal lo[3], const PetscReal hi[3], PetscInt *level,
+                                     void *ctx)
+{
+  const PffFluid *fl = (const PffFluid *)ctx;
+  PetscInt        nlevels;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetSizes(grid, NULL, &nlevels, NULL, NULL, NULL));
+  const PetscReal band = fl->band * (hi[0] - lo[0]), coarsest = (PetscReal)(nlevels - 1);
+  const PetscReal dist = PffGeometryLiquidBoxDistance(fl->geo, lo, hi, coarsest * band);
+  *level               = (PetscInt)PetscMin(coarsest, PetscFloorReal(dist / band));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The geometry is read before the grid is set up, because -fluid_refine surface places the levels
+   by it; its checks on the seed lattice wait for the grid (PffFluidSetUp). */
+static PetscErrorCode PffFluidGridSetUp(PffFlowScene *fs)
 {
   PffFluid *fl = (PffFluid *)fs->ctx;
   PetscReal lo[3], hi[3];
@@ -26,9 +82,30 @@ static PetscErrorCode PffFluidSetUp(PffFlowScene *fs)
   PetscCall(PffGeometrySetFromOptions(fl->geo, lo, hi));
   PetscCheck(PffGeometryNumLiquids(fl->geo) > 0, fs->scene->comm, PETSC_ERR_ARG_WRONG,
              "-liquid_0_type is missing: the fluid scene needs at least one liquid region");
+  if (fl->refine == PFF_FLUID_REFINE_SURFACE) {
+    PetscEnum gridRefine = (PetscEnum)PFF_REFINE_NONE;
+    PetscBool set;
+    PetscCall(PetscOptionsGetEnum(NULL, NULL, "-grid_refine", PffRefineTypes, &gridRefine, &set));
+    PetscCheck(!set || gridRefine == (PetscEnum)PFF_REFINE_NONE, fs->scene->comm, PETSC_ERR_ARG_INCOMP,
+               "-fluid_refine surface conflicts with -grid_refine %s: choose one refinement",
+               PffRefineTypes[gridRefine]);
+    PetscCall(PffGridSetRefinementFunction(fs->grid, PffFluidRefine, fl));
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffFluidSetUp(PffFlowScene *fs)
+{
+  PffFluid *fl = (PffFluid *)fs->ctx;
+
+  PetscFunctionBeginUser;
   PetscCall(PffGeometryCheck(fl->geo, fs->grid));
   if (PffGeometryNumSolids(fl->geo) > 0) PetscCall(PffFlowSetSolid(fs->flow, PffGeometrySolidDistance, fl->geo));
   PetscCall(PffGeometryView(fl->geo, NULL));
+  if (fl->refine == PFF_FLUID_REFINE_SURFACE)
+    PetscCall(PetscPrintf(fs->scene->comm,
+                          "fluid: static refinement at the initial liquid surface, one level per %g block lengths\n",
+                          (double)fl->band));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -100,11 +177,19 @@ static PetscErrorCode PffFluidDestroy(PffFlowScene *fs)
 PetscErrorCode PffSceneCreate_Fluid(PffScene s)
 {
   PffFluid             *fl;
-  const PffFlowSceneOps ops = {NULL,           PffFluidSetUp,  PffFluidSeed, ",gas_y_mean", PffFluidDiagnose,
-                               PffFluidFinish, PffFluidDestroy};
+  const PffFlowSceneOps ops = {.setfromoptions = PffFluidSetFromOptions,
+                               .gridsetup      = PffFluidGridSetUp,
+                               .setup          = PffFluidSetUp,
+                               .seed           = PffFluidSeed,
+                               .diagHeader     = ",gas_y_mean",
+                               .diagnose       = PffFluidDiagnose,
+                               .finish         = PffFluidFinish,
+                               .destroy        = PffFluidDestroy};
 
   PetscFunctionBeginUser;
   PetscCall(PetscNew(&fl));
+  fl->refine = PFF_FLUID_REFINE_NONE;
+  fl->band   = 1;
   PetscCall(PffFlowSceneCreate_Private(s, &ops, fl));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -17,7 +17,12 @@
      union:  phi = min_k phi_k                                 (exact outside the solids)
 
    The gradient is the unit vector from the nearest surface point (outside a box), the outward
-   normal of the nearest face (inside a box), or the radial direction (sphere). */
+   normal of the nearest face (inside a box), or the radial direction (sphere).
+
+   For static refinement at the initial liquid surface the liquid set L gets the same CSG treatment,
+   d_L = max(min_i d_liquid_i, -min_g d_gas_g), with box faces on the domain walls dropped (they
+   touch the wall, not the gas). |d_L| is a lower bound of the distance to the surface and d_L is
+   1-Lipschitz, so a box with centre c and half diagonal r is at least |d_L(c)| - r from it. */
 #include "geometry.h"
 
 const char *const PffShapeTypes[] = {"box", "sphere", "halfspace", "PffShapeType", "PFF_SHAPE_", NULL};
@@ -348,6 +353,79 @@ PetscReal PffGeometrySolidDistance(const PetscReal x[3], PetscReal grad[3], void
   }
   if (grad != NULL)
     for (int d = 0; d < 3; d++) grad[d] = g[d];
+  return dist;
+}
+
+/* Exact signed distance of one liquid or gas shape (negative inside), where a box face on a domain
+   wall or beyond it is no surface: the box continues through the wall. On an axis where both faces
+   are such walls the box has no face at all. */
+static PetscReal PffShapeSurfaceDistance(PffGeometry geo, const PffShape *s, const PetscReal x[3])
+{
+  switch (s->type) {
+  case PFF_SHAPE_SPHERE:
+    return PetscSqrtReal(PetscSqr(x[0] - s->a[0]) + PetscSqr(x[1] - s->a[1]) + PetscSqr(x[2] - s->a[2])) - s->r;
+  case PFF_SHAPE_HALFSPACE:
+    return (x[0] - s->a[0]) * s->b[0] + (x[1] - s->a[1]) * s->b[1] + (x[2] - s->a[2]) * s->b[2];
+  case PFF_SHAPE_BOX:
+    break;
+  }
+  PetscReal out = 0, in = -PETSC_MAX_REAL;
+  for (int d = 0; d < 3; d++) {
+    const PetscReal tol    = 1e-12 * (geo->hi[d] - geo->lo[d]);
+    const PetscBool openlo = (PetscBool)(s->a[d] <= geo->lo[d] + tol),
+                    openhi = (PetscBool)(s->b[d] >= geo->hi[d] - tol);
+    if (openlo && openhi) continue;
+    /* q > 0: outside the slab by q; q <= 0: |q| inside from its nearest (closed) face */
+    const PetscReal q = openlo ? x[d] - s->b[d] : (openhi ? s->a[d] - x[d] : PetscMax(s->a[d] - x[d], x[d] - s->b[d]));
+    if (q > 0) out += q * q;
+    in = PetscMax(in, q);
+  }
+  return out > 0 ? PetscSqrtReal(out) : in;
+}
+
+PetscReal PffGeometryLiquidDistance(PffGeometry geo, const PetscReal x[3])
+{
+  PetscReal dl = PETSC_MAX_REAL, dg = PETSC_MAX_REAL;
+
+  for (PetscInt i = 0; i < geo->nliquid; i++) dl = PetscMin(dl, PffShapeSurfaceDistance(geo, &geo->liquid[i], x));
+  for (PetscInt g = 0; g < geo->ngas; g++) dg = PetscMin(dg, PffShapeSurfaceDistance(geo, &geo->gas[g], x));
+  return PetscMax(dl, -dg);
+}
+
+/* Lower bound of the distance from a box with centre c and half diagonal r to the liquid surface
+   (the signed distance bound is 1-Lipschitz). */
+static inline PetscReal PffGeometryBallBound(PffGeometry geo, const PetscReal c[3], PetscReal r)
+{
+  return PetscMax(0.0, PetscAbsReal(PffGeometryLiquidDistance(geo, c)) - r);
+}
+
+PetscReal PffGeometryLiquidBoxDistance(PffGeometry geo, const PetscReal lo[3], const PetscReal hi[3], PetscReal cap)
+{
+  const PetscInt  S = PFF_GEOMETRY_BOX_SAMPLES;
+  PetscReal       c[3], size[3], r = 0, dist;
+  const PetscReal half = 0.5;
+
+  for (int d = 0; d < 3; d++) {
+    c[d] = half * (lo[d] + hi[d]);
+    r += PetscSqr(half * (hi[d] - lo[d]));
+  }
+  dist = PffGeometryBallBound(geo, c, PetscSqrtReal(r));
+  if (dist >= cap) return dist;
+  r = 0;
+  for (int d = 0; d < 3; d++) {
+    size[d] = (hi[d] - lo[d]) / (PetscReal)S;
+    r += PetscSqr(half * size[d]);
+  }
+  r    = PetscSqrtReal(r);
+  dist = PETSC_MAX_REAL;
+  for (PetscInt k = 0; k < S; k++)
+    for (PetscInt j = 0; j < S; j++)
+      for (PetscInt i = 0; i < S; i++) {
+        const PetscReal x[3] = {lo[0] + ((PetscReal)i + half) * size[0], lo[1] + ((PetscReal)j + half) * size[1],
+                                lo[2] + ((PetscReal)k + half) * size[2]};
+        dist                 = PetscMin(dist, PffGeometryBallBound(geo, x, r));
+        if (dist == 0) return 0;
+      }
   return dist;
 }
 

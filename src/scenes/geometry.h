@@ -49,6 +49,23 @@ PETSC_INTERN PetscInt PffGeometryLiquidAt(PffGeometry geo, const PetscReal x[3],
    NULL. Not collective. */
 PETSC_INTERN PetscReal PffGeometrySolidDistance(const PetscReal x[3], PetscReal grad[3], void *ctx);
 
+/* Signed distance bound to the initial liquid surface (negative in the liquid): the CSG combination
+   max(min_i d_liquid_i, -min_g d_gas_g) of the exact signed distances of the shapes, where the faces
+   of a box that lie on a domain wall (or beyond) are no surface, so a liquid box against the walls
+   has its free faces only. |value| never exceeds the distance to the surface (min/max of exact
+   distances underestimate inside unions and outside intersections). Solids are not considered; with
+   no surface at all (a box that fills the domain) the value is -PETSC_MAX_REAL. Not collective. */
+PETSC_INTERN PetscReal PffGeometryLiquidDistance(PffGeometry geo, const PetscReal x[3]);
+
+/* A lower bound of the distance from the box [lo, hi] to the initial liquid surface, 0 when the
+   surface may cross the box: the minimum over PFF_GEOMETRY_BOX_SAMPLES^3 sub-boxes of
+   max(0, |PffGeometryLiquidDistance(centre)| - half diagonal), tighter than the true distance by at
+   most about one sub-box diagonal. A bound of the whole box at or beyond cap is returned without
+   sub-boxes (cap = PETSC_MAX_REAL: always refine the bound). Deterministic. Not collective. */
+#define PFF_GEOMETRY_BOX_SAMPLES 8
+PETSC_INTERN PetscReal PffGeometryLiquidBoxDistance(PffGeometry geo, const PetscReal lo[3], const PetscReal hi[3],
+                                                    PetscReal cap);
+
 PETSC_INTERN PetscInt PffGeometryNumSolids(PffGeometry geo);
 PETSC_INTERN PetscInt PffGeometryNumLiquids(PffGeometry geo);
 PETSC_INTERN PetscInt PffGeometryNumGas(PffGeometry geo);

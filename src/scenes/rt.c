@@ -149,7 +149,11 @@ static PetscErrorCode PffRTFinish(PffFlowScene *fs)
 static PetscErrorCode PffSceneCreate_RTCommon(PffScene s, PetscBool paper)
 {
   PffRT                *rt;
-  const PffFlowSceneOps ops = {PffRTSetFromOptions, NULL, PffRTSeed, ",spike_over_W", PffRTDiagnose, PffRTFinish, NULL};
+  const PffFlowSceneOps ops = {.setfromoptions = PffRTSetFromOptions,
+                               .seed           = PffRTSeed,
+                               .diagHeader     = ",spike_over_W",
+                               .diagnose       = PffRTDiagnose,
+                               .finish         = PffRTFinish};
 
   PetscFunctionBeginUser;
   PetscCall(PetscNew(&rt));

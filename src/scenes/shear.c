@@ -143,8 +143,11 @@ static PetscErrorCode PffShearFinish(PffFlowScene *fs)
 PetscErrorCode PffSceneCreate_ShearSphere(PffScene s)
 {
   PffShear             *sh;
-  const PffFlowSceneOps ops = {PffShearSetFromOptions, PffShearSetUp,  PffShearSeed, NULL,
-                               PffShearDiagnose,       PffShearFinish, NULL};
+  const PffFlowSceneOps ops = {.setfromoptions = PffShearSetFromOptions,
+                               .setup          = PffShearSetUp,
+                               .seed           = PffShearSeed,
+                               .diagnose       = PffShearDiagnose,
+                               .finish         = PffShearFinish};
 
   PetscFunctionBeginUser;
   PetscCall(PetscNew(&sh));

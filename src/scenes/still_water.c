@@ -96,8 +96,12 @@ static PetscErrorCode PffStillFinish(PffFlowScene *fs)
 PetscErrorCode PffSceneCreate_StillWater(PffScene s)
 {
   PffStill             *sw;
-  const PffFlowSceneOps ops = {PffStillSetFromOptions, PffStillSetUp,  PffStillSeed, ",volume_drift",
-                               PffStillDiagnose,       PffStillFinish, NULL};
+  const PffFlowSceneOps ops = {.setfromoptions = PffStillSetFromOptions,
+                               .setup          = PffStillSetUp,
+                               .seed           = PffStillSeed,
+                               .diagHeader     = ",volume_drift",
+                               .diagnose       = PffStillDiagnose,
+                               .finish         = PffStillFinish};
 
   PetscFunctionBeginUser;
   PetscCall(PetscNew(&sw));

@@ -1,7 +1,8 @@
 # Runs EXE with ARGS at each rank count in RANKS (each with -output_dir OUTDIR_np<n>) and fails unless
 # every run exits 0 and agrees with the first run:
 #   - REGEX: the numbers captured by its groups (one or more) agree within the relative tolerance RTOL;
-#   - EXACT (optional): the text it matches (e.g. particle counts) is identical.
+#   - EXACT (optional): the text it matches (e.g. particle counts) is identical; a list of regexes
+#     checks the text of each.
 set(values)
 set(exacts)
 foreach(NP IN LISTS RANKS)
@@ -20,10 +21,14 @@ foreach(NP IN LISTS RANKS)
   string(JOIN "," row ${groups})
   list(APPEND values "${row}")
   if(DEFINED EXACT)
-    if(NOT out MATCHES "${EXACT}")
-      message(FATAL_ERROR "run on ${NP} ranks: no match for ${EXACT}")
-    endif()
-    list(APPEND exacts "${CMAKE_MATCH_0}")
+    set(matched "")
+    foreach(ex IN LISTS EXACT)
+      if(NOT out MATCHES "${ex}")
+        message(FATAL_ERROR "run on ${NP} ranks: no match for ${ex}")
+      endif()
+      string(APPEND matched "${CMAKE_MATCH_0}\n")
+    endforeach()
+    list(APPEND exacts "${matched}")
   endif()
 endforeach()
 list(GET values 0 ref)

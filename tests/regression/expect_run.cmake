@@ -3,7 +3,7 @@
 # stdout + stderr must match EXPECT when given. OUTPUT_DIR is removed first, so stale files from an
 # earlier run cannot pass the check.
 # Usage: cmake -DMPIEXEC=... -DNPFLAG=-n -DNP=2 "-DFLAGS=..." -DEXE=... "-DARGS=..." -DOUTPUT_DIR=<dir>
-#              -DFILES=a.h5,b.h5 [-DEXPECT=<regex>] -P expect_run.cmake
+#              -DFILES=a.h5,b.h5 [-DEXPECT=<regex>] [-DTHREADS=<OpenMP threads per rank>] -P expect_run.cmake
 foreach(var MPIEXEC NP EXE ARGS OUTPUT_DIR FILES)
   if(NOT DEFINED ${var})
     message(FATAL_ERROR "expect_run.cmake: ${var} is not set")
