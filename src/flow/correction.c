@@ -182,8 +182,12 @@ PetscErrorCode PffFlowVolumeCorrection_Private(PffFlow f, PffFlowStepStats *st)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* The advection channels with the displacement as velocity d / dt: chUa = u + d / dt for the gas,
-   chUl = (the extrapolated liquid velocity, or u without extrapolation) + d / dt; halos exchanged. */
+/* The advection channels with the displacement as velocity d / dt: chUa = u + d_gas / dt for the gas,
+   chUl = (the extrapolated liquid velocity, or u without extrapolation) + d_liquid / dt; halos
+   exchanged. On a face between a liquid and a gas cell each phase keeps only the part of d that moves
+   it towards its own side: the correction fills a liquid cell with liquid and a gas cell with gas and
+   never carries a particle across the interface (a type-blind d pulled the gas into every liquid cell
+   short of particles, where it was deleted as a bubble, which left the cell short again). */
 PetscErrorCode PffFlowCorrectionVelocity_Private(PffFlow f, PetscReal dt, PetscBool extrapolated)
 {
   PetscInt        nlocal;
@@ -191,19 +195,35 @@ PetscErrorCode PffFlowCorrectionVelocity_Private(PffFlow f, PetscReal dt, PetscB
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
-  for (PetscInt lb = 0; lb < nlocal; lb++)
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo   info;
+    const PffView *vphi;
+    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+    PetscCall(PffGridGetBlockViews(f->grid, f->chPhi, lb, 0, &vphi));
+    const PetscInt n = info.n;
     for (PetscInt d = 0; d < 3; d++) {
       const PetscInt ch[4] = {f->chUt, f->chU, f->chUa, f->chUl};
       float         *a[4];
-      PetscInt       n3 = 0;
-      PetscCall(PffFlowBlockData_Private(f, lb, d, 4, ch, a, &n3));
+      PetscCall(PffFlowBlockData_Private(f, lb, d, 4, ch, a, NULL));
       const float *disp = a[0], *u = a[1];
       float       *ua = a[2], *ul = a[3];
-      for (PetscInt c = 0; c < n3; c++) {
-        ua[c] = (float)(u[c] + idt * disp[c]);
-        ul[c] = (float)((extrapolated ? ul[c] : u[c]) + idt * disp[c]);
-      }
+      for (PetscInt k = 0; k < n; k++)
+        for (PetscInt j = 0; j < n; j++)
+          for (PetscInt i = 0; i < n; i++) {
+            const PetscInt  c  = i + n * (j + n * k);
+            const PetscBool hi = *PffViewsAt(vphi, i, j, k, n) >= 0.5;
+            const PetscBool lo = *PffViewsAt(vphi, i - (d == 0), j - (d == 1), k - (d == 2), n) >= 0.5;
+            const PetscReal dd = disp[c];
+            PetscReal       dg = dd;
+            if (lo && !hi)
+              dg = PetscMax(dd, 0); /* liquid below, gas above: + moves into the gas */
+            else if (!lo && hi)
+              dg = PetscMin(dd, 0);
+            ua[c] = (float)(u[c] + idt * dg);
+            ul[c] = (float)((extrapolated ? ul[c] : u[c]) + idt * dd);
+          }
     }
+  }
   PetscCall(PffGridHaloBegin(f->grid, f->chUa));
   PetscCall(PffGridHaloEnd(f->grid, f->chUa));
   PetscCall(PffGridHaloBegin(f->grid, f->chUl));
