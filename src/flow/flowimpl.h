@@ -28,7 +28,7 @@ struct _n_PffFlow {
   PetscInt chMass, chUt, chU, chPhiF, chBeta, chOpen, chPhi, chP, chCdiv, chVort;
   PetscInt chUl, chUlMask; /* liquid velocity extrapolated into the air and its validity (only with layers > 0) */
   PetscInt chVol, chVolRef, chQ, chUa; /* volume weights, their lattice target, correction potential, gas advection */
-  PetscInt extrapLayers;   /* -flow_extrapolate_layers (Sec. 3.7) */
+  PetscInt extrapLayers;               /* -flow_extrapolate_layers (Sec. 3.7) */
   PetscInt uWidth;
 
   PetscReal t, dtPrev;
