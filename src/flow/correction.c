@@ -38,11 +38,14 @@ PetscErrorCode PffFlowReferenceVolume_Private(PffFlow f)
   PetscCall(PffParticlesCreate(f->grid, &ref));
   PetscCall(PffParticlesSetJitter(ref, 0));
   PetscCall(PffParticlesSeed(ref, PffReferenceSeed, f));
-  /* mass and momentum land in working channels that every step overwrites */
-  PetscCall(PffParticlesP2G(ref, one, f->chMass, f->chUt, f->chVolRef));
+  /* the kernel sum of Eq. 6 for the same lattice normalises Eq. 7 (phase.c); the momentum lands in a
+     working channel that every step overwrites */
+  PetscCall(PffParticlesP2G(ref, one, f->chMassRef, f->chUt, f->chVolRef));
   PetscCall(PffParticlesDestroy(&ref));
-  PetscCall(PffGridHaloBegin(f->grid, f->chVolRef));
-  PetscCall(PffGridHaloEnd(f->grid, f->chVolRef));
+  if (f->chVolRef >= 0) {
+    PetscCall(PffGridHaloBegin(f->grid, f->chVolRef));
+    PetscCall(PffGridHaloEnd(f->grid, f->chVolRef));
+  }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -27,7 +27,8 @@ PetscErrorCode PffFlowCreate(PffGrid grid, PffFlow *flow)
   f->usePressure              = PETSC_TRUE;
   f->deleteBubbles            = PETSC_TRUE;
   f->extrapLayers             = PFF_FLOW_EXTRAPOLATE_LAYERS_DEFAULT;
-  f->chMass = f->chUt = f->chU = f->chPhiF = f->chBeta = f->chOpen = f->chPhi = f->chP = f->chCdiv = f->chVort = -1;
+  f->chMass = f->chMassRef = f->chUt = f->chU = f->chPhiF = f->chBeta = f->chOpen = f->chPhi = f->chP = f->chCdiv =
+      f->chVort                                                                                       = -1;
   f->chUl = f->chUlMask = f->chVol = f->chVolRef = f->chQ = f->chUa = -1;
   PetscCall(PffParticlesCreate(grid, &f->part));
   PetscCall(PffPressureCreate(grid, &f->press));
@@ -153,6 +154,7 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
   PetscCall(PffGridAddChannel(f->grid, "ut", PFF_CHANNEL_FACE, 1, &f->chUt));
   PetscCall(PffGridAddChannel(f->grid, "velocity", PFF_CHANNEL_FACE, width, &f->chU));
   PetscCall(PffGridAddChannel(f->grid, "phi_face", PFF_CHANNEL_FACE, 1, &f->chPhiF));
+  PetscCall(PffGridAddChannel(f->grid, "mass_ref", PFF_CHANNEL_FACE, 1, &f->chMassRef));
   PetscCall(PffGridAddChannel(f->grid, "beta", PFF_CHANNEL_FACE, 1, &f->chBeta));
   PetscCall(PffGridAddChannel(f->grid, "open", PFF_CHANNEL_FACE, 1, &f->chOpen));
   PetscCall(PffGridAddChannel(f->grid, "phi", PFF_CHANNEL_CELL, 1, &f->chPhi));
@@ -179,12 +181,12 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
       PetscCall(PffGridSetChannelOutput(f->grid, work[k], PETSC_FALSE));
   }
   /* working channels stay out of frames (checkpoints keep everything) */
-  const PetscInt hidden[] = {f->chMass, f->chUt, f->chPhiF, f->chBeta, f->chOpen};
+  const PetscInt hidden[] = {f->chMass, f->chMassRef, f->chUt, f->chPhiF, f->chBeta, f->chOpen};
   for (size_t k = 0; k < PETSC_STATIC_ARRAY_LENGTH(hidden); k++)
     PetscCall(PffGridSetChannelOutput(f->grid, hidden[k], PETSC_FALSE));
   PetscCall(PffParticlesGetKernelSum(f->part, &f->rho0));
   PetscCall(PffFlowOpenFaces_Private(f));
-  if (f->chVolRef >= 0) PetscCall(PffFlowReferenceVolume_Private(f));
+  PetscCall(PffFlowReferenceVolume_Private(f));
   if (!f->prescribed && f->usePressure) PetscCall(PffPressureSetUp(f->press));
   f->setupcalled = PETSC_TRUE;
   PetscFunctionReturn(PETSC_SUCCESS);

@@ -25,7 +25,7 @@ struct _n_PffFlow {
   PetscReal     prescribedNextT, prescribedNextU; /* the field's speed at prescribedNextT, sampled last step */
 
   /* channels */
-  PetscInt chMass, chUt, chU, chPhiF, chBeta, chOpen, chPhi, chP, chCdiv, chVort;
+  PetscInt chMass, chMassRef, chUt, chU, chPhiF, chBeta, chOpen, chPhi, chP, chCdiv, chVort;
   PetscInt chUl, chUlMask; /* liquid velocity extrapolated into the air and its validity (only with layers > 0) */
   PetscInt chVol, chVolRef, chQ, chUa; /* volume weights, their lattice target, correction potential, gas advection */
   PetscInt extrapLayers;               /* -flow_extrapolate_layers (Sec. 3.7) */

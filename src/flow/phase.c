@@ -52,20 +52,25 @@ static PetscErrorCode PffFlowCellPhase(PffFlow f, PetscInt nlocal)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* face phi from the raw density (Eq. 7) */
+/* face phi from the raw density (Eq. 7), normalised by the lattice reference */
 static PetscErrorCode PffFlowRawPhase(PffFlow f, PetscInt nlocal)
 {
   const PetscReal eta = PetscLogReal(f->rho[0] / f->rho[1]), rtmin = eta * f->rho[1] * f->rho0,
                   scale = f->alphaPhi * f->rho0 * f->rho[0];
 
   PetscFunctionBeginUser;
-  const PetscInt ch[2] = {f->chMass, f->chPhiF};
+  const PetscInt ch[3] = {f->chMass, f->chPhiF, f->chMassRef};
   for (PetscInt lb = 0; lb < nlocal; lb++)
     for (PetscInt d = 0; d < 3; d++) {
-      float   *a[2];
+      float   *a[3];
       PetscInt n3 = 0;
-      PetscCall(PffFlowBlockData_Private(f, lb, d, 2, ch, a, &n3));
-      for (PetscInt c = 0; c < n3; c++) a[1][c] = (float)PffPhi(a[0][c], rtmin, scale);
+      PetscCall(PffFlowBlockData_Private(f, lb, d, 3, ch, a, &n3));
+      for (PetscInt c = 0; c < n3; c++) {
+        /* rho~ as the full kernel would see it: beside walls, solids and level boundaries the lattice
+           reference (correction.c) is below rho~_0, and a uniform fluid would look rarefied there */
+        const PetscReal norm = a[2][c] > 0 ? f->rho0 / (PetscReal)a[2][c] : 1;
+        a[1][c]              = (float)PffPhi(a[0][c] * norm, rtmin, scale);
+      }
     }
   PetscCall(PffGridHaloBegin(f->grid, f->chPhiF));
   PetscCall(PffGridHaloEnd(f->grid, f->chPhiF));
