@@ -4,8 +4,8 @@
    chMass holds rho~ normalised so that a uniform lattice of liquid particles gives rho_l rho~_0
    (see PffParticlesP2G); Eq. 7 is then applied literally with rho~_min = eta_phi rho_g rho~_0 and
    eta_phi = log(rho_l / rho_g). A cell's phase value is the mean over its open faces; cells below
-   1/2 are air. Faces between two liquid cells get phi = 1, between two air cells phi = 0, and the cell
-   values are then taken again from the cleaned faces. */
+   1/2 are air. Faces between two liquid cells get phi = 1, between two air cells phi = 0, and cells
+   whose faces are then all 1 (0) get 1 (0). */
 #include "flowimpl.h"
 
 static inline PetscReal PffPhi(PetscReal rt, PetscReal rtmin, PetscReal scale)
@@ -15,8 +15,9 @@ static inline PetscReal PffPhi(PetscReal rt, PetscReal rtmin, PetscReal scale)
 }
 
 /* Cell phi = mean of the face phi over the cell's open faces (chPhiF's halo current); a cell with every
-   face closed (inside a solid) keeps the plain mean. */
-static PetscErrorCode PffFlowCellPhase(PffFlow f, PetscInt nlocal)
+   face closed (inside a solid) keeps the plain mean. With bulkOnly only cells whose open faces are all 1
+   (or all 0) are set, the others keep their value. */
+static PetscErrorCode PffFlowCellPhase(PffFlow f, PetscInt nlocal, PetscBool bulkOnly)
 {
   PetscFunctionBeginUser;
   for (PetscInt lb = 0; lb < nlocal; lb++) {
@@ -33,7 +34,7 @@ static PetscErrorCode PffFlowCellPhase(PffFlow f, PetscInt nlocal)
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt j = 0; j < n; j++)
         for (PetscInt i = 0; i < n; i++) {
-          PetscReal sum = 0, w = 0, all = 0;
+          PetscReal sum = 0, w = 0, all = 0, lo1 = 1, hi0 = 0;
           for (PetscInt d = 0; d < 3; d++) {
             const PetscInt  e[3] = {d == 0, d == 1, d == 2};
             const PetscReal lo   = *PffViewsAt(vphi[d], i, j, k, n),
@@ -43,7 +44,16 @@ static PetscErrorCode PffFlowCellPhase(PffFlow f, PetscInt nlocal)
             sum += olo * lo + ohi * hi;
             w += olo + ohi;
             all += lo + hi;
+            if (olo > 0) {
+              lo1 = PetscMin(lo1, lo);
+              hi0 = PetscMax(hi0, lo);
+            }
+            if (ohi > 0) {
+              lo1 = PetscMin(lo1, hi);
+              hi0 = PetscMax(hi0, hi);
+            }
           }
+          if (bulkOnly && !(w > 0 && (lo1 == 1 || hi0 == 0))) continue;
           cell[i + n * (j + n * k)] = (float)(w > 0 ? sum / w : all / 6);
         }
   }
@@ -85,7 +95,7 @@ PetscErrorCode PffFlowPhaseField_Private(PffFlow f)
   PetscCall(PetscLogEventBegin(PFF_PhaseField, 0, 0, 0, 0));
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
   PetscCall(PffFlowRawPhase(f, nlocal));
-  PetscCall(PffFlowCellPhase(f, nlocal));
+  PetscCall(PffFlowCellPhase(f, nlocal, PETSC_FALSE));
   /* tags clean the face values away from the interface; density and beta follow (Eq. 9) */
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo   info;
@@ -114,12 +124,12 @@ PetscErrorCode PffFlowPhaseField_Private(PffFlow f)
           }
     }
   }
-  /* the cell values again, from the cleaned faces: away from the interface they are exactly 0 or 1, so
-     FLIP noise in the bulk (where the clamp of Eq. 7 cuts only the upper half of the fluctuations) does
-     not bias sum(phi V) or the escaped-particle test */
+  /* cells whose faces are all cleaned to 1 (0) become exactly 1 (0), so FLIP noise in the bulk (where the
+     clamp of Eq. 7 cuts only the upper half of the fluctuations) does not bias sum(phi V) or the
+     escaped-particle test; interface cells keep the raw mean (the rt3d spike tip reads their phi = 1/2) */
   PetscCall(PffGridHaloBegin(f->grid, f->chPhiF));
   PetscCall(PffGridHaloEnd(f->grid, f->chPhiF));
-  PetscCall(PffFlowCellPhase(f, nlocal));
+  PetscCall(PffFlowCellPhase(f, nlocal, PETSC_TRUE));
   PetscCall(PetscLogEventEnd(PFF_PhaseField, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
