@@ -1,20 +1,21 @@
 /* Volume correction (the c_div of PF-FLIP Eq. 8, after Losasso et al. 2008), applied as a particle
    displacement instead of a velocity (docs/flow.md, "Volume correction").
 
-   P2G also splats the type-blind volume weight W_f = sum_p w_fp V_p. Its target W_ref is what the same
-   P2G gives for the regular lattice of 8 particles per cell in every fluid cell of the grid, splatted
-   once at set-up: rho~_0 in the interior, less beside walls and solids, and whatever the cross-level
-   splatting gives at level boundaries, so all three cancel from the ratio. A cell's particle volume
-   fraction is s = sum W / sum W_ref over its open faces, i.e. the liquid fraction W_l / W_ref plus
-   the gas fraction W_g / W_ref, each phase's raw density against its own target (mass / rho_type),
-   interface cells included. Every fluid cell wants s = 1.
+   P2G also splats the type-blind particle volume W_f = sum_p t_fp V_p with trilinear weights t_fp (a
+   partition of unity, so a lattice and randomly placed particles have the same expected W). Its target
+   W_ref is what the same P2G gives for the regular lattice of 8 particles per cell in every fluid cell,
+   splatted once at set-up: the interior value, less beside walls and solids, and whatever the
+   cross-level splatting gives at level boundaries, so all three cancel from the ratio. A cell's
+   particle volume fraction is s = sum W / sum W_ref over its open faces: the liquid's own fraction plus
+   the gas's own, interface cells included. The same set-up splat gives Eq. 6's kernel sum of the
+   lattice (mass_ref), against which phase.c reads Eq. 7.
 
-   The correction is the projection of Eq. 8 with u* = 0, dt = 1 and c_div = -kappa (s - 1): on this
-   step's coefficients beta = 1/rho it gives a face field d = -beta G q with D d = kappa (s - 1), a
-   displacement in metres that spreads over-dense cells (s > 1) and pulls under-dense ones together.
-   It is bounded per face by -flow_volume_correction_max_displacement cells and is added to the
-   advection velocity as d / dt only: it moves the particles by d in the step, whatever dt is, and
-   never enters u, the FLIP update or the particle velocities. */
+   The correction is the projection of Eq. 8 with u* = 0, dt = 1 and the source of PffCorrectionSource:
+   on this step's coefficients beta = 1/rho it gives a face field d = -beta G q with D d = -c_div, a
+   displacement in metres that spreads over-dense cells and pulls under-dense ones together. It is
+   bounded per face by -flow_volume_correction_max_displacement cells and added to the advection
+   velocities as d / dt only: it moves the particles by d in the step, whatever dt is, and never enters
+   u, the FLIP update or the particle velocities. */
 #include "flowimpl.h"
 
 static PetscErrorCode PffReferenceSeed(const PetscReal x[3], PetscInt *type, PetscReal v[3], void *ctx)
