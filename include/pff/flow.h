@@ -31,8 +31,6 @@ typedef struct {
   PetscInt64       bubblesDeleted, dropletCandidates; /* escaped particles this step (Sec. 3.4) */
   PffPressureStats pressure;                          /* its = 0 when the solve is off */
   PffPressureStats correction;                        /* the volume-correction solve (its = 0 when off) */
-  PetscReal        volumeRatio[2]; /* min and max particle volume fraction s of a cell before the correction */
-  PetscReal        correctionMax;  /* largest |d| / h of the correction displacement before its bound */
   PffParticleStats advect;
   PetscLogDouble   stageTime[PFF_FLOW_NSTAGES]; /* wall seconds per stage, see PffFlowStageNames */
 } PffFlowStepStats;
@@ -77,7 +75,8 @@ PETSC_EXTERN PetscErrorCode PffFlowGetDensities(PffFlow flow, PetscReal rho[PFF_
 PETSC_EXTERN PetscErrorCode PffFlowGetDeleteBubbles(PffFlow flow, PetscBool *del);
 /* Channel indices: phi (cell), p (cell), u (face), vort (cell vorticity magnitude). */
 PETSC_EXTERN PetscErrorCode PffFlowGetChannels(PffFlow flow, PetscInt *phi, PetscInt *p, PetscInt *u, PetscInt *vort);
-/* Max |u| over owned faces and the liquid volume sum(phi_cell V_cell). Collective. */
+/* Max |u| over the faces and the liquid volume (that of PffFlowGetPhaseVolumes), each only when its
+   pointer is not NULL (the same on every rank). Collective. */
 PETSC_EXTERN PetscErrorCode PffFlowGetDiagnostics(PffFlow flow, PetscReal *umax, PetscReal *liquidVolume);
 
 /* Extrapolation of the liquid velocity into the air (PF-FLIP Sec. 3.7), on face channels of grid: open

@@ -53,16 +53,13 @@ PetscErrorCode PffFlowReferenceVolume_Private(PffFlow f)
 /* c_div per fluid cell: -kappa (s - 1) in liquid cells (cell phi >= 1/2) and -kappa (s - s_gas) - c0
    in gas cells, where s_gas is the gas cells' mean s (so that deleted bubbles rarefy the gas, not the
    whole box) and c0 hands the liquid's net volume change to the gas cells, so that sum(c_div V) = 0
-   and the liquid reaches its target in a closed box too. 0 in cells closed on every face. The extreme
-   s of any fluid cell into srange. */
-static PetscErrorCode PffCorrectionSource(PffFlow f, PetscReal srange[2])
+   and the liquid reaches its target in a closed box too. 0 in cells closed on every face. */
+static PetscErrorCode PffCorrectionSource(PffFlow f)
 {
   PetscInt  nlocal;
   PetscReal sum[4] = {0, 0, 0, 0}; /* gas cells: sum W V, sum W_ref V, sum V; liquid cells: sum c_div V */
 
   PetscFunctionBeginUser;
-  srange[0] = PETSC_MAX_REAL;
-  srange[1] = 0;
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
   /* first pass: s into c_div (-1 where no face is open), the totals */
   for (PetscInt lb = 0; lb < nlocal; lb++) {
@@ -96,8 +93,6 @@ static PetscErrorCode PffCorrectionSource(PffFlow f, PetscReal srange[2])
             continue;
           }
           const PetscReal s = w / wref;
-          srange[0]         = PetscMin(srange[0], s);
-          srange[1]         = PetscMax(srange[1], s);
           cdiv[c]           = (float)s;
           if (phi[c] >= 0.5)
             sum[3] += -f->volCorr * (s - 1) * vc;
@@ -109,8 +104,6 @@ static PetscErrorCode PffCorrectionSource(PffFlow f, PetscReal srange[2])
         }
   }
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, sum, 4, MPIU_REAL, MPI_SUM, f->comm));
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &srange[0], 1, MPIU_REAL, MPI_MIN, f->comm));
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &srange[1], 1, MPIU_REAL, MPI_MAX, f->comm));
   const PetscReal sgas = sum[1] > 0 ? sum[0] / sum[1] : 1, c0 = sum[2] > 0 ? sum[3] / sum[2] : 0;
   /* second pass: s -> c_div */
   for (PetscInt lb = 0; lb < nlocal; lb++) {
@@ -131,13 +124,14 @@ static PetscErrorCode PffCorrectionSource(PffFlow f, PetscReal srange[2])
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* The displacement into face channel chD, from solver ps and potential chQ (its previous
-   value the initial guess), bounded per face; the largest |d| / h before the bound into dmax. */
-static PetscErrorCode PffCorrectionDisplacement(PffFlow f, PffPressure ps, PetscInt chD, PetscInt chQ,
-                                                PffPressureStats *st, PetscReal *dmax)
+/* The displacement d into chUt (free after G2P): the projection of Eq. 8 with u* = 0, dt = 1 and c_div
+   from chCdiv, on the step's own operator (beta = 1/rho: no set-up, and the gas yields where the liquid
+   moves), at its own tolerance; q (chQ, its previous value the initial guess) is the potential. d is
+   bounded per face. */
+static PetscErrorCode PffCorrectionDisplacement(PffFlow f, PffPressureStats *st)
 {
   KSP       ksp;
-  PetscReal rtol, atol, dtol, m = 0;
+  PetscReal rtol, atol, dtol;
   PetscInt  maxit, nlocal;
 
   PetscFunctionBeginUser;
@@ -146,14 +140,14 @@ static PetscErrorCode PffCorrectionDisplacement(PffFlow f, PffPressure ps, Petsc
     for (PetscInt d = 0; d < 3; d++) {
       float   *u;
       PetscInt n3 = 0;
-      PetscCall(PffFlowBlockData_Private(f, lb, d, 1, &chD, &u, &n3));
+      PetscCall(PffFlowBlockData_Private(f, lb, d, 1, &f->chUt, &u, &n3));
       PetscCall(PetscArrayzero(u, n3));
     }
   /* a fraction of a cell needs no 1e-8: the solve runs at its own tolerance, then the pressure's is back */
-  PetscCall(PffPressureGetKSP(ps, &ksp));
+  PetscCall(PffPressureGetKSP(f->press, &ksp));
   PetscCall(KSPGetTolerances(ksp, &rtol, &atol, &dtol, &maxit));
   PetscCall(KSPSetTolerances(ksp, f->volCorrRtol, atol, dtol, maxit));
-  PetscCall(PffPressureProject(ps, chD, 1.0, f->chCdiv, chQ, st));
+  PetscCall(PffPressureProject(f->press, f->chUt, 1.0, f->chCdiv, f->chQ, st));
   PetscCall(KSPSetTolerances(ksp, rtol, atol, dtol, maxit));
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo info;
@@ -162,15 +156,12 @@ static PetscErrorCode PffCorrectionDisplacement(PffFlow f, PffPressure ps, Petsc
     for (PetscInt d = 0; d < 3; d++) {
       float   *u;
       PetscInt n3 = 0;
-      PetscCall(PffFlowBlockData_Private(f, lb, d, 1, &chD, &u, &n3));
-      for (PetscInt c = 0; c < n3; c++) {
-        m    = PetscMax(m, PetscAbsReal((PetscReal)u[c]) / info.h);
-        u[c] = (float)PetscMax(-bound, PetscMin(bound, (PetscReal)u[c]));
-      }
+      PetscCall(PffFlowBlockData_Private(f, lb, d, 1, &f->chUt, &u, &n3));
+      for (PetscInt c = 0; c < n3; c++) u[c] = (float)PetscMax(-bound, PetscMin(bound, (PetscReal)u[c]));
     }
   }
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &m, 1, MPIU_REAL, MPI_MAX, f->comm));
-  *dmax = PetscMax(*dmax, m);
+  PetscCall(PetscInfo(NULL, "volume correction: %" PetscInt_FMT " iterations, relative residual %.2e\n", st->its,
+                      (double)st->rnorm));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -179,10 +170,8 @@ PetscErrorCode PffFlowVolumeCorrection_Private(PffFlow f, PffFlowStepStats *st)
   PetscFunctionBeginUser;
   PetscCall(PffGridHaloBegin(f->grid, f->chVol));
   PetscCall(PffGridHaloEnd(f->grid, f->chVol));
-  PetscCall(PffCorrectionSource(f, st->volumeRatio));
-  st->correctionMax = 0;
-  /* on the step's own operator (beta = 1/rho): no set-up, and the gas yields where the liquid moves */
-  PetscCall(PffCorrectionDisplacement(f, f->press, f->chUt, f->chQ, &st->correction, &st->correctionMax));
+  PetscCall(PffCorrectionSource(f));
+  PetscCall(PffCorrectionDisplacement(f, &st->correction));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -214,9 +203,9 @@ PetscErrorCode PffFlowCorrectionVelocity_Private(PffFlow f, PetscReal dt, PetscB
       for (PetscInt k = 0; k < n; k++)
         for (PetscInt j = 0; j < n; j++)
           for (PetscInt i = 0; i < n; i++) {
-            const PetscInt  c  = i + n * (j + n * k);
-            const PetscBool hi = *PffViewsAt(vphi, i, j, k, n) >= 0.5;
-            const PetscBool lo = *PffViewsAt(vphi, i - (d == 0), j - (d == 1), k - (d == 2), n) >= 0.5;
+            const PetscInt c = i + n * (j + n * k);
+            PetscBool      lo, hi;
+            PffFlowFaceTags_Private(vphi, i, j, k, d, n, &lo, &hi);
             const PetscReal dd = disp[c];
             PetscReal       dg = dd;
             if (lo && !hi)

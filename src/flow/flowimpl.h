@@ -57,6 +57,15 @@ static inline PetscErrorCode PffFlowBlockData_Private(PffFlow f, PetscInt lb, Pe
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Tags (cell phi >= 1/2, liquid) of the two cells of the lower d-face of cell (i, j, k) of an n^3 block:
+   hi the cell itself, lo its -d neighbour (through the halo of the cell view vphi). */
+static inline void PffFlowFaceTags_Private(const PffView *vphi, PetscInt i, PetscInt j, PetscInt k, PetscInt d,
+                                           PetscInt n, PetscBool *lo, PetscBool *hi)
+{
+  *hi = (PetscBool)(*PffViewsAt(vphi, i, j, k, n) >= 0.5);
+  *lo = (PetscBool)(*PffViewsAt(vphi, i - (d == 0), j - (d == 1), k - (d == 2), n) >= 0.5);
+}
+
 /* phase.c */
 PETSC_INTERN PetscErrorCode PffFlowPhaseField_Private(PffFlow);
 /* correction.c */

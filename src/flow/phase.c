@@ -111,11 +111,11 @@ PetscErrorCode PffFlowPhaseField_Private(PffFlow f)
       for (PetscInt k = 0; k < n; k++)
         for (PetscInt j = 0; j < n; j++)
           for (PetscInt i = 0; i < n; i++) {
-            const PetscInt  c    = i + n * (j + n * k);
-            const PetscBool mine = *PffViewsAt(vcell, i, j, k, n) >= 0.5;
+            const PetscInt c = i + n * (j + n * k);
+            PetscBool      mine, lower;
+            PffFlowFaceTags_Private(vcell, i, j, k, d, n, &lower, &mine);
             /* across a closed face (wall, solid) the other side is not fluid: use this cell's tag */
-            const PetscBool other =
-                open[c] > 0 ? *PffViewsAt(vcell, i - (d == 0), j - (d == 1), k - (d == 2), n) >= 0.5 : mine;
+            const PetscBool other = open[c] > 0 ? lower : mine;
             if (mine && other)
               phi[c] = 1;
             else if (!mine && !other)

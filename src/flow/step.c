@@ -250,28 +250,22 @@ PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
 PetscErrorCode PffFlowGetDiagnostics(PffFlow f, PetscReal *umax, PetscReal *liquidVolume)
 {
   PetscInt  nlocal;
-  PetscReal loc[2] = {0, 0};
+  PetscReal m = 0;
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
-  for (PetscInt lb = 0; lb < nlocal; lb++) {
-    PffBlockInfo info;
-    float       *phi;
-    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
-    const PetscInt n3 = info.n * info.n * info.n;
-    for (PetscInt d = 0; d < 3; d++) {
-      float *u;
-      PetscCall(PffGridGetBlockData(f->grid, f->chU, lb, d, &u));
-      for (PetscInt c = 0; c < n3; c++) loc[0] = PetscMax(loc[0], PetscAbsReal((PetscReal)u[c]));
-    }
-    PetscCall(PffGridGetBlockData(f->grid, f->chPhi, lb, 0, &phi));
-    PetscReal s = 0;
-    for (PetscInt c = 0; c < n3; c++) s += phi[c];
-    loc[1] += s * info.h * info.h * info.h;
+  if (umax) {
+    PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+    for (PetscInt lb = 0; lb < nlocal; lb++)
+      for (PetscInt d = 0; d < 3; d++) {
+        float   *u;
+        PetscInt n3 = 0;
+        PetscCall(PffFlowBlockData_Private(f, lb, d, 1, &f->chU, &u, &n3));
+        for (PetscInt c = 0; c < n3; c++) m = PetscMax(m, PetscAbsReal((PetscReal)u[c]));
+      }
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &m, 1, MPIU_REAL, MPI_MAX, f->comm));
+    *umax = m;
   }
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &loc[0], 1, MPIU_REAL, MPI_MAX, f->comm));
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &loc[1], 1, MPIU_REAL, MPI_SUM, f->comm));
-  if (umax) *umax = loc[0];
-  if (liquidVolume) *liquidVolume = loc[1];
+  /* one definition of the liquid volume: the drift checks' */
+  if (liquidVolume) PetscCall(PffFlowGetPhaseVolumes(f, liquidVolume, NULL));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -118,8 +118,11 @@ static void PffSplatBlock(const PffParticleSoA *s, PetscInt i0, PetscInt i1, con
       for (int q = 0; q < 8; q++) {
         if (w[q] == 0 && !vv) continue;
         const PetscInt ii = c0[0] + (q & 1), jj = c0[1] + ((q >> 1) & 1), kk = c0[2] + ((q >> 2) & 1);
-        *PffViewsAt(vm[d], ii, jj, kk, n) += (float)(w[q] * rho);
-        *PffViewsAt(vp[d], ii, jj, kk, n) += (float)(w[q] * rvd);
+        /* the trilinear weight reaches faces beyond Eq. 6's sphere, where mass and momentum get nothing */
+        if (w[q] != 0) {
+          *PffViewsAt(vm[d], ii, jj, kk, n) += (float)(w[q] * rho);
+          *PffViewsAt(vp[d], ii, jj, kk, n) += (float)(w[q] * rvd);
+        }
         if (vv)
           *PffViewsAt(vv[d], ii, jj, kk, n) +=
               (float)(vol * lin[0][q & 1] * lin[1][(q >> 1) & 1] * lin[2][(q >> 2) & 1]);

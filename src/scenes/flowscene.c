@@ -249,13 +249,11 @@ static PetscErrorCode PffFlowSceneCheckpoint(PffFlowScene *fs)
    were stored) gives the volumes at the restart as V0, and the run says so. */
 static PetscErrorCode PffFlowSceneStart(PffFlowScene *fs)
 {
-  PetscReal v[PFF_PARTICLE_NTYPES];
-
   PetscFunctionBeginUser;
   if (!fs->restart[0]) {
     PetscCall(PffFlowSeed(fs->flow, fs->ops.seed, fs->ctx));
-    PetscCall(PffFlowGetPhaseVolumes(fs->flow, &v[PFF_PARTICLE_LIQUID], &v[PFF_PARTICLE_AIR]));
-    for (PetscInt k = 0; k < PFF_PARTICLE_NTYPES; k++) fs->volumeStart[k] = v[k];
+    PetscCall(
+        PffFlowGetPhaseVolumes(fs->flow, &fs->volumeStart[PFF_PARTICLE_LIQUID], &fs->volumeStart[PFF_PARTICLE_AIR]));
     PetscFunctionReturn(PETSC_SUCCESS);
   }
   PffParticles p;
@@ -277,8 +275,8 @@ static PetscErrorCode PffFlowSceneStart(PffFlowScene *fs)
       fs->driftMax[k]    = extra[PFF_PARTICLE_NTYPES + k];
     }
   } else {
-    PetscCall(PffFlowGetPhaseVolumes(fs->flow, &v[PFF_PARTICLE_LIQUID], &v[PFF_PARTICLE_AIR]));
-    for (PetscInt k = 0; k < PFF_PARTICLE_NTYPES; k++) fs->volumeStart[k] = v[k];
+    PetscCall(
+        PffFlowGetPhaseVolumes(fs->flow, &fs->volumeStart[PFF_PARTICLE_LIQUID], &fs->volumeStart[PFF_PARTICLE_AIR]));
     PetscCall(PetscPrintf(fs->scene->comm,
                           "restart: %s holds no reference volumes; volume drifts are measured from the restart\n",
                           fs->restart));
