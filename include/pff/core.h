@@ -24,6 +24,45 @@ PETSC_EXTERN PetscErrorCode PffInitializePackage(void);
    unknown key). Collective. Call once all SetFromOptions() have run. */
 PETSC_EXTERN PetscErrorCode PffOptionsCheckUnused(MPI_Comm comm);
 
+/* Strict option readers, used inside PetscOptionsBegin/End like PetscOptionsReal() and friends. They
+   read the raw text first and fail with "-KEY VALUE is invalid: WHY" on a value that is not a number,
+   not finite, beyond +-1e12, not an integer, not a boolean, or a list longer than *n; then they call
+   PETSc's reader, so -help and the used-option accounting stay PETSc's. Collective on the
+   PetscOptionsBegin communicator. */
+PETSC_EXTERN PetscErrorCode PffOptionsReal_Private(PetscOptionItems *, const char[], const char[], const char[],
+                                                   PetscReal, PetscReal *, PetscBool *);
+PETSC_EXTERN PetscErrorCode PffOptionsInt_Private(PetscOptionItems *, const char[], const char[], const char[],
+                                                  PetscInt, PetscInt *, PetscBool *, PetscInt);
+PETSC_EXTERN PetscErrorCode PffOptionsBool_Private(PetscOptionItems *, const char[], const char[], const char[],
+                                                   PetscBool, PetscBool *, PetscBool *);
+PETSC_EXTERN PetscErrorCode PffOptionsRealArray_Private(PetscOptionItems *, const char[], const char[], const char[],
+                                                        PetscReal[], PetscInt *, PetscBool *);
+PETSC_EXTERN PetscErrorCode PffOptionsIntArray_Private(PetscOptionItems *, const char[], const char[], const char[],
+                                                       PetscInt[], PetscInt *, PetscBool *);
+PETSC_EXTERN PetscErrorCode PffOptionsEnum_Private(PetscOptionItems *, const char[], const char[], const char[],
+                                                   const char *const *, PetscEnum, PetscEnum *, PetscBool *);
+#define PffOptionsEnum(a, b, c, d, e, f, g) PffOptionsEnum_Private(PetscOptionsObject, a, b, c, d, e, f, g)
+#define PffOptionsReal(a, b, c, d, e, f) PffOptionsReal_Private(PetscOptionsObject, a, b, c, d, e, f)
+#define PffOptionsInt(a, b, c, d, e, f) PffOptionsInt_Private(PetscOptionsObject, a, b, c, d, e, f, PETSC_MIN_INT)
+#define PffOptionsBoundedInt(a, b, c, d, e, f, g) PffOptionsInt_Private(PetscOptionsObject, a, b, c, d, e, f, g)
+#define PffOptionsBool(a, b, c, d, e, f) PffOptionsBool_Private(PetscOptionsObject, a, b, c, d, e, f)
+#define PffOptionsRealArray(a, b, c, d, e, f) PffOptionsRealArray_Private(PetscOptionsObject, a, b, c, d, e, f)
+#define PffOptionsIntArray(a, b, c, d, e, f) PffOptionsIntArray_Private(PetscOptionsObject, a, b, c, d, e, f)
+
+/* Checks a YAML scene file (-options_file_yaml) before PETSc reads it: a readable regular file holding one
+   UTF-8 document whose top level is a mapping of known sections and options (PETSc's YAML subset, no
+   aliases, at most 8 mappings deep). Returns 0 if it is fine, else 1 with msg (at most len characters)
+   holding one line "path:line:column: problem" (1-based) or "path: problem". Plain C: callable before
+   PetscInitialize. Not collective. */
+PETSC_EXTERN int PffYAMLCheckFile(const char path[], char msg[], size_t len);
+
+/* The same checks for an option that another object reads (e.g. a PETSc KSP option), before it does:
+   if key is set, its value must parse and lie in the open interval (lo, hi), described by range
+   ("in (0, 1)"); an integer must lie in [lo, hi]. Collective. */
+PETSC_EXTERN PetscErrorCode PffOptionsCheckReal(MPI_Comm comm, const char key[], PetscReal lo, PetscReal hi,
+                                                const char range[]);
+PETSC_EXTERN PetscErrorCode PffOptionsCheckInt(MPI_Comm comm, const char key[], PetscInt lo, PetscInt hi);
+
 /* Library versions and build revision as one line, e.g. for HDF5 attributes. Not collective.
    buf receives at most len characters. */
 PETSC_EXTERN PetscErrorCode PffGetVersionString(char buf[], size_t len);

@@ -29,6 +29,7 @@ PETSC_EXTERN const char *const PffChannelKinds[];
 #define PFF_GRID_MAX_LEVELS 7
 #define PFF_GRID_MAX_CHANNELS 32
 #define PFF_GRID_MAX_WIDTH 4
+#define PFF_GRID_MAX_RASTER_BLOCKS (1 << 24) /* blocks of the raster every rank holds */
 
 /* Requested level of the block with box [lo, hi]; -1 makes the block inactive. */
 typedef PetscErrorCode (*PffRefineFn)(PffGrid grid, const PetscReal lo[3], const PetscReal hi[3], PetscInt *level,

@@ -59,6 +59,18 @@ PETSC_EXTERN PetscErrorCode PffPressureSetFromOptions(PffPressure ps);
    through a VecScatter built once). The preconditioner matrix (Pmat) is the assembled A in both cases,
    so every PETSc PC and pffmg keep working; A is assembled either way. */
 typedef enum { PFF_PRESSURE_OPERATOR_AIJ, PFF_PRESSURE_OPERATOR_SHELL } PffPressureOperatorType;
+
+/* -pressure_on_failure: what a solve that did not converge does to the run. */
+typedef enum { PFF_PRESSURE_FAILURE_STOP, PFF_PRESSURE_FAILURE_WARN } PffPressureFailureType;
+PETSC_EXTERN const char *const PffPressureFailureTypes[];
+
+/* Acts on the outcome of a PffPressureProject() by -pressure_on_failure. A solve that converged passes.
+   Otherwise "stop" (the default) raises PETSC_ERR_NOT_CONVERGED with one line naming the step, t, the
+   stage, the KSP and PC, the converged reason, the iterations and the residual, and hint (the options
+   to change); "warn" prints that line on rank 0 and goes on. A non-finite residual, KSP_DIVERGED_NANORINF
+   or KSP_DIVERGED_PC_FAILED stops the run under either policy, since the fields are spoilt. Collective. */
+PETSC_EXTERN PetscErrorCode    PffPressureCheckSolve(PffPressure ps, const PffPressureStats *st, const char stage[],
+                                                     PetscInt step, PetscReal t, const char hint[]);
 PETSC_EXTERN const char *const PffPressureOperatorTypes[];
 
 /* Sets the KSP's Amat type (default PFF_PRESSURE_OPERATOR_AIJ); option -pressure_operator aij|shell.
@@ -98,9 +110,9 @@ PETSC_EXTERN PetscErrorCode PffPressureSetCoefficients(PffPressure ps, PetscInt 
    open the constant null space is removed. The previous p is the initial guess. Collective. */
 /* Without Dirichlet walls (walls, solids and periodic axes only) the constants span the null space:
    attached to A, removed from the rhs (a mean of c_div is dropped), and p is defined up to a constant.
-   With a Dirichlet wall A is definite, no null space is attached and the rhs is solved as it is. Non-convergence (e.g.
-   KSP_DIVERGED_ITS) is reported in stats->reason, not raised; KSP_DIVERGED_NANORINF and KSP_DIVERGED_PC_FAILED raise an
-   error naming the KSP and PC. The caller exchanges the halos of chU and chP afterwards. */
+   With a Dirichlet wall A is definite, no null space is attached and the rhs is solved as it is. Non-convergence of any
+   kind is reported in stats->reason and stats->rnorm, not raised: the caller passes them to
+   PffPressureCheckSolve(), which knows the step. The caller exchanges the halos of chU and chP afterwards. */
 PETSC_EXTERN PetscErrorCode PffPressureProject(PffPressure ps, PetscInt chU, PetscReal dt, PetscInt chCdiv,
                                                PetscInt chP, PffPressureStats *stats);
 

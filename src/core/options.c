@@ -1,5 +1,239 @@
-/* Unused options are errors: a misspelt key must not silently fall back to a default. */
+/* Option checks. PETSc's own parsers stop at the first bad character without naming the key, take
+   nan and inf as numbers and drop the extra values of a vector; every option of ours goes through
+   the strict readers below first, so a bad value is one message of the shape
+   "-KEY VALUE is invalid: WHY". Unused options are errors: a misspelt key must not silently fall
+   back to a default. */
 #include <pff.h>
+#include <ctype.h>
+#include <errno.h>
+#include <limits.h>
+#include <stdlib.h>
+
+/* Largest magnitude of any real option: far beyond every physical value the scenes use, and small
+   enough that squares and products of a few options stay finite in double precision. */
+#define PFF_OPTIONS_MAX_REAL 1e12
+
+static const char *PffSkipSpace(const char *s)
+{
+  while (*s && isspace((unsigned char)*s)) s++;
+  return s;
+}
+
+/* Parses one real from [s, end): all of it, finite and within the bound; 0 on success, else why. */
+static const char *PffParseReal(const char *s, const char *end, PetscReal *v)
+{
+  char   tok[128], *stop = NULL;
+  size_t n;
+
+  s = PffSkipSpace(s);
+  while (end > s && isspace((unsigned char)end[-1])) end--;
+  n = (size_t)(end - s);
+  if (n == 0) return "a number is missing";
+  if (n >= sizeof(tok)) return "not a number";
+  memcpy(tok, s, n);
+  tok[n]   = 0;
+  errno    = 0;
+  double x = strtod(tok, &stop);
+  if (stop == tok || *stop) return "not a number";
+  if (!isfinite(x)) return "must be finite";
+  if (errno == ERANGE && x != 0) return "must be within +-1e12";
+  if (PetscAbsReal((PetscReal)x) > PFF_OPTIONS_MAX_REAL) return "must be within +-1e12";
+  *v = (PetscReal)x;
+  return NULL;
+}
+
+static const char *PffParseInt(const char *s, PetscInt *v)
+{
+  char *stop = NULL;
+
+  s = PffSkipSpace(s);
+  if (!*s) return "an integer is missing";
+  errno       = 0;
+  long long x = strtoll(s, &stop, 10);
+  if (stop == s || *PffSkipSpace(stop)) return "not an integer";
+  if (errno == ERANGE || x > PETSC_MAX_INT || x < PETSC_MIN_INT) return "out of the integer range";
+  *v = (PetscInt)x;
+  return NULL;
+}
+
+/* The raw text of an option, or set = false. The key is spelt as the user typed it, prefix included. */
+static PetscErrorCode PffOptionsRaw(PetscOptionItems *obj, const char key[], char name[], size_t nlen, char buf[],
+                                    size_t len, PetscBool *set)
+{
+  PetscFunctionBeginUser;
+  buf[0] = 0;
+  PetscCall(PetscSNPrintf(name, nlen, "-%s%s", obj->prefix ? obj->prefix : "", key + 1));
+  PetscCall(PetscOptionsGetString(obj->options, obj->prefix, key, buf, len, set));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffOptionsReal_Private(PetscOptionItems *obj, const char key[], const char text[], const char man[],
+                                      PetscReal cur, PetscReal *val, PetscBool *set)
+{
+  char        name[256], buf[256];
+  PetscBool   has;
+  PetscReal   v   = 0;
+  const char *why = NULL;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffOptionsRaw(obj, key, name, sizeof(name), buf, sizeof(buf), &has));
+  if (has) why = PffParseReal(buf, buf + strlen(buf), &v);
+  PetscCheck(!why, obj->comm, PETSC_ERR_ARG_WRONG, "%s %s is invalid: %s", name, buf[0] ? buf : "(no value)", why);
+  PetscCall(PetscOptionsReal_Private(obj, key, text, man, cur, val, set));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffOptionsInt_Private(PetscOptionItems *obj, const char key[], const char text[], const char man[],
+                                     PetscInt cur, PetscInt *val, PetscBool *set, PetscInt lo)
+{
+  char        name[256], buf[256];
+  PetscBool   has;
+  PetscInt    v   = 0;
+  const char *why = NULL;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffOptionsRaw(obj, key, name, sizeof(name), buf, sizeof(buf), &has));
+  if (has) why = PffParseInt(buf, &v);
+  PetscCheck(!why, obj->comm, PETSC_ERR_ARG_WRONG, "%s %s is invalid: %s", name, buf[0] ? buf : "(no value)", why);
+  PetscCheck(!has || v >= lo, obj->comm, PETSC_ERR_ARG_OUTOFRANGE, "%s %s is invalid: must be >= %" PetscInt_FMT, name,
+             buf, lo);
+  PetscCall(PetscOptionsInt_Private(obj, key, text, man, cur, val, set, PETSC_MIN_INT, PETSC_MAX_INT));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffOptionsBool_Private(PetscOptionItems *obj, const char key[], const char text[], const char man[],
+                                      PetscBool cur, PetscBool *val, PetscBool *set)
+{
+  static const char *const words[] = {"", "true", "false", "yes", "no", "on", "off", "1", "0"};
+  char                     name[256], buf[256];
+  PetscBool                has, ok = PETSC_FALSE;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffOptionsRaw(obj, key, name, sizeof(name), buf, sizeof(buf), &has));
+  if (has)
+    for (size_t i = 0; i < PETSC_STATIC_ARRAY_LENGTH(words) && !ok; i++) PetscCall(PetscStrcasecmp(buf, words[i], &ok));
+  PetscCheck(!has || ok, obj->comm, PETSC_ERR_ARG_WRONG, "%s %s is invalid: must be true or false", name, buf);
+  PetscCall(PetscOptionsBool_Private(obj, key, text, man, cur, val, set));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffOptionsEnum_Private(PetscOptionItems *obj, const char key[], const char text[], const char man[],
+                                      const char *const *list, PetscEnum cur, PetscEnum *val, PetscBool *set)
+{
+  char      name[256], buf[256], choices[512] = "";
+  PetscBool has, ok = PETSC_FALSE;
+  PetscInt  n = 0;
+
+  PetscFunctionBeginUser;
+  while (list[n]) n++;
+  PetscCheck(n > 2, PETSC_COMM_SELF, PETSC_ERR_PLIB, "enum list of %s is malformed", key);
+  n -= 2; /* the names, then the type name and the prefix (and NULL) */
+  PetscCall(PffOptionsRaw(obj, key, name, sizeof(name), buf, sizeof(buf), &has));
+  for (PetscInt i = 0; i < n && has && !ok; i++) PetscCall(PetscStrcasecmp(buf, list[i], &ok));
+  if (has && !ok) {
+    for (PetscInt i = 0; i < n; i++) {
+      PetscCall(PetscStrlcat(choices, i ? ", " : "", sizeof(choices)));
+      PetscCall(PetscStrlcat(choices, list[i], sizeof(choices)));
+    }
+    SETERRQ(obj->comm, PETSC_ERR_ARG_UNKNOWN_TYPE, "%s %s is invalid: must be one of %s", name,
+            buf[0] ? buf : "(no value)", choices);
+  }
+  PetscCall(PetscOptionsEnum_Private(obj, key, text, man, list, cur, val, set));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Checks a comma-separated list: at most *n entries, each parsed by the caller's kind. */
+static PetscErrorCode PffOptionsCheckList(PetscOptionItems *obj, const char key[], PetscInt nmax, PetscBool integer)
+{
+  char        name[256], buf[1024];
+  PetscBool   has;
+  PetscInt    count = 0;
+  const char *why   = NULL;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffOptionsRaw(obj, key, name, sizeof(name), buf, sizeof(buf), &has));
+  if (!has) PetscFunctionReturn(PETSC_SUCCESS);
+  for (const char *s = buf; !why;) {
+    const char *comma = strchr(s, ',');
+    const char *end   = comma ? comma : s + strlen(s);
+    char        tok[128];
+    PetscReal   r;
+    PetscInt    i;
+
+    count++;
+    if (integer) {
+      size_t n = PetscMin((size_t)(end - s), sizeof(tok) - 1);
+      memcpy(tok, s, n);
+      tok[n] = 0;
+      why    = PffParseInt(tok, &i);
+    } else
+      why = PffParseReal(s, end, &r);
+    if (!comma) break;
+    s = comma + 1;
+  }
+  PetscCheck(!why, obj->comm, PETSC_ERR_ARG_WRONG, "%s %s is invalid: %s", name, buf[0] ? buf : "(no value)", why);
+  PetscCheck(count <= nmax, obj->comm, PETSC_ERR_ARG_SIZ, "%s %s is invalid: takes %s%" PetscInt_FMT " values", name,
+             buf, nmax == 3 ? "" : "at most ", nmax);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffOptionsRealArray_Private(PetscOptionItems *obj, const char key[], const char text[], const char man[],
+                                           PetscReal val[], PetscInt *n, PetscBool *set)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffOptionsCheckList(obj, key, *n, PETSC_FALSE));
+  PetscCall(PetscOptionsRealArray_Private(obj, key, text, man, val, n, set));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffOptionsIntArray_Private(PetscOptionItems *obj, const char key[], const char text[], const char man[],
+                                          PetscInt val[], PetscInt *n, PetscBool *set)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffOptionsCheckList(obj, key, *n, PETSC_TRUE));
+  PetscCall(PetscOptionsIntArray_Private(obj, key, text, man, val, n, set));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Reads key from the global database, if set, as a real or an integer; fails naming the key. */
+static PetscErrorCode PffOptionsGetNumber(MPI_Comm comm, const char key[], PetscBool integer, char buf[], size_t len,
+                                          PetscReal *r, PetscInt *i, PetscBool *has)
+{
+  const char *why;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscOptionsGetString(NULL, NULL, key, buf, len, has));
+  if (!*has) PetscFunctionReturn(PETSC_SUCCESS);
+  why = integer ? PffParseInt(buf, i) : PffParseReal(buf, buf + strlen(buf), r);
+  PetscCheck(!why, comm, PETSC_ERR_ARG_WRONG, "%s %s is invalid: %s", key, buf[0] ? buf : "(no value)", why);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffOptionsCheckReal(MPI_Comm comm, const char key[], PetscReal lo, PetscReal hi, const char range[])
+{
+  char      buf[256];
+  PetscBool has;
+  PetscReal v = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffOptionsGetNumber(comm, key, PETSC_FALSE, buf, sizeof(buf), &v, NULL, &has));
+  PetscCheck(!has || (v > lo && v < hi), comm, PETSC_ERR_ARG_OUTOFRANGE, "%s %s is invalid: must be %s", key, buf,
+             range);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffOptionsCheckInt(MPI_Comm comm, const char key[], PetscInt lo, PetscInt hi)
+{
+  char      buf[256];
+  PetscBool has;
+  PetscInt  v = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffOptionsGetNumber(comm, key, PETSC_TRUE, buf, sizeof(buf), NULL, &v, &has));
+  PetscCheck(!has || (v >= lo && v <= hi), comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "%s %s is invalid: must be in [%" PetscInt_FMT ", %" PetscInt_FMT "]", key, buf, lo, hi);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
 
 PetscErrorCode PffOptionsCheckUnused(MPI_Comm comm)
 {

@@ -203,15 +203,21 @@ PetscErrorCode PffFlowEscaped_Private(PffFlow f, PetscInt64 *bubbles, PetscInt64
 PetscErrorCode PffFlowMaxParticleSpeed_Private(PffFlow f, PetscReal *umax)
 {
   PffParticleArrays a;
-  PetscReal         m = 0;
+  PetscReal         m[2] = {0, 0}; /* max |v|^2, and 1 where a velocity is not finite (a max drops NaNs) */
 
   PetscFunctionBeginUser;
   PetscCall(PffParticlesGetArrays(f->part, &a));
   for (PetscInt i = 0; i < a.n; i++) {
     const PetscReal s = a.v[3 * i] * a.v[3 * i] + a.v[3 * i + 1] * a.v[3 * i + 1] + a.v[3 * i + 2] * a.v[3 * i + 2];
-    m                 = PetscMax(m, s);
+    m[0]              = PetscMax(m[0], s);
+    if (!PetscIsNormalReal(s + 1)) m[1] = 1;
   }
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &m, 1, MPIU_REAL, MPI_MAX, f->comm));
-  *umax = PetscSqrtReal(m);
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, m, 2, MPIU_REAL, MPI_MAX, f->comm));
+  PetscCheck(m[1] == 0 && PetscIsNormalReal(m[0] + 1), f->comm, PETSC_ERR_NOT_CONVERGED,
+             "step %" PetscInt_FMT
+             " (t = %g): a particle velocity is not finite at the start of the step (the run went "
+             "unstable): lower -flow_cfl or -flow_dt_max",
+             f->step + 1, (double)f->t);
+  *umax = PetscSqrtReal(m[0]);
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -44,41 +44,40 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
   PetscFunctionBeginUser;
   PetscOptionsBegin(f->comm, NULL, "PF-FLIP flow", "PffFlow");
   PetscCall(
-      PetscOptionsReal("-rho_liquid", "Liquid density rho_l", "PffFlowSetFromOptions", f->rho[0], &f->rho[0], NULL));
-  PetscCall(PetscOptionsReal("-rho_gas", "Gas density rho_g", "PffFlowSetFromOptions", f->rho[1], &f->rho[1], NULL));
-  PetscCall(PetscOptionsReal("-nu_liquid", "Liquid kinematic viscosity (0: none, FLIP ratio -flow_flip)",
-                             "PffFlowSetFromOptions", f->nu[0], &f->nu[0], NULL));
-  PetscCall(PetscOptionsReal("-nu_gas", "Gas kinematic viscosity (0: none)", "PffFlowSetFromOptions", f->nu[1],
-                             &f->nu[1], NULL));
-  PetscCall(
-      PetscOptionsRealArray("-gravity", "Gravity vector gx,gy,gz", "PffFlowSetFromOptions", f->gravity, &ng, &set));
+      PffOptionsReal("-rho_liquid", "Liquid density rho_l", "PffFlowSetFromOptions", f->rho[0], &f->rho[0], NULL));
+  PetscCall(PffOptionsReal("-rho_gas", "Gas density rho_g", "PffFlowSetFromOptions", f->rho[1], &f->rho[1], NULL));
+  PetscCall(PffOptionsReal("-nu_liquid", "Liquid kinematic viscosity (0: none, FLIP ratio -flow_flip)",
+                           "PffFlowSetFromOptions", f->nu[0], &f->nu[0], NULL));
+  PetscCall(PffOptionsReal("-nu_gas", "Gas kinematic viscosity (0: none)", "PffFlowSetFromOptions", f->nu[1], &f->nu[1],
+                           NULL));
+  PetscCall(PffOptionsRealArray("-gravity", "Gravity vector gx,gy,gz", "PffFlowSetFromOptions", f->gravity, &ng, &set));
   PetscCheck(!set || ng == 3, f->comm, PETSC_ERR_ARG_SIZ, "-gravity takes 3 values gx,gy,gz; got %" PetscInt_FMT, ng);
-  PetscCall(PetscOptionsReal("-flow_cfl", "CFL number of the time step (0, 4]", "PffFlowSetFromOptions", f->cfl,
-                             &f->cfl, NULL));
-  PetscCall(PetscOptionsReal("-flow_dt_max", "Largest time step", "PffFlowSetFromOptions", f->dtMax, &f->dtMax, NULL));
-  PetscCall(PetscOptionsReal("-flow_alpha_phi", "Phase-field stiffness alpha_phi (Eq. 7)", "PffFlowSetFromOptions",
-                             f->alphaPhi, &f->alphaPhi, NULL));
-  PetscCall(PetscOptionsReal("-flow_delta_phi", "Escaped-particle margin delta_phi (Sec. 3.4)", "PffFlowSetFromOptions",
-                             f->deltaPhi, &f->deltaPhi, NULL));
-  PetscCall(PetscOptionsReal("-flow_flip", "FLIP ratio alpha where no viscosity is given", "PffFlowSetFromOptions",
-                             f->flip, &f->flip, NULL));
-  PetscCall(PetscOptionsBool("-flow_pressure", "Solve the pressure projection", "PffFlowSetFromOptions", f->usePressure,
-                             &f->usePressure, NULL));
+  PetscCall(PffOptionsReal("-flow_cfl", "CFL number of the time step (0, 4]", "PffFlowSetFromOptions", f->cfl, &f->cfl,
+                           NULL));
+  PetscCall(PffOptionsReal("-flow_dt_max", "Largest time step", "PffFlowSetFromOptions", f->dtMax, &f->dtMax, NULL));
+  PetscCall(PffOptionsReal("-flow_alpha_phi", "Phase-field stiffness alpha_phi (Eq. 7)", "PffFlowSetFromOptions",
+                           f->alphaPhi, &f->alphaPhi, NULL));
+  PetscCall(PffOptionsReal("-flow_delta_phi", "Escaped-particle margin delta_phi (Sec. 3.4)", "PffFlowSetFromOptions",
+                           f->deltaPhi, &f->deltaPhi, NULL));
+  PetscCall(PffOptionsReal("-flow_flip", "FLIP ratio alpha where no viscosity is given", "PffFlowSetFromOptions",
+                           f->flip, &f->flip, NULL));
+  PetscCall(PffOptionsBool("-flow_pressure", "Solve the pressure projection", "PffFlowSetFromOptions", f->usePressure,
+                           &f->usePressure, NULL));
   PetscCall(
-      PetscOptionsReal("-flow_volume_correction",
-                       "Volume correction: share kappa of each cell's particle-volume error removed per step (0: off)",
-                       "PffFlowSetFromOptions", f->volCorr, &f->volCorr, NULL));
-  PetscCall(PetscOptionsReal("-flow_volume_correction_max_displacement",
-                             "Largest volume-correction displacement of a face per step, in cells",
-                             "PffFlowSetFromOptions", f->volCorrMaxDisp, &f->volCorrMaxDisp, NULL));
-  PetscCall(PetscOptionsReal("-flow_volume_correction_rtol", "Relative tolerance of the volume-correction solve",
-                             "PffFlowSetFromOptions", f->volCorrRtol, &f->volCorrRtol, NULL));
-  PetscCall(PetscOptionsBool("-flow_delete_bubbles", "Delete escaped air particles deep in liquid (Sec. 3.4)",
-                             "PffFlowSetFromOptions", f->deleteBubbles, &f->deleteBubbles, NULL));
-  PetscCall(PetscOptionsInt("-flow_extrapolate_layers",
-                            "Face layers the liquid velocity is extrapolated into the air for liquid particles (Sec. "
-                            "3.7; 0: off)",
-                            "PffFlowSetFromOptions", f->extrapLayers, &f->extrapLayers, NULL));
+      PffOptionsReal("-flow_volume_correction",
+                     "Volume correction: share kappa of each cell's particle-volume error removed per step (0: off)",
+                     "PffFlowSetFromOptions", f->volCorr, &f->volCorr, NULL));
+  PetscCall(PffOptionsReal("-flow_volume_correction_max_displacement",
+                           "Largest volume-correction displacement of a face per step, in cells",
+                           "PffFlowSetFromOptions", f->volCorrMaxDisp, &f->volCorrMaxDisp, NULL));
+  PetscCall(PffOptionsReal("-flow_volume_correction_rtol", "Relative tolerance of the volume-correction solve",
+                           "PffFlowSetFromOptions", f->volCorrRtol, &f->volCorrRtol, NULL));
+  PetscCall(PffOptionsBool("-flow_delete_bubbles", "Delete escaped air particles deep in liquid (Sec. 3.4)",
+                           "PffFlowSetFromOptions", f->deleteBubbles, &f->deleteBubbles, NULL));
+  PetscCall(PffOptionsInt("-flow_extrapolate_layers",
+                          "Face layers the liquid velocity is extrapolated into the air for liquid particles (Sec. "
+                          "3.7; 0: off)",
+                          "PffFlowSetFromOptions", f->extrapLayers, &f->extrapLayers, NULL));
   PetscOptionsEnd();
   for (int t = 0; t < PFF_PARTICLE_NTYPES; t++) {
     const char *key = t == PFF_PARTICLE_LIQUID ? "liquid" : "gas";

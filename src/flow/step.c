@@ -211,6 +211,8 @@ PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
     if (f->usePressure) {
       PetscCall(PffPressureSetCoefficients(f->press, f->chBeta, f->chOpen));
       PetscCall(PffPressureProject(f->press, f->chU, dt, -1, f->chP, &st->pressure));
+      PetscCall(PffPressureCheckSolve(f->press, &st->pressure, "Pressure", f->step + 1, f->t,
+                                      "raise -pressure_ksp_max_it or loosen -pressure_ksp_rtol"));
     }
     PetscCall(PffGridHaloBegin(f->grid, f->chU));
     PetscCall(PffGridHaloEnd(f->grid, f->chU));

@@ -137,6 +137,8 @@ static PetscErrorCode PffParseAxes(MPI_Comm comm, const char key[], const char l
     if (*c == ',' || *c == ' ') continue;
     PetscCheck(*c == 'x' || *c == 'y' || *c == 'z', comm, PETSC_ERR_ARG_OUTOFRANGE,
                "%s \"%s\" is invalid: give a comma-separated list of the axes x, y, z (or none)", key, list);
+    PetscCheck(!axes[*c - 'x'], comm, PETSC_ERR_ARG_OUTOFRANGE, "%s \"%s\" is invalid: axis %c is listed twice", key,
+               list, *c);
     axes[*c - 'x'] = PETSC_TRUE;
   }
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -158,25 +160,25 @@ PetscErrorCode PffGridSetFromOptions(PffGrid g)
     normal[d] = g->rnormal[d];
   }
   PetscOptionsBegin(g->comm, NULL, "Multiresolution sparse block grid (MSBG)", "PffGrid");
-  PetscCall(PetscOptionsIntArray("-grid_cells", "Finest-level cells per axis nx,ny,nz (multiples of the block size)",
-                                 "PffGridSetCells", cells, &ncells, &set));
+  PetscCall(PffOptionsIntArray("-grid_cells", "Finest-level cells per axis nx,ny,nz (multiples of the block size)",
+                               "PffGridSetCells", cells, &ncells, &set));
   if (set) {
     PetscCheck(ncells == 3 || ncells == 1, g->comm, PETSC_ERR_ARG_SIZ,
                "-grid_cells takes 3 values nx,ny,nz (or 1 for a cube); got %" PetscInt_FMT, ncells);
     if (ncells == 1) cells[1] = cells[2] = cells[0];
     PetscCall(PffGridSetCells(g, cells));
   }
-  PetscCall(PetscOptionsInt("-grid_block_size", "Cells per block axis at level 0, a power of two in [4, 64]",
-                            "PffGridSetBlockSize", n0, &n0, &set));
+  PetscCall(PffOptionsInt("-grid_block_size", "Cells per block axis at level 0, a power of two in [4, 64]",
+                          "PffGridSetBlockSize", n0, &n0, &set));
   if (set) PetscCall(PffGridSetBlockSize(g, n0));
-  PetscCall(PetscOptionsInt("-grid_levels", "Number of resolution levels, at most log2(block size) + 1",
-                            "PffGridSetLevels", nlevels, &nlevels, &set));
+  PetscCall(PffOptionsInt("-grid_levels", "Number of resolution levels, at most log2(block size) + 1",
+                          "PffGridSetLevels", nlevels, &nlevels, &set));
   if (set) PetscCall(PffGridSetLevels(g, nlevels));
-  PetscCall(PetscOptionsRealArray("-grid_origin", "Lower corner of the domain x,y,z", "PffGridSetDomain", origin,
-                                  &norigin, &set));
+  PetscCall(PffOptionsRealArray("-grid_origin", "Lower corner of the domain x,y,z", "PffGridSetDomain", origin,
+                                &norigin, &set));
   PetscCheck(!set || norigin == 3, g->comm, PETSC_ERR_ARG_SIZ, "-grid_origin takes 3 values x,y,z");
-  PetscCall(PetscOptionsReal("-grid_h", "Finest cell size (default 1/nx)", "PffGridSetDomain", h0 > 0 ? h0 : 0.0, &h0,
-                             &hset));
+  PetscCall(
+      PffOptionsReal("-grid_h", "Finest cell size (default 1/nx)", "PffGridSetDomain", h0 > 0 ? h0 : 0.0, &h0, &hset));
   if (set || hset) {
     if (!hset && g->h0 <= 0) h0 = 1.0 / (PetscReal)g->cells[0];
     PetscCall(PffGridSetDomain(g, origin, h0));
@@ -188,22 +190,21 @@ PetscErrorCode PffGridSetFromOptions(PffGrid g)
     PetscCall(PffParseAxes(g->comm, "-grid_periodic", periodic, axes));
     PetscCall(PffGridSetPeriodic(g, axes));
   }
-  PetscCall(PetscOptionsEnum("-partition_type", "Block partitioner", "PffGridSetPartitionType", PffPartitionTypes,
-                             ptype, &ptype, NULL));
+  PetscCall(PffOptionsEnum("-partition_type", "Block partitioner", "PffGridSetPartitionType", PffPartitionTypes, ptype,
+                           &ptype, NULL));
   g->ptype = (PffPartitionType)ptype;
-  PetscCall(PetscOptionsEnum("-grid_refine", "Static refinement: level grows with the distance to a plane or sphere",
-                             "PffGridSetRefinementFunction", PffRefineTypes, rtype, &rtype, NULL));
+  PetscCall(PffOptionsEnum("-grid_refine", "Static refinement: level grows with the distance to a plane or sphere",
+                           "PffGridSetRefinementFunction", PffRefineTypes, rtype, &rtype, NULL));
   g->rtype = (PffRefineType)rtype;
-  PetscCall(PetscOptionsRealArray("-grid_refine_point", "Point on the refinement plane, or sphere centre", NULL, point,
-                                  &npoint, &set));
+  PetscCall(PffOptionsRealArray("-grid_refine_point", "Point on the refinement plane, or sphere centre", NULL, point,
+                                &npoint, &set));
   PetscCheck(!set || npoint == 3, g->comm, PETSC_ERR_ARG_SIZ, "-grid_refine_point takes 3 values x,y,z");
-  PetscCall(
-      PetscOptionsRealArray("-grid_refine_normal", "Normal of the refinement plane", NULL, normal, &nnormal, &set));
+  PetscCall(PffOptionsRealArray("-grid_refine_normal", "Normal of the refinement plane", NULL, normal, &nnormal, &set));
   PetscCheck(!set || nnormal == 3, g->comm, PETSC_ERR_ARG_SIZ, "-grid_refine_normal takes 3 values x,y,z");
   PetscCall(
-      PetscOptionsReal("-grid_refine_radius", "Radius of the refinement sphere", NULL, g->rradius, &g->rradius, NULL));
-  PetscCall(PetscOptionsReal("-grid_refine_band", "Width of each level band, in block sizes", NULL, g->rband, &g->rband,
-                             NULL));
+      PffOptionsReal("-grid_refine_radius", "Radius of the refinement sphere", NULL, g->rradius, &g->rradius, NULL));
+  PetscCall(
+      PffOptionsReal("-grid_refine_band", "Width of each level band, in block sizes", NULL, g->rband, &g->rband, NULL));
   PetscOptionsEnd();
   PetscCheck(g->rband > 0, g->comm, PETSC_ERR_ARG_OUTOFRANGE, "-grid_refine_band %g is invalid: must be positive",
              (double)g->rband);
@@ -238,9 +239,12 @@ static PetscErrorCode PffGridValidate(PffGrid g)
                "-grid_cells: %c has more than 2^21 blocks (the Morton key limit)", 'x' + d);
   }
   const PetscInt64 nblocks = (PetscInt64)(g->cells[0] / g->n0) * (g->cells[1] / g->n0) * (g->cells[2] / g->n0);
-  PetscCheck(nblocks <= PETSC_MAX_INT / 2, g->comm, PETSC_ERR_ARG_OUTOFRANGE,
-             "-grid_cells and -grid_block_size give %" PetscInt64_FMT " blocks; the replicated raster holds at most %d",
-             nblocks, PETSC_MAX_INT / 2);
+  /* every rank holds the whole raster (a few words per block): 2^24 blocks is 16.7 G cells of 16^3 blocks */
+  PetscCheck(nblocks <= PFF_GRID_MAX_RASTER_BLOCKS, g->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-grid_cells %" PetscInt_FMT ",%" PetscInt_FMT ",%" PetscInt_FMT
+             " is invalid with -grid_block_size %" PetscInt_FMT ": %" PetscInt64_FMT
+             " blocks, but the replicated raster holds at most %d (use larger blocks)",
+             g->cells[0], g->cells[1], g->cells[2], g->n0, nblocks, PFF_GRID_MAX_RASTER_BLOCKS);
   if (g->h0 <= 0) g->h0 = 1.0 / (PetscReal)g->cells[0];
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -64,6 +64,18 @@ PetscErrorCode PffIOWriteParticles_Private(PffParticles particles, MPI_Comm comm
 
   PffCallHDF5(group = H5Gcreate2(file, "particles", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT));
   PetscCall(PffH5WriteAttribute_Private(group, "count", H5T_STD_I64LE, H5T_NATIVE_INT64, 0, &total));
+  {
+    /* each rank's row count: a restart on as many ranks reads back each rank's own rows in its own
+       order, so that its sums run in the same order as the uninterrupted run's (bit-exact) */
+    PetscMPIInt size;
+    PetscInt64 *counts;
+    PetscCallMPI(MPI_Comm_size(comm, &size));
+    PetscCall(PetscMalloc1(size, &counts));
+    PetscCallMPI(MPI_Allgather(&n, 1, MPIU_INT64, counts, 1, MPIU_INT64, comm));
+    PetscCall(
+        PffH5WriteAttribute_Private(group, "rank_counts", H5T_STD_I64LE, H5T_NATIVE_INT64, (hsize_t)size, counts));
+    PetscCall(PetscFree(counts));
+  }
   for (int k = 0; k < 2; k++) {
     const char      *name = k == 0 ? "x" : "v";
     const PetscReal *src  = k == 0 ? a.x : a.v;
@@ -172,13 +184,26 @@ PetscErrorCode PffIOReadParticles_Private(PffParticles particles, PffGrid grid, 
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
   PetscCallMPI(MPI_Comm_size(comm, &size));
   PetscCall(PffGridGetSizes(grid, NULL, &nlevels, NULL, NULL, NULL));
+  PffCallHDF5(group = H5Gopen2(file, "particles", H5P_DEFAULT));
   {
     const PetscInt64 base = count / size, rem = count % size;
+    PetscInt64      *counts, sum              = 0;
+    PetscBool        found = PETSC_FALSE;
+
     lo = base * rank + PetscMin((PetscInt64)rank, rem);
     PetscCall(PetscIntCast(base + (rank < rem ? 1 : 0), &n));
+    /* written on as many ranks: each rank takes back its own rows (see PffIOWriteParticles_Private) */
+    PetscCall(PetscMalloc1(size, &counts));
+    PetscCall(PffH5ReadAttribute_Private(group, "rank_counts", H5T_NATIVE_INT64, (hsize_t)size, counts, &found));
+    for (PetscMPIInt r = 0; found && r < size; r++) sum += counts[r];
+    if (found && sum == count) {
+      lo = 0;
+      for (PetscMPIInt r = 0; r < rank; r++) lo += counts[r];
+      PetscCall(PetscIntCast(counts[rank], &n));
+    }
+    PetscCall(PetscFree(counts));
   }
   PetscCall(PetscMalloc6(3 * n + 1, &x, 3 * n + 1, &v, n + 1, &id, n + 1, &type, n + 1, &level, n + 1, &flags));
-  PffCallHDF5(group = H5Gopen2(file, "particles", H5P_DEFAULT));
   PetscCall(PffIOReadRows(group, "x", PFF_H5T_NATIVE_PETSCREAL, 3, (hsize_t)lo, (hsize_t)n, dxpl, x));
   PetscCall(PffIOReadRows(group, "v", PFF_H5T_NATIVE_PETSCREAL, 3, (hsize_t)lo, (hsize_t)n, dxpl, v));
   PetscCall(PffIOReadRows(group, "id", H5T_NATIVE_UINT64, 0, (hsize_t)lo, (hsize_t)n, dxpl, id));

@@ -104,29 +104,65 @@ static PetscErrorCode PffIOCompareRaster(PffGrid grid, hid_t file, const char pa
                                          size_t len)
 {
   const PetscInt *glevel;
-  PetscInt       *flevel, fnb[3], nb[3], n0;
-  int             fn0 = 0;
-  PetscBool       found;
+  PetscInt       *flevel, fnb[3], nb[3], n0, nl;
+  PetscReal       org[3], h0;
+  PetscBool       per[3];
+  int             fn0 = 0, fnl = 0, fper[3] = {0, 0, 0};
+  double          fh0 = 0, forg[3] = {0, 0, 0};
+  PetscBool       found, gfound[4];
   hid_t           group;
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetRaster(grid, nb, &glevel, NULL));
-  PetscCall(PffGridGetSizes(grid, &n0, NULL, NULL, NULL, NULL));
+  PetscCall(PffGridGetSizes(grid, &n0, &nl, org, &h0, per));
   PetscCall(PffIOReadRaster(file, path, dxpl, fnb, &flevel));
   PffCallHDF5(group = H5Gopen2(file, "grid", H5P_DEFAULT));
   PetscCall(PffH5ReadAttribute_Private(group, "block_size", H5T_NATIVE_INT, 0, &fn0, &found));
+  /* the geometry a frame's fields live on: every difference is listed, so that one run shows them all */
+  PetscCall(PffH5ReadAttribute_Private(group, "levels", H5T_NATIVE_INT, 0, &fnl, &gfound[0]));
+  PetscCall(PffH5ReadAttribute_Private(group, "h0", H5T_NATIVE_DOUBLE, 0, &fh0, &gfound[1]));
+  PetscCall(PffH5ReadAttribute_Private(group, "origin", H5T_NATIVE_DOUBLE, 3, forg, &gfound[2]));
+  PetscCall(PffH5ReadAttribute_Private(group, "periodic", H5T_NATIVE_INT, 3, fper, &gfound[3]));
   PffCallHDF5(H5Gclose(group));
+  {
+    char diff[512] = "";
+    if (gfound[0] && fnl != nl)
+      PetscCall(PetscSNPrintf(diff + strlen(diff), sizeof(diff) - strlen(diff),
+                              "; -grid_levels %d in the file, %" PetscInt_FMT " now", fnl, nl));
+    if (gfound[1] && PetscAbsReal((PetscReal)fh0 - h0) > 1e-12 * PetscAbsReal(h0))
+      PetscCall(PetscSNPrintf(diff + strlen(diff), sizeof(diff) - strlen(diff),
+                              "; -grid_h %.15g in the file, %.15g now", fh0, (double)h0));
+    if (gfound[2])
+      for (int d = 0; d < 3; d++)
+        if (PetscAbsReal((PetscReal)forg[d] - org[d]) > 1e-12 * PetscMax(1, h0 * nb[d] * n0)) {
+          PetscCall(PetscSNPrintf(diff + strlen(diff), sizeof(diff) - strlen(diff),
+                                  "; -grid_origin %g,%g,%g in the file, %g,%g,%g now", forg[0], forg[1], forg[2],
+                                  (double)org[0], (double)org[1], (double)org[2]));
+          break;
+        }
+    if (gfound[3] &&
+        ((fper[0] != 0) != (per[0] != 0) || (fper[1] != 0) != (per[1] != 0) || (fper[2] != 0) != (per[2] != 0)))
+      PetscCall(PetscSNPrintf(
+          diff + strlen(diff), sizeof(diff) - strlen(diff), "; -grid_periodic %s%s%s%s in the file, %s%s%s%s now",
+          fper[0] ? "x" : "", fper[1] ? "y" : "", fper[2] ? "z" : "", fper[0] || fper[1] || fper[2] ? "" : "none",
+          per[0] ? "x" : "", per[1] ? "y" : "", per[2] ? "z" : "", per[0] || per[1] || per[2] ? "" : "none"));
+    if (found && fn0 != n0)
+      PetscCall(PetscSNPrintf(diff + strlen(diff), sizeof(diff) - strlen(diff),
+                              "; -grid_block_size %d in the file, %" PetscInt_FMT " now", fn0, n0));
+    if (fnb[0] * fn0 != nb[0] * n0 || fnb[1] * fn0 != nb[1] * n0 || fnb[2] * fn0 != nb[2] * n0)
+      PetscCall(PetscSNPrintf(diff + strlen(diff), sizeof(diff) - strlen(diff),
+                              "; -grid_cells %" PetscInt_FMT ",%" PetscInt_FMT ",%" PetscInt_FMT
+                              " in the file, %" PetscInt_FMT ",%" PetscInt_FMT ",%" PetscInt_FMT " now",
+                              fnb[0] * fn0, fnb[1] * fn0, fnb[2] * fn0, nb[0] * n0, nb[1] * n0, nb[2] * n0));
+    if (diff[0]) {
+      PetscCall(PetscSNPrintf(msg, len, "%s was written on another grid: %s", path, diff + 2));
+      PetscCall(PetscFree(flevel));
+      PetscFunctionReturn(PETSC_SUCCESS);
+    }
+  }
+  /* equal block sizes and cell counts give equal rasters (the differences were listed above) */
   if (!found)
     PetscCall(PetscSNPrintf(msg, len, "frame %s: /grid has no block_size attribute", path));
-  else if (fn0 != n0)
-    PetscCall(
-        PetscSNPrintf(msg, len, "frame %s: block size %d differs from -grid_block_size %" PetscInt_FMT, path, fn0, n0));
-  else if (fnb[0] != nb[0] || fnb[1] != nb[1] || fnb[2] != nb[2])
-    PetscCall(PetscSNPrintf(msg, len,
-                            "frame %s: raster of %" PetscInt_FMT "x%" PetscInt_FMT "x%" PetscInt_FMT
-                            " blocks differs from the grid's %" PetscInt_FMT "x%" PetscInt_FMT "x%" PetscInt_FMT
-                            " (-grid_cells / -grid_block_size)",
-                            path, fnb[0], fnb[1], fnb[2], nb[0], nb[1], nb[2]));
   else {
     for (PetscInt b = 0; b < nb[0] * nb[1] * nb[2]; b++) {
       if (flevel[b] == glevel[b]) continue;

@@ -38,12 +38,12 @@ PetscErrorCode PffParticlesSetFromOptions(PffParticles p)
 
   PetscFunctionBeginUser;
   PetscOptionsBegin(p->comm, NULL, "FLIP particles", "PffParticles");
-  PetscCall(PetscOptionsReal("-particles_jitter", "Jitter of the seeding lattice as a fraction of the sub-cell spacing",
-                             "PffParticlesSeed", p->jitter, &p->jitter, NULL));
-  PetscCall(PetscOptionsInt("-particles_seed", "Key of the counter-based random number generator", "PffParticlesSeed",
-                            seed, &seed, NULL));
-  PetscCall(PetscOptionsReal("-particles_substep_cfl", "Cells a particle may move per RK3 sub-step",
-                             "PffParticlesAdvect", p->substepCfl, &p->substepCfl, NULL));
+  PetscCall(PffOptionsReal("-particles_jitter", "Jitter of the seeding lattice as a fraction of the sub-cell spacing",
+                           "PffParticlesSeed", p->jitter, &p->jitter, NULL));
+  PetscCall(PffOptionsInt("-particles_seed", "Key of the counter-based random number generator", "PffParticlesSeed",
+                          seed, &seed, NULL));
+  PetscCall(PffOptionsReal("-particles_substep_cfl", "Cells a particle may move per RK3 sub-step", "PffParticlesAdvect",
+                           p->substepCfl, &p->substepCfl, NULL));
   PetscOptionsEnd();
   PetscCheck(p->jitter >= 0 && p->jitter <= 1, p->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-particles_jitter %g is invalid: must be in [0, 1]", (double)p->jitter);

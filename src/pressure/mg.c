@@ -297,36 +297,36 @@ PetscErrorCode PffPressureMGSetFromOptions_Private(PC pc)
              "pffmg needs the grid: use it through PffPressure (-pressure_pc_type pffmg)");
   PetscCall(PCGetOptionsPrefix(pc, &prefix));
   PetscOptionsBegin(mg->comm, prefix, "Adaptive multigrid preconditioner (pffmg)", "PC");
-  PetscCall(PetscOptionsEnum(
+  PetscCall(PffOptionsEnum(
       "-pffmg_smoother", "pffmg smoother: two-stage red-black hybrid Gauss-Seidel or weighted Jacobi", "PffPressureMG",
       PffMGSmootherTypes, (PetscEnum)mg->opt.smoother, (PetscEnum *)&mg->opt.smoother, NULL));
-  PetscCall(PetscOptionsBool("-pffmg_adaptive", "Adaptive relaxation (Algorithm 2) instead of fixed sweeps",
-                             "PffPressureMG", mg->opt.adaptive, &mg->opt.adaptive, NULL));
-  PetscCall(PetscOptionsBool("-pffmg_block_sweeps", "Repeat block-local sweeps until the update falls by 1/3",
-                             "PffPressureMG", mg->opt.blockSweeps, &mg->opt.blockSweeps, NULL));
-  PetscCall(PetscOptionsBoundedInt("-pffmg_block_sweeps_max", "Most block-local sweeps per visit (k_max)",
-                                   "PffPressureMG", mg->opt.blockSweepsMax, &mg->opt.blockSweepsMax, NULL, 1));
-  PetscCall(PetscOptionsBoundedInt("-pffmg_adaptive_steps", "Adaptive relaxation steps per smoothing (N_iter,max)",
-                                   "PffPressureMG", mg->opt.adaptiveSteps, &mg->opt.adaptiveSteps, NULL, 1));
-  PetscCall(PetscOptionsBoundedInt("-pffmg_sweeps", "Pre- and post-sweeps when adaptive relaxation is off",
-                                   "PffPressureMG", mg->opt.sweeps, &mg->opt.sweeps, NULL, 1));
-  PetscCall(PetscOptionsReal("-pffmg_omega", "Relaxation weight omega (6/7 is optimal in 3D)", "PffPressureMG",
-                             mg->opt.omega, &mg->opt.omega, NULL));
-  PetscCall(PetscOptionsReal("-pffmg_theta_sigmas", "theta = 10^(mean + this x sd) of log10 block residual maxima",
-                             "PffPressureMG", mg->opt.thetaSigmas, &mg->opt.thetaSigmas, NULL));
-  PetscCall(PetscOptionsBoundedInt("-pffmg_max_levels", "Most multigrid levels (the last is solved directly)",
-                                   "PffPressureMG", mg->opt.maxLevels, &mg->opt.maxLevels, NULL, 1));
-  PetscCall(PetscOptionsReal("-pffmg_correction",
-                             "Scale of the coarse-grid correction (piecewise-constant Galerkin is twice too stiff)",
-                             "PffPressureMG", mg->opt.correction, &mg->opt.correction, NULL));
-  PetscCall(PetscOptionsBool("-pffmg_rescale",
-                             "Coarse coefficients consistent with the coarse discretisation (false: plain P^T A P)",
-                             "PffPressureMG", mg->opt.rescale, &mg->opt.rescale, NULL));
-  PetscCall(PetscOptionsBoundedInt("-pffmg_kcycle", "Flexible-CG steps per coarse correction (K-cycle); 0: V-cycle",
-                                   "PffPressureMG", mg->opt.kcycleIts, &mg->opt.kcycleIts, NULL, 0));
-  PetscCall(PetscOptionsBoundedInt("-pffmg_coarse_max",
-                                   "Uniform coarse levels below the block raster until at most this many cells",
-                                   "PffPressureMG", mg->opt.coarseMax, &mg->opt.coarseMax, NULL, 1));
+  PetscCall(PffOptionsBool("-pffmg_adaptive", "Adaptive relaxation (Algorithm 2) instead of fixed sweeps",
+                           "PffPressureMG", mg->opt.adaptive, &mg->opt.adaptive, NULL));
+  PetscCall(PffOptionsBool("-pffmg_block_sweeps", "Repeat block-local sweeps until the update falls by 1/3",
+                           "PffPressureMG", mg->opt.blockSweeps, &mg->opt.blockSweeps, NULL));
+  PetscCall(PffOptionsBoundedInt("-pffmg_block_sweeps_max", "Most block-local sweeps per visit (k_max)",
+                                 "PffPressureMG", mg->opt.blockSweepsMax, &mg->opt.blockSweepsMax, NULL, 1));
+  PetscCall(PffOptionsBoundedInt("-pffmg_adaptive_steps", "Adaptive relaxation steps per smoothing (N_iter,max)",
+                                 "PffPressureMG", mg->opt.adaptiveSteps, &mg->opt.adaptiveSteps, NULL, 1));
+  PetscCall(PffOptionsBoundedInt("-pffmg_sweeps", "Pre- and post-sweeps when adaptive relaxation is off",
+                                 "PffPressureMG", mg->opt.sweeps, &mg->opt.sweeps, NULL, 1));
+  PetscCall(PffOptionsReal("-pffmg_omega", "Relaxation weight omega (6/7 is optimal in 3D)", "PffPressureMG",
+                           mg->opt.omega, &mg->opt.omega, NULL));
+  PetscCall(PffOptionsReal("-pffmg_theta_sigmas", "theta = 10^(mean + this x sd) of log10 block residual maxima",
+                           "PffPressureMG", mg->opt.thetaSigmas, &mg->opt.thetaSigmas, NULL));
+  PetscCall(PffOptionsBoundedInt("-pffmg_max_levels", "Most multigrid levels (the last is solved directly)",
+                                 "PffPressureMG", mg->opt.maxLevels, &mg->opt.maxLevels, NULL, 1));
+  PetscCall(PffOptionsReal("-pffmg_correction",
+                           "Scale of the coarse-grid correction (piecewise-constant Galerkin is twice too stiff)",
+                           "PffPressureMG", mg->opt.correction, &mg->opt.correction, NULL));
+  PetscCall(PffOptionsBool("-pffmg_rescale",
+                           "Coarse coefficients consistent with the coarse discretisation (false: plain P^T A P)",
+                           "PffPressureMG", mg->opt.rescale, &mg->opt.rescale, NULL));
+  PetscCall(PffOptionsBoundedInt("-pffmg_kcycle", "Flexible-CG steps per coarse correction (K-cycle); 0: V-cycle",
+                                 "PffPressureMG", mg->opt.kcycleIts, &mg->opt.kcycleIts, NULL, 0));
+  PetscCall(PffOptionsBoundedInt("-pffmg_coarse_max",
+                                 "Uniform coarse levels below the block raster until at most this many cells",
+                                 "PffPressureMG", mg->opt.coarseMax, &mg->opt.coarseMax, NULL, 1));
   PetscOptionsEnd();
   PetscCheck(mg->opt.omega > 0 && mg->opt.omega < 2, mg->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-pressure_pffmg_omega %g is invalid: must lie in (0, 2)", (double)mg->opt.omega);

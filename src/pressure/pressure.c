@@ -11,6 +11,7 @@
 
 const char *const PffPressureAssemblyTypes[] = {"ptap", "direct", "PffPressureAssemblyType", "PFF_PRESSURE_ASSEMBLY_",
                                                 NULL};
+const char *const PffPressureFailureTypes[] = {"stop", "warn", "PffPressureFailureType", "PFF_PRESSURE_FAILURE_", NULL};
 const char *const PffPressureOperatorTypes[] = {"aij", "shell", "PffPressureOperatorType", "PFF_PRESSURE_OPERATOR_",
                                                 NULL};
 
@@ -52,6 +53,18 @@ PetscErrorCode PffPressureCreate(PffGrid grid, PffPressure *ps)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* PETSc takes nan, negative and out-of-range tolerances here without a word (a negative rtol means
+   "default", a nan one never converges), and its parser does not name the key of a non-number. */
+static PetscErrorCode PffPressureCheckKSPOptions(MPI_Comm comm)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffOptionsCheckReal(comm, "-pressure_ksp_rtol", 0, 1, "in (0, 1)"));
+  PetscCall(PffOptionsCheckReal(comm, "-pressure_ksp_atol", -1e-300, PETSC_MAX_REAL, ">= 0"));
+  PetscCall(PffOptionsCheckReal(comm, "-pressure_ksp_divtol", 1, PETSC_MAX_REAL, "> 1"));
+  PetscCall(PffOptionsCheckInt(comm, "-pressure_ksp_max_it", 1, PETSC_MAX_INT));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffPressureSetFromOptions(PffPressure ps)
 {
   char     *names[7] = {NULL};
@@ -60,15 +73,18 @@ PetscErrorCode PffPressureSetFromOptions(PffPressure ps)
 
   PetscFunctionBeginUser;
   PetscOptionsBegin(ps->comm, NULL, "Pressure projection", "PffPressure");
-  PetscCall(PetscOptionsEnum("-pressure_assembly", "Assembly of A = G^T W G", "PffPressureSetCoefficients",
-                             PffPressureAssemblyTypes, (PetscEnum)ps->assembly, (PetscEnum *)&ps->assembly, NULL));
+  PetscCall(PffOptionsEnum("-pressure_assembly", "Assembly of A = G^T W G", "PffPressureSetCoefficients",
+                           PffPressureAssemblyTypes, (PetscEnum)ps->assembly, (PetscEnum *)&ps->assembly, NULL));
   PetscCall(PetscOptionsStringArray("-pressure_dirichlet_walls",
                                     "Walls with p = 0: none or a list of xmin,xmax,ymin,ymax,zmin,zmax",
                                     "PffPressureSetDirichletWalls", names, &nnames, &set));
-  PetscCall(PetscOptionsEnum("-pressure_operator",
-                             "Operator the Krylov method applies: assembled AIJ or matrix-free shell (the PC uses AIJ)",
-                             "PffPressureSetOperatorType", PffPressureOperatorTypes, (PetscEnum)ps->operatorType,
-                             (PetscEnum *)&ps->operatorType, NULL));
+  PetscCall(PffOptionsEnum(
+      "-pressure_on_failure", "When a solve does not converge: stop the run with its reason, or warn and go on",
+      "PffPressureCheckSolve", PffPressureFailureTypes, (PetscEnum)ps->onFailure, (PetscEnum *)&ps->onFailure, NULL));
+  PetscCall(PffOptionsEnum("-pressure_operator",
+                           "Operator the Krylov method applies: assembled AIJ or matrix-free shell (the PC uses AIJ)",
+                           "PffPressureSetOperatorType", PffPressureOperatorTypes, (PetscEnum)ps->operatorType,
+                           (PetscEnum *)&ps->operatorType, NULL));
   PetscOptionsEnd();
   /* parsed after the options block, so that a bad name leaves the options object closed */
   if (set) {
@@ -93,6 +109,7 @@ PetscErrorCode PffPressureSetFromOptions(PffPressure ps)
     for (PetscInt q = 0; q < nnames; q++) PetscCall(PetscFree(names[q]));
     PetscCall(PffPressureSetDirichletWalls(ps, walls));
   }
+  PetscCall(PffPressureCheckKSPOptions(ps->comm));
   PetscCall(KSPSetFromOptions(ps->ksp));
   {
     PC        pc;
@@ -306,17 +323,6 @@ PetscErrorCode PffPressureProject(PffPressure ps, PetscInt chU, PetscReal dt, Pe
   PetscCall(PetscTime(&t2));
   PetscCall(KSPGetIterationNumber(ps->ksp, &st.its));
   PetscCall(KSPGetConvergedReason(ps->ksp, &st.reason));
-  if (st.reason == KSP_DIVERGED_NANORINF || st.reason == KSP_DIVERGED_PC_FAILED) {
-    KSPType ktype;
-    PCType  ptype;
-    PC      pc;
-    PetscCall(KSPGetType(ps->ksp, &ktype));
-    PetscCall(KSPGetPC(ps->ksp, &pc));
-    PetscCall(PCGetType(pc, &ptype));
-    SETERRQ(ps->comm, PETSC_ERR_NOT_CONVERGED,
-            "pressure solver (KSP %s, PC %s, options prefix pressure_) failed: %s after %" PetscInt_FMT " iterations",
-            ktype, ptype, KSPConvergedReasons[st.reason], st.its);
-  }
   /* true relative residual, whatever norm the KSP monitors, with the operator the KSP applied */
   PetscCall(MatMult(ps->operatorType == PFF_PRESSURE_OPERATOR_SHELL ? ps->S : ps->A, ps->p, ps->vcell));
   PetscCall(VecAYPX(ps->vcell, -1.0, ps->b));
@@ -424,5 +430,35 @@ PetscErrorCode PffPressureGetKSP(PffPressure ps, KSP *ksp)
   PetscFunctionBeginUser;
   PetscCheck(ps != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL object");
   *ksp = ps->ksp;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureCheckSolve(PffPressure ps, const PffPressureStats *st, const char stage[], PetscInt step,
+                                     PetscReal t, const char hint[])
+{
+  KSPType   ktype;
+  PCType    ptype;
+  PC        pc;
+  PetscReal rtol;
+  PetscInt  maxit;
+  char      line[640];
+
+  PetscFunctionBeginUser;
+  if (st->reason >= 0 && PetscIsNormalReal(st->rnorm + 1)) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(KSPGetType(ps->ksp, &ktype));
+  PetscCall(KSPGetPC(ps->ksp, &pc));
+  PetscCall(PCGetType(pc, &ptype));
+  PetscCall(KSPGetTolerances(ps->ksp, &rtol, NULL, NULL, &maxit));
+  PetscCall(PetscSNPrintf(
+      line, sizeof(line),
+      "step %" PetscInt_FMT " (t = %g): stage %s: the solve (KSP %s, PC %s) did not converge: %s after %" PetscInt_FMT
+      " of %" PetscInt_FMT " iterations, relative residual %g (rtol %g); %s",
+      step, (double)t, stage, ktype, ptype, st->reason < 0 ? KSPConvergedReasons[st->reason] : "non-finite residual",
+      st->its, maxit, (double)st->rnorm, (double)rtol, hint));
+  /* a non-finite iterate has spoilt the fields, whatever the policy */
+  const PetscBool finite = (PetscBool)(PetscIsNormalReal(st->rnorm + 1) && st->reason != KSP_DIVERGED_NANORINF &&
+                                       st->reason != KSP_DIVERGED_PC_FAILED);
+  PetscCheck(ps->onFailure == PFF_PRESSURE_FAILURE_WARN && finite, ps->comm, PETSC_ERR_NOT_CONVERGED, "%s", line);
+  PetscCall(PetscPrintf(ps->comm, "pfflip: warning: %s\n", line));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

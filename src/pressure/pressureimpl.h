@@ -53,6 +53,7 @@ struct _n_PffPressure {
 
   PffPressureAssemblyType assembly;
   PffPressureOperatorType operatorType; /* the KSP's Amat; the Pmat is always A */
+  PffPressureFailureType  onFailure;    /* -pressure_on_failure */
   PetscBool               subPCDefaultApplied;
 };
 

@@ -1,6 +1,7 @@
 /* The fluid-scene driver: -sim_* options, the time loop, diagnostics CSV, frames and the run
    summary with each stage's share of the step time. */
 #include "flowscene.h"
+#include <sys/stat.h>
 #include <errno.h>
 #include <unistd.h>
 
@@ -49,40 +50,45 @@ static PetscErrorCode PffFlowSceneSetFromOptions(PffScene s)
   PetscFunctionBeginUser;
   if (fs->ops.setfromoptions) PetscCall(fs->ops.setfromoptions(fs));
   PetscOptionsBegin(s->comm, NULL, "Simulation run", "PffScene");
-  PetscCall(PetscOptionsReal(
-      "-sim_t_end", "End time (in the scene time unit: t0 = sqrt(W/g) for rt3d and rt_paper, seconds otherwise)", NULL,
-      fs->tEnd, &fs->tEnd, NULL));
-  PetscCall(PetscOptionsReal("-sim_output_interval",
-                             "Time between frames, in the scene time unit (0: first and last only)", NULL,
-                             fs->outputInterval, &fs->outputInterval, NULL));
-  PetscCall(PetscOptionsInt("-sim_max_steps", "Stop after this many steps (0: no limit)", NULL, fs->maxSteps,
-                            &fs->maxSteps, NULL));
-  PetscCall(PetscOptionsBool("-sim_frames", "Write HDF5 frames", NULL, fs->frames, &fs->frames, NULL));
-  PetscCall(PetscOptionsBool("-sim_frame_particles", "Include the particles in frames", NULL, fs->frameParticles,
-                             &fs->frameParticles, NULL));
-  PetscCall(PetscOptionsInt("-sim_checkpoint_every",
-                            "Write <output_dir>/checkpoint.h5 every this many steps (0: never)", NULL,
-                            fs->checkpointEvery, &fs->checkpointEvery, NULL));
+  PetscCall(PffOptionsReal("-sim_t_end",
+                           "End time (in the scene time unit: t0 = sqrt(W/g) for rt3d and rt_paper, seconds otherwise)",
+                           NULL, fs->tEnd, &fs->tEnd, NULL));
+  PetscCall(PffOptionsReal("-sim_output_interval",
+                           "Time between frames, in the scene time unit (0: first and last only)", NULL,
+                           fs->outputInterval, &fs->outputInterval, NULL));
+  PetscCall(PffOptionsInt("-sim_max_steps", "Stop after this many steps (0: no limit)", NULL, fs->maxSteps,
+                          &fs->maxSteps, NULL));
+  PetscCall(PffOptionsBool("-sim_frames", "Write HDF5 frames", NULL, fs->frames, &fs->frames, NULL));
+  PetscCall(PffOptionsBool("-sim_frame_particles", "Include the particles in frames", NULL, fs->frameParticles,
+                           &fs->frameParticles, NULL));
+  PetscCall(PffOptionsInt("-sim_checkpoint_every", "Write <output_dir>/checkpoint.h5 every this many steps (0: never)",
+                          NULL, fs->checkpointEvery, &fs->checkpointEvery, NULL));
   PetscCall(PetscOptionsString("-sim_restart", "Continue from this checkpoint (any rank count)", NULL, fs->restart,
                                fs->restart, sizeof(fs->restart), NULL));
-  PetscCall(PetscOptionsBool("-sim_check_particles",
-                             "Fail at the end unless the liquid particle count is unchanged and the gas count changed "
-                             "only by deleted bubbles (for tests)",
-                             NULL, fs->checkParticles, &fs->checkParticles, NULL));
-  PetscCall(PetscOptionsReal("-sim_max_volume_drift",
-                             "Fail as soon as the liquid volume drift |V - V0| / V0 after a step exceeds this (0: no "
-                             "check; for tests)",
-                             NULL, fs->driftBound[PFF_PARTICLE_LIQUID], &fs->driftBound[PFF_PARTICLE_LIQUID], NULL));
-  PetscCall(PetscOptionsReal("-sim_max_gas_volume_drift",
-                             "Fail as soon as the gas volume drift |V - V0| / V0 after a step exceeds this (0: no "
-                             "check; for tests)",
-                             NULL, fs->driftBound[PFF_PARTICLE_AIR], &fs->driftBound[PFF_PARTICLE_AIR], NULL));
+  PetscCall(PffOptionsBool("-sim_check_particles",
+                           "Fail at the end unless the liquid particle count is unchanged and the gas count changed "
+                           "only by deleted bubbles (for tests)",
+                           NULL, fs->checkParticles, &fs->checkParticles, NULL));
+  PetscCall(PffOptionsReal("-sim_max_volume_drift",
+                           "Fail as soon as the liquid volume drift |V - V0| / V0 after a step exceeds this (0: no "
+                           "check; for tests)",
+                           NULL, fs->driftBound[PFF_PARTICLE_LIQUID], &fs->driftBound[PFF_PARTICLE_LIQUID], NULL));
+  PetscCall(PffOptionsReal("-sim_max_gas_volume_drift",
+                           "Fail as soon as the gas volume drift |V - V0| / V0 after a step exceeds this (0: no "
+                           "check; for tests)",
+                           NULL, fs->driftBound[PFF_PARTICLE_AIR], &fs->driftBound[PFF_PARTICLE_AIR], NULL));
   PetscOptionsEnd();
   if (fs->restart[0]) {
     PetscMPIInt rank;
     int         err = 0;
     PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
-    if (rank == 0 && access(fs->restart, R_OK)) err = errno;
+    if (rank == 0) {
+      struct stat sb;
+      if (stat(fs->restart, &sb) || access(fs->restart, R_OK))
+        err = errno;
+      else if (!S_ISREG(sb.st_mode))
+        err = EISDIR;
+    }
     PetscCallMPI(MPI_Bcast(&err, 1, MPI_INT, 0, s->comm));
     PetscCheck(!err, s->comm, PETSC_ERR_FILE_OPEN, "-sim_restart %s cannot be read: %s", fs->restart, strerror(err));
   }
@@ -219,22 +225,32 @@ static PetscErrorCode PffFlowSceneConservation(PffFlowScene *fs)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* The extra values of a scene checkpoint: the reference volumes V0 and the max |drift| so far, liquid
-   then gas, so that a restarted run measures its drift since the seed, as the uninterrupted run would. */
-#define PFF_FLOW_SCENE_NEXTRA 4
+/* The extra values of a scene checkpoint, each pair liquid then gas: the reference volumes V0 and the
+   max |drift| so far, so that a restarted run measures its drift since the seed, as the uninterrupted
+   run would; the particle counts after the seed and the bubbles deleted since, so that its
+   conservation line counts from the run's start; and the densities, which a restart must not change.
+   Checkpoints written before the counts and densities were stored hold only the first 4. */
+#define PFF_FLOW_SCENE_NEXTRA 9
+#define PFF_FLOW_SCENE_NEXTRA_LEGACY 4
 
 /* <output_dir>/checkpoint.h5, written to a temporary name and renamed by the io module. */
 static PetscErrorCode PffFlowSceneCheckpoint(PffFlowScene *fs)
 {
-  const PetscReal extra[PFF_FLOW_SCENE_NEXTRA] = {fs->volumeStart[PFF_PARTICLE_LIQUID],
-                                                  fs->volumeStart[PFF_PARTICLE_AIR], fs->driftMax[PFF_PARTICLE_LIQUID],
-                                                  fs->driftMax[PFF_PARTICLE_AIR]};
-  char            path[PETSC_MAX_PATH_LEN];
-  PetscReal       t;
-  PetscInt        step;
-  PffParticles    p;
+  PetscReal    extra[PFF_FLOW_SCENE_NEXTRA], rho[PFF_PARTICLE_NTYPES];
+  char         path[PETSC_MAX_PATH_LEN];
+  PetscReal    t;
+  PetscInt     step;
+  PffParticles p;
 
   PetscFunctionBeginUser;
+  PetscCall(PffFlowGetDensities(fs->flow, rho));
+  for (PetscInt k = 0; k < PFF_PARTICLE_NTYPES; k++) {
+    extra[k]     = fs->volumeStart[k];
+    extra[2 + k] = fs->driftMax[k];
+    extra[4 + k] = (PetscReal)fs->countStart[k]; /* exact in double below 2^53 particles */
+    extra[7 + k] = rho[k];
+  }
+  extra[6] = (PetscReal)fs->bubblesDeletedRun;
   PetscCall(PffFlowGetTime(fs->flow, &t, &step));
   PetscCall(PffFlowGetParticles(fs->flow, &p));
   PetscCall(PetscSNPrintf(path, sizeof(path), "%s/checkpoint.h5", fs->scene->outdir));
@@ -262,8 +278,22 @@ static PetscErrorCode PffFlowSceneStart(PffFlowScene *fs)
   PetscCall(PffFlowGetParticles(fs->flow, &p));
   PetscCall(PffIOGetCheckpointExtraCount(fs->grid, fs->restart, &nextra));
   /* any other count is the reader's error: the checkpoint is not one of a fluid scene */
-  if (nextra != 0) nextra = PFF_FLOW_SCENE_NEXTRA;
+  if (nextra != 0 && nextra != PFF_FLOW_SCENE_NEXTRA_LEGACY) nextra = PFF_FLOW_SCENE_NEXTRA;
   PetscCall(PffIOReadCheckpoint(fs->grid, p, fs->restart, &t, &step, nextra, extra));
+  if (nextra == PFF_FLOW_SCENE_NEXTRA) {
+    PetscReal rho[PFF_PARTICLE_NTYPES];
+    char      diff[256] = "";
+    PetscCall(PffFlowGetDensities(fs->flow, rho));
+    for (PetscInt k = 0; k < PFF_PARTICLE_NTYPES; k++)
+      if (PetscAbsReal(extra[7 + k] - rho[k]) > 1e-12 * rho[k])
+        PetscCall(PetscSNPrintf(diff + strlen(diff), sizeof(diff) - strlen(diff), "; -rho_%s %g in the file, %g now",
+                                k == PFF_PARTICLE_LIQUID ? "liquid" : "gas", (double)extra[7 + k], (double)rho[k]));
+    PetscCheck(!diff[0], fs->scene->comm, PETSC_ERR_ARG_INCOMP, "-sim_restart %s was written with other physics: %s",
+               fs->restart, diff + 2);
+    for (PetscInt k = 0; k < PFF_PARTICLE_NTYPES; k++) fs->countStart[k] = (PetscInt64)extra[4 + k];
+    fs->bubblesDeletedRun = (PetscInt64)extra[6];
+    fs->countsCarried     = PETSC_TRUE;
+  }
   PetscCall(PffFlowSetTime(fs->flow, t, step));
   PetscCall(PffFlowUpdateFields(fs->flow, PETSC_FALSE));
   fs->restarted = PETSC_TRUE;
@@ -323,15 +353,22 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
   PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
   PetscCall(PffGridView(fs->grid, NULL));
   PetscCall(PffFlowSceneStart(fs));
-  PetscCall(PffFlowSceneCount(fs, fs->countStart));
+  PetscCall(PffSceneMakeOutputDir_Private(s));
+  if (!fs->countsCarried) PetscCall(PffFlowSceneCount(fs, fs->countStart));
   PetscCall(PffFlowGetDeleteBubbles(fs->flow, &deleteBubbles));
-  if (rank == 0) {
+  {
     char path[PETSC_MAX_PATH_LEN];
+    int  err = 0;
     PetscCall(PetscSNPrintf(path, sizeof(path), "%s/%s_diag.csv", s->outdir, s->name));
-    /* a restarted run appends to the diagnostics of the run it continues */
-    fs->diag = fopen(path, fs->restarted ? "a" : "w");
-    PetscCheck(fs->diag, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "-output_dir: cannot write %s", path);
-    if (!fs->restarted)
+    /* a restarted run appends to the diagnostics of the run it continues, or starts a new file */
+    if (rank == 0) {
+      fs->diag = fopen(path, fs->restarted ? "a" : "w");
+      if (!fs->diag) err = errno;
+    }
+    PetscCallMPI(MPI_Bcast(&err, 1, MPI_INT, 0, s->comm));
+    PetscCheck(!err, s->comm, PETSC_ERR_FILE_OPEN, "-output_dir %s: cannot write %s: %s", s->outdir, path,
+               strerror(err));
+    if (rank == 0 && !fseek(fs->diag, 0, SEEK_END) && ftell(fs->diag) == 0)
       fprintf(fs->diag,
               "step,t,t_over_t0,dt,cfl,particles,ksp_its,ksp_rnorm,umax_grid,liquid_volume,bubbles_deleted,"
               "droplet_candidates,wall_s,gas_volume%s\n",

@@ -35,6 +35,7 @@ struct _PffFlowScene {
   PetscReal tEnd, outputInterval, timeUnit;
   PetscInt  maxSteps, checkpointEvery;
   PetscBool frames, frameParticles, restarted, checkParticles;
+  PetscBool countsCarried; /* the run-start particle counts came from the checkpoint */
   char      restart[PETSC_MAX_PATH_LEN];
   FILE     *diag;
   /* of the latest diagnostics row: max |u| on the grid (PffFlowGetDiagnostics), liquid and gas volume of

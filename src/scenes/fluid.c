@@ -39,12 +39,12 @@ static PetscErrorCode PffFluidSetFromOptions(PffFlowScene *fs)
 
   PetscFunctionBeginUser;
   PetscOptionsBegin(fs->scene->comm, NULL, "Fluid scene", "PffScene");
-  PetscCall(PetscOptionsEnum("-fluid_refine",
-                             "Static refinement: none, or surface (finest level at the initial liquid surface, one "
-                             "level coarser every -fluid_refine_band block lengths away from it, up to -grid_levels)",
-                             NULL, PffFluidRefineTypes, refine, &refine, NULL));
-  PetscCall(PetscOptionsReal("-fluid_refine_band", "Width of each level band, in block lengths (-fluid_refine surface)",
-                             NULL, fl->band, &fl->band, &bandSet));
+  PetscCall(PffOptionsEnum("-fluid_refine",
+                           "Static refinement: none, or surface (finest level at the initial liquid surface, one "
+                           "level coarser every -fluid_refine_band block lengths away from it, up to -grid_levels)",
+                           NULL, PffFluidRefineTypes, refine, &refine, NULL));
+  PetscCall(PffOptionsReal("-fluid_refine_band", "Width of each level band, in block lengths (-fluid_refine surface)",
+                           NULL, fl->band, &fl->band, &bandSet));
   PetscOptionsEnd();
   fl->refine = (PffFluidRefineType)refine;
   PetscCheck(fl->band > 0 && PetscIsNormalReal(fl->band), fs->scene->comm, PETSC_ERR_ARG_OUTOFRANGE,

@@ -106,23 +106,23 @@ static PetscErrorCode PffGeometryReadRegion(PetscOptionItems *PetscOptionsObject
                           : in->type == PFF_SHAPE_SPHERE ? "centre"
                                                          : "a point on the bounding plane"));
   in->na = PFF_GEOMETRY_MAX_VALUES;
-  PetscCall(PetscOptionsRealArray(key, help, "PffGeometrySetFromOptions", in->a, &in->na, &in->seta));
+  PetscCall(PffOptionsRealArray(key, help, "PffGeometrySetFromOptions", in->a, &in->na, &in->seta));
   PetscCall(PetscSNPrintf(key, sizeof(key), "-%s_%" PetscInt_FMT "_%s", kind, i, PffShapeKeyB[in->type]));
   if (in->type == PFF_SHAPE_SPHERE) {
     PetscCall(PetscSNPrintf(help, sizeof(help), "%s %" PetscInt_FMT ": radius", kind, i));
-    PetscCall(PetscOptionsReal(key, help, "PffGeometrySetFromOptions", in->r, &in->r, &in->setr));
+    PetscCall(PffOptionsReal(key, help, "PffGeometrySetFromOptions", in->r, &in->r, &in->setr));
   } else {
     PetscCall(
         PetscSNPrintf(help, sizeof(help), "%s %" PetscInt_FMT ": %s", kind, i,
                       in->type == PFF_SHAPE_BOX ? "upper corner x,y,z" : "normal x,y,z, pointing out of the region"));
     in->nb = PFF_GEOMETRY_MAX_VALUES;
-    PetscCall(PetscOptionsRealArray(key, help, "PffGeometrySetFromOptions", in->b, &in->nb, &in->setb));
+    PetscCall(PffOptionsRealArray(key, help, "PffGeometrySetFromOptions", in->b, &in->nb, &in->setb));
   }
   if (liquid) {
     PetscCall(PetscSNPrintf(key, sizeof(key), "-%s_%" PetscInt_FMT "_velocity", kind, i));
     PetscCall(PetscSNPrintf(help, sizeof(help), "%s %" PetscInt_FMT ": initial velocity x,y,z", kind, i));
     in->nv = PFF_GEOMETRY_MAX_VALUES;
-    PetscCall(PetscOptionsRealArray(key, help, "PffGeometrySetFromOptions", in->v, &in->nv, &in->setv));
+    PetscCall(PffOptionsRealArray(key, help, "PffGeometrySetFromOptions", in->v, &in->nv, &in->setv));
   }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -226,8 +226,8 @@ PetscErrorCode PffGeometrySetFromOptions(PffGeometry geo, const PetscReal lo[3],
 
       PetscCall(PetscSNPrintf(key, sizeof(key), "-%s_%" PetscInt_FMT "_type", kinds[k], i));
       PetscCall(PetscSNPrintf(help, sizeof(help), helps[k], i));
-      PetscCall(PetscOptionsEnum(key, help, "PffGeometrySetFromOptions",
-                                 k == SOLID ? PffSolidShapeTypes : PffShapeTypes, type, &type, &set));
+      PetscCall(PffOptionsEnum(key, help, "PffGeometrySetFromOptions", k == SOLID ? PffSolidShapeTypes : PffShapeTypes,
+                               type, &type, &set));
       if (!set) break;
       r->type = (PetscInt)type;
       PetscCall(PffGeometryReadRegion(PetscOptionsObject, kinds[k], i, (PetscBool)(k == LIQUID), r));

@@ -17,12 +17,12 @@ static PetscErrorCode PffGridDemoSetFromOptions(PffScene s)
 
   PetscFunctionBeginUser;
   PetscOptionsBegin(s->comm, NULL, "Grid demo scene", "PffScene");
-  PetscCall(PetscOptionsInt("-demo_steps", "Diffusion steps", NULL, d->steps, &d->steps, NULL));
-  PetscCall(PetscOptionsInt("-demo_output_every", "Write a frame every this many steps (0: first and last only)", NULL,
-                            d->every, &d->every, NULL));
-  PetscCall(PetscOptionsReal("-demo_nu", "Diffusivity", NULL, d->nu, &d->nu, NULL));
-  PetscCall(PetscOptionsReal("-demo_sigma", "Width of the initial Gaussian, as a fraction of the x extent", NULL,
-                             d->sigma, &d->sigma, NULL));
+  PetscCall(PffOptionsInt("-demo_steps", "Diffusion steps", NULL, d->steps, &d->steps, NULL));
+  PetscCall(PffOptionsInt("-demo_output_every", "Write a frame every this many steps (0: first and last only)", NULL,
+                          d->every, &d->every, NULL));
+  PetscCall(PffOptionsReal("-demo_nu", "Diffusivity", NULL, d->nu, &d->nu, NULL));
+  PetscCall(PffOptionsReal("-demo_sigma", "Width of the initial Gaussian, as a fraction of the x extent", NULL,
+                           d->sigma, &d->sigma, NULL));
   PetscOptionsEnd();
   PetscCheck(d->steps >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE, "-demo_steps %" PetscInt_FMT " is invalid: must be >= 0",
              d->steps);
@@ -101,6 +101,7 @@ static PetscErrorCode PffGridDemoRun(PffScene s)
   PffProgress    prog;
 
   PetscFunctionBeginUser;
+  PetscCall(PffSceneMakeOutputDir_Private(s));
   PetscCall(PetscLogStageRegister("Init", &stInit));
   PetscCall(PetscLogStageRegister("Halo", &stHalo));
   PetscCall(PetscLogStageRegister("Diffuse", &stDiffuse));

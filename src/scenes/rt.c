@@ -23,22 +23,23 @@ static PetscErrorCode PffRTSetFromOptions(PffFlowScene *fs)
   PetscFunctionBeginUser;
   PetscOptionsBegin(fs->scene->comm, NULL, "Rayleigh-Taylor scene", "PffScene");
   PetscCall(
-      PetscOptionsReal("-rt_width", "Domain width W (the domain is W x 4W x W)", NULL, rt->width, &rt->width, NULL));
-  PetscCall(PetscOptionsInt("-rt_resolution", "Cells across W", NULL, rt->resolution, &rt->resolution, NULL));
-  PetscCall(PetscOptionsReal("-rt_atwood", "Atwood number (rho_h - rho_l) / (rho_h + rho_l)", NULL, rt->atwood,
-                             &rt->atwood, NULL));
-  PetscCall(PetscOptionsReal("-rt_gravity", "Gravitational acceleration g (along -y)", NULL, rt->gravity, &rt->gravity,
-                             NULL));
-  PetscCall(PetscOptionsReal("-rt_amplitude", "Interface perturbation amplitude, in units of W", NULL, rt->amplitude,
-                             &rt->amplitude, NULL));
+      PffOptionsReal("-rt_width", "Domain width W (the domain is W x 4W x W)", NULL, rt->width, &rt->width, NULL));
+  PetscCall(PffOptionsInt("-rt_resolution", "Cells across W", NULL, rt->resolution, &rt->resolution, NULL));
+  PetscCall(PffOptionsReal("-rt_atwood", "Atwood number (rho_h - rho_l) / (rho_h + rho_l)", NULL, rt->atwood,
+                           &rt->atwood, NULL));
+  PetscCall(
+      PffOptionsReal("-rt_gravity", "Gravitational acceleration g (along -y)", NULL, rt->gravity, &rt->gravity, NULL));
+  PetscCall(PffOptionsReal("-rt_amplitude", "Interface perturbation amplitude, in units of W", NULL, rt->amplitude,
+                           &rt->amplitude, NULL));
   if (!rt->paper)
     PetscCall(
-        PetscOptionsReal("-rt_reynolds", "Reynolds number W sqrt(g W) / nu", NULL, rt->reynolds, &rt->reynolds, NULL));
+        PffOptionsReal("-rt_reynolds", "Reynolds number W sqrt(g W) / nu", NULL, rt->reynolds, &rt->reynolds, NULL));
   PetscOptionsEnd();
   PetscCheck(rt->width > 0, fs->scene->comm, PETSC_ERR_ARG_OUTOFRANGE, "-rt_width %g is invalid: must be positive",
              (double)rt->width);
-  PetscCheck(rt->resolution >= 4 && rt->resolution % 4 == 0, fs->scene->comm, PETSC_ERR_ARG_OUTOFRANGE,
-             "-rt_resolution %" PetscInt_FMT " is invalid: must be a positive multiple of 4", rt->resolution);
+  PetscCheck(rt->resolution >= 4 && rt->resolution % 4 == 0 && rt->resolution <= 4096, fs->scene->comm,
+             PETSC_ERR_ARG_OUTOFRANGE,
+             "-rt_resolution %" PetscInt_FMT " is invalid: must be a multiple of 4 in [4, 4096]", rt->resolution);
   PetscCheck(rt->atwood > 0 && rt->atwood < 1, fs->scene->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-rt_atwood %g is invalid: must be in (0, 1)", (double)rt->atwood);
   PetscCheck(rt->gravity > 0, fs->scene->comm, PETSC_ERR_ARG_OUTOFRANGE, "-rt_gravity %g is invalid: must be positive",

@@ -28,6 +28,30 @@ PetscErrorCode PffSceneCreate(MPI_Comm comm, PffScene *scene)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Why path cannot hold the run's output (0 if it can): it must be a writable directory. */
+static int PffSceneCheckDir(const char *path)
+{
+  struct stat sb;
+  if (stat(path, &sb)) return errno;
+  if (!S_ISDIR(sb.st_mode)) return ENOTDIR;
+  return access(path, W_OK | X_OK) ? errno : 0;
+}
+
+/* Before any work: an -output_dir that exists must be a writable directory, on every rank. Creates
+   nothing, so that a run stopped by a later input error leaves no trace. */
+static PetscErrorCode PffSceneCheckOutputDir(PffScene s)
+{
+  struct stat sb;
+  int         err = 0;
+
+  PetscFunctionBeginUser;
+  if (!stat(s->outdir, &sb)) err = PffSceneCheckDir(s->outdir);
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &err, 1, MPI_INT, MPI_MAX, s->comm));
+  PetscCheck(!err, s->comm, PETSC_ERR_FILE_OPEN, "-output_dir %s is invalid: %s", s->outdir,
+             err == ENOTDIR ? "exists and is not a directory" : strerror(err));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffSceneSetFromOptions(PffScene s)
 {
   const size_t nscenes    = PETSC_STATIC_ARRAY_LENGTH(PffScenes);
@@ -51,13 +75,15 @@ PetscErrorCode PffSceneSetFromOptions(PffScene s)
   PetscCall(PetscOptionsString("-output_dir", "Directory for frames and logs", NULL, s->outdir, s->outdir,
                                sizeof(s->outdir), NULL));
   PetscOptionsEnd();
+  PetscCall(PffSceneCheckOutputDir(s));
   PetscCall(PffScenes[pick].create(s));
   if (s->ops.setfromoptions) PetscCall(s->ops.setfromoptions(s));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Creates the output directory (rank 0) and checks it is writable; errors name -output_dir. */
-static PetscErrorCode PffSceneMakeOutputDir(PffScene s)
+/* Creates the output directory (rank 0), then checks on every rank that it is a writable directory
+   (ranks on other nodes see it through a shared file system or not at all); errors name -output_dir. */
+PetscErrorCode PffSceneMakeOutputDir_Private(PffScene s)
 {
   PetscMPIInt rank;
   int         err = 0;
@@ -74,18 +100,18 @@ static PetscErrorCode PffSceneMakeOutputDir(PffScene s)
       *c = '/';
     }
     if (!err && mkdir(path, 0755) && errno != EEXIST) err = errno;
-    if (!err && access(path, W_OK)) err = errno;
   }
   PetscCallMPI(MPI_Bcast(&err, 1, MPI_INT, 0, s->comm));
+  if (!err) err = PffSceneCheckDir(s->outdir);
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &err, 1, MPI_INT, MPI_MAX, s->comm));
   PetscCheck(!err, s->comm, PETSC_ERR_FILE_OPEN, "-output_dir %s cannot be created or written: %s", s->outdir,
-             strerror(err));
+             err == ENOTDIR ? "a part of it exists and is not a directory" : strerror(err));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 PetscErrorCode PffSceneRun(PffScene s)
 {
   PetscFunctionBeginUser;
-  PetscCall(PffSceneMakeOutputDir(s));
   PetscCall(s->ops.run(s));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -17,6 +17,9 @@ struct _n_PffScene {
   void       *data;
 };
 
+/* Creates -output_dir and checks it on every rank. A scene's run calls it once its input (a restart
+   checkpoint included) has been read, so that bad input leaves nothing behind. Collective. */
+PETSC_INTERN PetscErrorCode PffSceneMakeOutputDir_Private(PffScene);
 PETSC_INTERN PetscErrorCode PffSceneCreate_GridDemo(PffScene);
 PETSC_INTERN PetscErrorCode PffSceneCreate_RT3D(PffScene);
 PETSC_INTERN PetscErrorCode PffSceneCreate_RTPaper(PffScene);

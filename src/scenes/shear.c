@@ -19,16 +19,19 @@ static PetscErrorCode PffShearSetFromOptions(PffFlowScene *fs)
 
   PetscFunctionBeginUser;
   PetscOptionsBegin(fs->scene->comm, NULL, "Shear-flow advection scene", "PffScene");
-  PetscCall(PetscOptionsInt("-shear_resolution", "Cells per axis of the unit cube", NULL, sh->resolution,
-                            &sh->resolution, NULL));
-  PetscCall(PetscOptionsReal("-shear_max_error", "Fail when the phi error exceeds this (0: no check; for tests)", NULL,
-                             sh->check, &sh->check, NULL));
-  PetscCall(PetscOptionsReal("-shear_u0", "Velocity scale U0 (period T = 1/U0)", NULL, sh->u0, &sh->u0, NULL));
+  PetscCall(PffOptionsInt("-shear_resolution", "Cells per axis of the unit cube", NULL, sh->resolution, &sh->resolution,
+                          NULL));
+  PetscCall(PffOptionsReal("-shear_max_error", "Fail when the phi error exceeds this (0: no check; for tests)", NULL,
+                           sh->check, &sh->check, NULL));
+  PetscCall(PffOptionsReal("-shear_u0", "Velocity scale U0 (period T = 1/U0)", NULL, sh->u0, &sh->u0, NULL));
   PetscCall(
-      PetscOptionsReal("-shear_periods", "Periods to run (t_end = periods T)", NULL, sh->periods, &sh->periods, NULL));
+      PffOptionsReal("-shear_periods", "Periods to run (t_end = periods T)", NULL, sh->periods, &sh->periods, NULL));
   PetscOptionsEnd();
-  PetscCheck(sh->resolution >= 8 && sh->resolution % 4 == 0, fs->scene->comm, PETSC_ERR_ARG_OUTOFRANGE,
-             "-shear_resolution %" PetscInt_FMT " is invalid: must be a multiple of 4, at least 8", sh->resolution);
+  PetscCheck(sh->check >= 0, fs->scene->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-shear_max_error %g is invalid: must be >= 0 (0: no check)", (double)sh->check);
+  PetscCheck(sh->resolution >= 8 && sh->resolution % 4 == 0 && sh->resolution <= 4096, fs->scene->comm,
+             PETSC_ERR_ARG_OUTOFRANGE,
+             "-shear_resolution %" PetscInt_FMT " is invalid: must be a multiple of 4 in [8, 4096]", sh->resolution);
   PetscCheck(sh->u0 > 0, fs->scene->comm, PETSC_ERR_ARG_OUTOFRANGE, "-shear_u0 %g is invalid: must be positive",
              (double)sh->u0);
   PetscCheck(sh->periods > 0, fs->scene->comm, PETSC_ERR_ARG_OUTOFRANGE,

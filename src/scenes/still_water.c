@@ -15,21 +15,22 @@ static PetscErrorCode PffStillSetFromOptions(PffFlowScene *fs)
 
   PetscFunctionBeginUser;
   PetscOptionsBegin(fs->scene->comm, NULL, "Still-water scene", "PffScene");
-  PetscCall(PetscOptionsReal("-still_level", "Liquid depth as a fraction of the box height", NULL, sw->level,
-                             &sw->level, NULL));
-  PetscCall(PetscOptionsReal("-still_max_velocity",
-                             "Fail when the spurious velocity exceeds this (0: no check; for tests)", NULL, sw->check,
-                             &sw->check, NULL));
-  PetscCall(PetscOptionsReal("-still_ratio", "Density ratio rho_l / rho_g", NULL, sw->ratio, &sw->ratio, NULL));
-  PetscCall(PetscOptionsInt("-still_resolution", "Cells per axis of the cubic box", NULL, sw->resolution,
-                            &sw->resolution, NULL));
+  PetscCall(PffOptionsReal("-still_level", "Liquid depth as a fraction of the box height", NULL, sw->level, &sw->level,
+                           NULL));
+  PetscCall(PffOptionsReal("-still_max_velocity",
+                           "Fail when the spurious velocity exceeds this (0: no check; for tests)", NULL, sw->check,
+                           &sw->check, NULL));
+  PetscCall(PffOptionsReal("-still_ratio", "Density ratio rho_l / rho_g", NULL, sw->ratio, &sw->ratio, NULL));
+  PetscCall(PffOptionsInt("-still_resolution", "Cells per axis of the cubic box", NULL, sw->resolution, &sw->resolution,
+                          NULL));
   PetscOptionsEnd();
   PetscCheck(sw->level > 0 && sw->level < 1, fs->scene->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-still_level %g is invalid: must be in (0, 1)", (double)sw->level);
   PetscCheck(sw->ratio > 1, fs->scene->comm, PETSC_ERR_ARG_OUTOFRANGE, "-still_ratio %g is invalid: must exceed 1",
              (double)sw->ratio);
-  PetscCheck(sw->resolution >= 8 && sw->resolution % 8 == 0, fs->scene->comm, PETSC_ERR_ARG_OUTOFRANGE,
-             "-still_resolution %" PetscInt_FMT " is invalid: must be a positive multiple of 8", sw->resolution);
+  PetscCheck(sw->resolution >= 8 && sw->resolution % 8 == 0 && sw->resolution <= 4096, fs->scene->comm,
+             PETSC_ERR_ARG_OUTOFRANGE,
+             "-still_resolution %" PetscInt_FMT " is invalid: must be a multiple of 8 in [8, 4096]", sw->resolution);
   PetscCall(PetscSNPrintf(buf, sizeof(buf), "%" PetscInt_FMT, sw->resolution));
   PetscCall(PffFlowSceneDefault("-grid_cells", buf));
   PetscCall(PffFlowSceneDefaultReal("-grid_h", 1.0 / (PetscReal)sw->resolution));
