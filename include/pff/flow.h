@@ -41,7 +41,7 @@ PETSC_EXTERN const char
 /* Life cycle. Create borrows the grid, which must be set up (the flow adds its channels in SetUp).
    SetFromOptions reads
    -rho_liquid, -rho_gas (> 0), -nu_liquid, -nu_gas (>= 0; 0 = no physical viscosity: FLIP ratio -flow_flip),
-   -gravity gx,gy,gz, -flow_cfl (0, 4], -flow_dt_max, -flow_alpha_phi (> 0), -flow_delta_phi [0, 0.5),
+   -gravity gx,gy,gz, -flow_cfl (0, 4], -flow_dt_max, -flow_alpha_phi (0, 10], -flow_delta_phi [0, 0.5),
    -flow_flip [0, 1], -flow_pressure (bool, default true), -flow_volume_correction [0, 1] (0 = off),
    -flow_volume_correction_max_displacement (cells, > 0), -flow_volume_correction_rtol (0, 1),
    -flow_delete_bubbles (bool, default true), -flow_extrapolate_layers (>= 0; 0 = off), and the particle and

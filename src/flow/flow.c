@@ -94,8 +94,10 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
              (double)f->cfl);
   PetscCheck(f->dtMax > 0, f->comm, PETSC_ERR_ARG_OUTOFRANGE, "-flow_dt_max %g is invalid: must be positive",
              (double)f->dtMax);
-  PetscCheck(f->alphaPhi > 0, f->comm, PETSC_ERR_ARG_OUTOFRANGE, "-flow_alpha_phi %g is invalid: must be positive",
-             (double)f->alphaPhi);
+  /* Eq. 7 divides the density by alpha_phi rho~_0: the paper uses 0.5 and 1; beyond 10 a full cell reads
+     phi < 0.32 and the interface is lost */
+  PetscCheck(f->alphaPhi > 0 && f->alphaPhi <= 10, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-flow_alpha_phi %g is invalid: must be in (0, 10]", (double)f->alphaPhi);
   PetscCheck(f->deltaPhi >= 0 && f->deltaPhi < 0.5, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-flow_delta_phi %g is invalid: must be in [0, 0.5)", (double)f->deltaPhi);
   PetscCheck(f->flip >= 0 && f->flip <= 1, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
