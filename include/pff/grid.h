@@ -52,6 +52,7 @@ typedef struct {
   PetscInt  n;      /* cells per axis, n0 >> level */
   PetscReal lo[3];  /* lower corner */
   PetscReal h;      /* cell size h0 * 2^level */
+  PetscInt  holes;  /* bit r: neighbour region r (PffRegionIndex) lies across a wall or faces an inactive block */
 } PffBlockInfo;
 
 typedef struct {
@@ -186,6 +187,13 @@ PETSC_EXTERN PetscErrorCode PffGridInterpolate(PffGrid grid, PetscInt ch, PetscI
 /* As PffGridInterpolate, but point p is interpolated on the lattice of local block lb[p] and may lie
    outside it, as far as the channel's halo width minus one cell (periodic images are unwrapped
    towards the block). For particles that left their block during one advection step. Not collective. */
+/* Component comp of channel ch at lp, in cell units of local block lb's level from its lower corner,
+   interpolated exactly as PffGridInterpolateFrom() does on the block's lattice (stencils reaching into
+   the halo included). For kernels that loop over the particles of a block: not collective,
+   thread-safe (reads only), no logging and no argument checks (ch, lb and comp must be valid and lp
+   within the channel's halo). */
+PETSC_EXTERN PetscReal      PffGridInterpolateInBlock(PffGrid grid, PetscInt ch, PetscInt lb, PetscInt comp,
+                                                      const PetscReal lp[3]);
 PETSC_EXTERN PetscErrorCode PffGridInterpolateFrom(PffGrid grid, PetscInt ch, PetscInt np, const PetscReal x[],
                                                    const PetscInt lb[], PetscReal val[]);
 /* Sets every owned value of channel ch to fn at its sample position x (the cell centre, or the lower

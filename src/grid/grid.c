@@ -356,6 +356,7 @@ PetscErrorCode PffGridGetBlockInfo(PffGrid g, PetscInt lb, PffBlockInfo *info)
   info->level = g->level[gid];
   info->n     = g->n0 >> info->level;
   info->h     = g->h0 * (PetscReal)((PetscInt)1 << info->level);
+  info->holes = g->lholes[lb];
   for (int d = 0; d < 3; d++) info->lo[d] = g->origin[d] + (PetscReal)(info->ijk[d] * g->n0) * g->h0;
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -132,6 +132,12 @@ static inline void PffInterpolatePoint(PffGrid g, const PffChannel *c, PetscInt 
   for (PetscInt comp = 0; comp < c->ncomp; comp++) val[comp] = PffInterpolateInBlock(c, lb, n, holes, lp, comp);
 }
 
+PetscReal PffGridInterpolateInBlock(PffGrid g, PetscInt ch, PetscInt lb, PetscInt comp, const PetscReal lp[3])
+{
+  const PffChannel *c = g->ch[ch];
+  return PffInterpolateInBlock(c, lb, PffGridBlockN_Private(g, g->lgid[lb]), g->lholes[lb], lp, comp);
+}
+
 PetscErrorCode PffGridInterpolate(PffGrid g, PetscInt ch, PetscInt np, const PetscReal x[], PetscReal val[])
 {
   PffChannel *c = NULL;

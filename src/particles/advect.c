@@ -15,10 +15,11 @@
    current block (logged with PetscInfo). So within one call a particle may travel about (width - 1)
    cells past its rank's blocks exactly; further motion is truncated until the next call.
 
-   The particles are processed in batches (all particles still sub-stepping, stage by stage), so the
-   grid's interpolation is called a few times per sub-step from one thread; the arithmetic is
-   OpenMP-parallel. Afterwards particles inside a solid are pushed out along the distance gradient and
-   all particles are migrated (which wraps periodic axes and clamps walls). */
+   The particles are processed in batches (all particles still sub-stepping, stage by stage); the
+   samples and the arithmetic are OpenMP-parallel. The samples are those of PffGridInterpolateFrom,
+   through the block table of PffSampler (bit-identical, without its per-point checks). Afterwards particles inside a
+   solid are pushed out along the distance gradient and all particles are migrated (which wraps periodic axes and clamps
+   walls). */
 #include "particlesimpl.h"
 
 typedef struct {
@@ -62,14 +63,18 @@ static PetscBool PffAdvectFix(PffParticles p, const PffAdvectBlock *blocks, cons
   return PETSC_TRUE;
 }
 
-/* Velocity samples at the m packed points (xs, bl): the first m0 use ch[0], the others ch[1]. */
-static PetscErrorCode PffAdvectSample(PffParticles p, const PetscInt ch[2], PetscInt m0, PetscInt m,
-                                      const PetscReal xs[], const PetscInt bl[], PetscReal k[])
+/* Velocity samples at the m packed points (xs, bl): the first m0 from the sampler's first channel,
+   the others from its last, in threads (no lookup, check or log call per point). */
+static void PffAdvectSample(PffParticles p, const PffSampler *s, PetscInt m0, PetscInt m, const PetscReal xs[],
+                            const PetscInt bl[], PetscReal k[])
 {
-  PetscFunctionBeginUser;
-  if (m0 > 0) PetscCall(PffGridInterpolateFrom(p->grid, ch[0], m0, xs, bl, k));
-  if (m > m0) PetscCall(PffGridInterpolateFrom(p->grid, ch[1], m - m0, xs + 3 * m0, bl + m0, k + 3 * m0));
-  PetscFunctionReturn(PETSC_SUCCESS);
+#pragma omp parallel for schedule(static)
+  for (PetscInt j = 0; j < m; j++) {
+    const PetscInt ch = j < m0 ? 0 : s->nch - 1;
+    PetscReal      lp[3];
+    PffSamplerLocal_Private(p, &s->blocks[bl[j]], &xs[3 * j], lp);
+    for (PetscInt d = 0; d < 3; d++) PffSamplerFace_Private(s, bl[j], ch, 1, d, lp, &k[3 * j + d]);
+  }
 }
 
 /* ord: the local particles with the liquid ones first (all in order when both types share a channel);
@@ -109,6 +114,7 @@ PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const PetscInt chU[PFF_
   PetscReal      *work, *k1, *k2, *k3, *xs, *xa, *hsub;
   PetscInt       *iwork, *cur, *nsub, *act, *bl, *ord;
   PffAdvectBlock *blocks;
+  PffSampler      sampler;
   PetscInt64      pushed = 0;
 
   PetscFunctionBeginUser;
@@ -142,6 +148,7 @@ PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const PetscInt chU[PFF_
   bl   = act + n;
   ord  = bl + n;
   nliq = PffAdvectOrder(p, chU, ord);
+  PetscCall(PffSamplerCreate_Private(p, chU[0] == chU[1] ? 1 : 2, chU, &sampler));
   PetscCall(PetscMalloc1(PetscMax(p->nlocal, 1), &blocks));
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
     PffBlockInfo info;
@@ -156,13 +163,13 @@ PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const PetscInt chU[PFF_
   /* sub-step counts from the velocity at the start, sampled in the order of ord (the first sub-step's k1) */
   PetscReal *x = p->s.x;
   if (nliq == n) /* one channel for both types: ord is the identity, no packed copy */
-    PetscCall(PffAdvectSample(p, chU, n, n, x, p->blk, k1));
+    PffAdvectSample(p, &sampler, n, n, x, p->blk, k1);
   else {
     for (PetscInt j = 0; j < n; j++) {
       for (int a = 0; a < 3; a++) xa[3 * j + a] = x[3 * ord[j] + a];
       bl[j] = p->blk[ord[j]];
     }
-    PetscCall(PffAdvectSample(p, chU, nliq, n, xa, bl, k1));
+    PffAdvectSample(p, &sampler, nliq, n, xa, bl, k1);
   }
 #pragma omp parallel for reduction(max : maxsub) schedule(static)
   for (PetscInt j = 0; j < n; j++) {
@@ -192,7 +199,7 @@ PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const PetscInt chU[PFF_
         for (int a = 0; a < 3; a++) xa[3 * j + a] = x[3 * act[j] + a];
         bl[j] = cur[act[j]];
       }
-      PetscCall(PffAdvectSample(p, chU, m0, m, xa, bl, k1));
+      PffAdvectSample(p, &sampler, m0, m, xa, bl, k1);
     }
     /* k2 at x + dt/2 k1, k3 at x + 3 dt/4 k2 */
     for (int stage = 0; stage < 2; stage++) {
@@ -204,7 +211,7 @@ PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const PetscInt chU[PFF_
         for (int a = 0; a < 3; a++) xs[3 * j + a] = x[3 * i + a] + f * hsub[i] * kp[3 * j + a];
         nclamp += PffAdvectFix(p, blocks, level, cur[i], &xs[3 * j], &bl[j]);
       }
-      PetscCall(PffAdvectSample(p, chU, m0, m, xs, bl, stage == 0 ? k2 : k3));
+      PffAdvectSample(p, &sampler, m0, m, xs, bl, stage == 0 ? k2 : k3);
     }
 #pragma omp parallel for reduction(+ : nclamp) schedule(static)
     for (PetscInt j = 0; j < m; j++) {
@@ -215,6 +222,7 @@ PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const PetscInt chU[PFF_
     }
   }
   PetscCall(PetscFree(blocks));
+  PetscCall(PffSamplerDestroy_Private(&sampler));
   if (nclamp) PetscCall(PetscInfo(NULL, "%" PetscInt_FMT " advection stages clamped to the halo reach\n", nclamp));
 
   /* push out of solids along the distance gradient (a few Newton-like steps) */

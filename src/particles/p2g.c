@@ -87,12 +87,15 @@ static PetscErrorCode PffZeroWithGhosts(PffGrid grid, PetscInt ch, PetscInt nloc
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Splats the particles [i0, i1) of one block into the views of its three face components. */
+/* Splats the particles [i0, i1) of one block into the views of its three face components; a stencil
+   inside the block's own cells (most of them) writes its arrays (dm, dp, dv) directly, in the same
+   order, so the sums are the same. */
 static void PffSplatBlock(const PffParticleSoA *s, PetscInt i0, PetscInt i1, const PffBlockInfo *info,
-                          const PffView *vm[3], const PffView *vp[3], const PffView *vv[3], const PetscReal density[])
+                          const PffView *vm[3], const PffView *vp[3], const PffView *vv[3], float *const dm[3],
+                          float *const dp[3], float *const dv[3], const PetscReal density[])
 {
   const PetscReal ih = 1.0 / info->h, norm = 1.0 / (PetscReal)((PetscInt64)1 << (3 * info->level));
-  const PetscInt  n = info->n;
+  const PetscInt  n = info->n, st[8] = {0, 1, n, n + 1, n * n, n * n + 1, n * n + n, n * n + n + 1};
 
   for (PetscInt i = i0; i < i1; i++) {
     const PetscReal vol = (PetscReal)((PetscInt64)1 << (3 * s->level[i])) * norm, rho = density[s->type[i]];
@@ -101,9 +104,11 @@ static void PffSplatBlock(const PffParticleSoA *s, PetscInt i0, PetscInt i1, con
     for (int d = 0; d < 3; d++) {
       PetscInt  c0[3];
       PetscReal q2[3][2], lin[3][2];
+      PetscBool inside = PETSC_TRUE;
       for (int a = 0; a < 3; a++) {
         const PetscReal f = sp[a] - (a == d ? 0.0 : 0.5), fl = PetscFloorReal(f), t = f - fl;
-        c0[a]     = (PetscInt)fl;
+        c0[a] = (PetscInt)fl;
+        if (c0[a] < 0 || c0[a] + 1 >= n) inside = PETSC_FALSE;
         q2[a][0]  = t * t;
         q2[a][1]  = (1 - t) * (1 - t);
         lin[a][0] = 1 - t;
@@ -115,6 +120,17 @@ static void PffSplatBlock(const PffParticleSoA *s, PetscInt i0, PetscInt i1, con
         w[q]              = r > 0 ? r * r * r * vol : 0;
       }
       const PetscReal rvd = rho * s->v[3 * i + d];
+      if (inside) {
+        const PetscInt o = c0[0] + n * (c0[1] + n * c0[2]);
+        for (int q = 0; q < 8; q++) {
+          if (w[q] != 0) {
+            dm[d][o + st[q]] += (float)(w[q] * rho);
+            dp[d][o + st[q]] += (float)(w[q] * rvd);
+          }
+          if (dv) dv[d][o + st[q]] += (float)(vol * lin[0][q & 1] * lin[1][(q >> 1) & 1] * lin[2][(q >> 2) & 1]);
+        }
+        continue;
+      }
       for (int q = 0; q < 8; q++) {
         if (w[q] == 0 && !vv) continue;
         const PetscInt ii = c0[0] + (q & 1), jj = c0[1] + ((q >> 1) & 1), kk = c0[2] + ((q >> 2) & 1);
@@ -136,6 +152,7 @@ PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTI
 {
   PffBlockInfo   *info;
   const PffView **views;
+  float         **data;
   PetscInt       *order, cstart[28] = {0};
   const PetscInt  nlocal = p->nlocal;
 
@@ -148,13 +165,18 @@ PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTI
   if (chVolume >= 0) PetscCall(PffCheckFaceChannel(p->grid, chVolume, "P2G volume"));
   const PetscInt nv = chVolume >= 0 ? 3 : 0, stride = 6 + nv;
   PetscCall(PetscLogEventBegin(PFF_P2G, 0, 0, 0, 0));
-  PetscCall(PetscMalloc3(nlocal, &info, stride * nlocal, &views, nlocal, &order));
+  PetscCall(PetscMalloc4(nlocal, &info, stride * nlocal, &views, stride * nlocal, &data, nlocal, &order));
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PetscCall(PffGridGetBlockInfo(p->grid, lb, &info[lb]));
     for (PetscInt comp = 0; comp < 3; comp++) {
       PetscCall(PffGridGetBlockViews(p->grid, chMass, lb, comp, &views[stride * lb + comp]));
       PetscCall(PffGridGetBlockViews(p->grid, chMom, lb, comp, &views[stride * lb + 3 + comp]));
-      if (nv) PetscCall(PffGridGetBlockViews(p->grid, chVolume, lb, comp, &views[stride * lb + 6 + comp]));
+      PetscCall(PffGridGetBlockData(p->grid, chMass, lb, comp, &data[stride * lb + comp]));
+      PetscCall(PffGridGetBlockData(p->grid, chMom, lb, comp, &data[stride * lb + 3 + comp]));
+      if (nv) {
+        PetscCall(PffGridGetBlockViews(p->grid, chVolume, lb, comp, &views[stride * lb + 6 + comp]));
+        PetscCall(PffGridGetBlockData(p->grid, chVolume, lb, comp, &data[stride * lb + 6 + comp]));
+      }
     }
   }
   PetscCall(PffZeroWithGhosts(p->grid, chMass, nlocal, info));
@@ -189,10 +211,11 @@ PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTI
     for (PetscInt e = cstart[c]; e < cstart[c + 1]; e++) {
       const PetscInt lb = order[e];
       PffSplatBlock(s, start[lb], start[lb + 1], &info[lb], &views[stride * lb], &views[stride * lb + 3],
-                    nv ? &views[stride * lb + 6] : NULL, density);
+                    nv ? &views[stride * lb + 6] : NULL, &data[stride * lb], &data[stride * lb + 3],
+                    nv ? &data[stride * lb + 6] : NULL, density);
     }
   }
-  PetscCall(PetscFree3(info, views, order));
+  PetscCall(PetscFree4(info, views, data, order));
 
   PetscCall(PffGridHaloReverseBegin(p->grid, chMass));
   PetscCall(PffGridHaloReverseEnd(p->grid, chMass));

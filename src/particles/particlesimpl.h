@@ -115,3 +115,85 @@ PETSC_INTERN PetscErrorCode PffParticlesGetWork_Private(PffParticles, size_t, Pe
 /* Wraps periodic axes and clamps walled axes of position x in place; returns what it did. */
 PETSC_INTERN void PffParticlesWrapClamp_Private(PffParticles, PetscReal x[3], PetscBool *wrapped, PetscBool *clamped);
 PETSC_INTERN PetscErrorCode PffParticlesCheckBinned_Private(PffParticles, const char[]);
+
+/* Block-batched sampling of face channels (G2P and advection; sample.c). A table built once per call
+   holds, per local block, its level, size and raster place and the data of each face component of up
+   to two channels, so that the per-point work needs no lookup, no check and no log call and runs in
+   threads. */
+typedef struct {
+  PetscInt     n, level, ijk[3];
+  const float *data[2][3]; /* channel k, face component d: the block's own n^3 cells */
+  const float *tile[2][3]; /* the same with one ghost layer, (n + 2)^3 from cell -1, or NULL (see sample.c) */
+} PffSampleBlock;
+
+typedef struct {
+  PffGrid         grid;
+  PetscInt        ch[2], nch;
+  PffSampleBlock *blocks; /* [nlocal] */
+  float          *tiles;  /* storage of every block's tiles */
+} PffSampler;
+
+PETSC_INTERN PetscErrorCode PffSamplerCreate_Private(PffParticles, PetscInt nch, const PetscInt ch[], PffSampler *);
+PETSC_INTERN PetscErrorCode PffSamplerDestroy_Private(PffSampler *);
+
+/* Position of world point x in cell units of local block lb's level, from its lower corner, as
+   PffGridInterpolateFrom() computes it: on a periodic axis the image nearest to the block's centre. */
+static inline void PffSamplerLocal_Private(const PffParticles p, const PffSampleBlock *b, const PetscReal x[3],
+                                           PetscReal lp[3])
+{
+  const PetscReal inv = 1.0 / (PetscReal)((PetscInt)1 << b->level);
+  for (int d = 0; d < 3; d++) {
+    PetscReal sp = (x[d] - p->origin[d]) / p->h0;
+    if (p->periodic[d]) { /* the shift floor((sp - centre) / L + 0.5) L, without its division */
+      const PetscReal L = (PetscReal)p->cells[d], centre = (PetscReal)(b->ijk[d] * p->n0) + 0.5 * (PetscReal)p->n0;
+      if (sp - centre >= 0.5 * L)
+        sp -= L;
+      else if (sp - centre < -0.5 * L)
+        sp += L;
+    }
+    lp[d] = (sp - (PetscReal)(b->ijk[d] * p->n0)) * inv;
+  }
+}
+
+/* Face component d of channels k0 and (if nk = 2) k0 + 1 at lp in local block lb, with one set of
+   trilinear weights: the block's own cells when the stencil lies inside them, the block's tile when it
+   reaches one ghost layer and the block has one, else the grid's general path (walls, farther
+   ghosts). Bit-identical to PffGridInterpolateFrom(). */
+static inline void PffSamplerFace_Private(const PffSampler *s, PetscInt lb, PetscInt k0, PetscInt nk, PetscInt d,
+                                          const PetscReal lp[3], PetscReal val[2])
+{
+  const PffSampleBlock *b = &s->blocks[lb];
+  const PetscInt        n = b->n;
+  PetscInt              i0[3];
+  PetscReal             t[3];
+  PetscBool             inside = PETSC_TRUE;
+
+  for (int e = 0; e < 3; e++) {
+    const PetscReal x = lp[e] - (e == d ? 0.0 : 0.5);
+    i0[e]             = (PetscInt)PetscFloorReal(x);
+    t[e]              = x - (PetscReal)i0[e];
+    if (i0[e] < 0 || i0[e] + 1 >= n) inside = PETSC_FALSE;
+  }
+  const PetscReal wx[2] = {1 - t[0], t[0]}, wy[2] = {1 - t[1], t[1]}, wz[2] = {1 - t[2], t[2]};
+  PetscInt        o, m = n;
+  const float    *base[2] = {NULL, NULL};
+  if (inside) {
+    o = i0[0] + n * (i0[1] + n * i0[2]);
+    for (PetscInt k = 0; k < nk; k++) base[k] = b->data[k0 + k][d];
+  } else if (b->tile[k0][d] && i0[0] >= -1 && i0[0] < n && i0[1] >= -1 && i0[1] < n && i0[2] >= -1 && i0[2] < n) {
+    m = n + 2;
+    o = (i0[0] + 1) + m * ((i0[1] + 1) + m * (i0[2] + 1));
+    for (PetscInt k = 0; k < nk; k++) base[k] = b->tile[k0 + k][d];
+  } else {
+    for (PetscInt k = 0; k < nk; k++) val[k] = PffGridInterpolateInBlock(s->grid, s->ch[k0 + k], lb, d, lp);
+    return;
+  }
+  const PetscInt st[8] = {0, 1, m, m + 1, m * m, m * m + 1, m * m + m, m * m + m + 1};
+  for (PetscInt k = 0; k < nk; k++) {
+    const float *a = base[k] + o;
+    PetscReal    v = 0;
+    /* the grid skips terms of weight 0; adding w * value = +0 leaves the sum as it is */
+    for (int q = 0; q < 8; q++) v += wx[q & 1] * wy[(q >> 1) & 1] * wz[(q >> 2) & 1] * (PetscReal)a[st[q]];
+    val[k] = v;
+  }
+}

@@ -1,0 +1,83 @@
+/* The block table of PffSampler (particlesimpl.h): G2P and advection sample face channels through it. */
+#include "particlesimpl.h"
+
+PetscErrorCode PffSamplerCreate_Private(PffParticles p, PetscInt nch, const PetscInt ch[], PffSampler *s)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(nch >= 1 && nch <= 2, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "a sampler takes 1 or 2 channels");
+  s->grid = p->grid;
+  s->nch  = nch;
+  for (PetscInt k = 0; k < nch; k++) {
+    PffChannelKind kind;
+    PetscInt       width;
+    const char    *name;
+    PetscCall(PffGridGetChannelInfo(p->grid, ch[k], &name, &kind, NULL, &width));
+    PetscCheck(kind == PFF_CHANNEL_FACE, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "channel %s must be a face channel",
+               name);
+    /* a point in its block reaches one cell beyond it */
+    PetscCheck(width >= 1, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "channel %s needs a halo of at least one cell", name);
+    s->ch[k] = ch[k];
+  }
+  PetscCall(PetscMalloc1(PetscMax(p->nlocal, 1), &s->blocks));
+  /* tiles for the blocks without a wall or inactive neighbour: there the grid's general path is a plain
+     trilinear stencil over its views, which the tile holds value for value */
+  size_t          ntile = 0;
+  const PffView **tv;
+  PetscCall(PetscMalloc1(6 * PetscMax(p->nlocal, 1), &tv));
+  for (PetscInt lb = 0; lb < p->nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(p->grid, lb, &info));
+    if (!info.holes) ntile += (size_t)(3 * nch) * (size_t)((info.n + 2) * (info.n + 2) * (info.n + 2));
+  }
+  PetscCall(PetscMalloc1(ntile + 1, &s->tiles));
+  ntile = 0;
+  for (PetscInt lb = 0; lb < p->nlocal; lb++) {
+    PffBlockInfo    info;
+    PffSampleBlock *b = &s->blocks[lb];
+    PetscCall(PffGridGetBlockInfo(p->grid, lb, &info));
+    b->n     = info.n;
+    b->level = info.level;
+    for (int d = 0; d < 3; d++) b->ijk[d] = info.ijk[d];
+    for (PetscInt k = 0; k < 2; k++)
+      for (int d = 0; d < 3; d++) {
+        b->data[k][d]          = NULL;
+        b->tile[k][d]          = NULL;
+        tv[6 * lb + 3 * k + d] = NULL;
+      }
+    for (PetscInt k = 0; k < nch; k++)
+      for (int d = 0; d < 3; d++) {
+        float *data;
+        PetscCall(PffGridGetBlockData(p->grid, ch[k], lb, d, &data));
+        b->data[k][d] = data;
+        if (info.holes) continue;
+        PetscCall(PffGridGetBlockViews(p->grid, ch[k], lb, d, &tv[6 * lb + 3 * k + d]));
+        b->tile[k][d] = s->tiles + ntile;
+        ntile += (size_t)((info.n + 2) * (info.n + 2) * (info.n + 2));
+      }
+  }
+  /* each block's tiles from its views, in threads (no PETSc call inside) */
+#pragma omp parallel for schedule(dynamic, 1)
+  for (PetscInt lb = 0; lb < p->nlocal; lb++) {
+    const PffSampleBlock *b = &s->blocks[lb];
+    const PetscInt        n = b->n, m = n + 2;
+    for (PetscInt q = 0; q < 6; q++) {
+      const PffView *views = tv[6 * lb + q];
+      float         *tile  = (float *)b->tile[q / 3][q % 3];
+      if (!views) continue;
+      for (PetscInt kk = -1; kk <= n; kk++)
+        for (PetscInt jj = -1; jj <= n; jj++)
+          for (PetscInt ii = -1; ii <= n; ii++)
+            tile[(ii + 1) + m * ((jj + 1) + m * (kk + 1))] = *PffViewsAt(views, ii, jj, kk, n);
+    }
+  }
+  PetscCall(PetscFree(tv));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffSamplerDestroy_Private(PffSampler *s)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscFree(s->blocks));
+  PetscCall(PetscFree(s->tiles));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
