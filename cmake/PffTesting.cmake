@@ -1,8 +1,13 @@
-# pff_add_mpi_test(<name> COMMAND <exe> [args...] RANKS <n...> [LABELS <l...>] [REGEX <pass regex>] [WILL_FAIL])
+# pff_add_mpi_test(<name> COMMAND <exe> [args...] RANKS <n...> [LABELS <l...>] [REGEX <pass regex>] [WILL_FAIL]
+#                  [THREADS <t>])
 # Registers <name>_np<n> for every rank count, launched through MPIEXEC with the
-# flags that let Open MPI run as root and oversubscribe the two-core machine.
+# flags that let Open MPI run as root and oversubscribe the two-core machine. THREADS > 1 sets
+# OMP_NUM_THREADS and names the tests <name>_np<n>_omp<t>.
 function(pff_add_mpi_test name)
-  cmake_parse_arguments(T "WILL_FAIL" "REGEX;FAIL_REGEX;TIMEOUT" "COMMAND;RANKS;LABELS" ${ARGN})
+  cmake_parse_arguments(T "WILL_FAIL" "REGEX;FAIL_REGEX;TIMEOUT;THREADS" "COMMAND;RANKS;LABELS" ${ARGN})
+  if(NOT T_THREADS)
+    set(T_THREADS 1)
+  endif()
   if(NOT T_RANKS)
     set(T_RANKS 1)
   endif()
@@ -11,12 +16,16 @@ function(pff_add_mpi_test name)
   endif()
   foreach(np IN LISTS T_RANKS)
     set(tname ${name}_np${np})
+    math(EXPR procs "${np} * ${T_THREADS}")
+    if(T_THREADS GREATER 1)
+      set(tname ${tname}_omp${T_THREADS})
+    endif()
     add_test(NAME ${tname}
              COMMAND ${MPIEXEC_EXECUTABLE} ${MPIEXEC_NUMPROC_FLAG} ${np} ${PFF_MPIEXEC_FLAGS} ${T_COMMAND}
              WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR})
     set_tests_properties(${tname} PROPERTIES
-      ENVIRONMENT "OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1;OMP_NUM_THREADS=1;OMPI_MCA_rmaps_base_oversubscribe=1;ASAN_OPTIONS=detect_leaks=0"
-      PROCESSORS ${np} TIMEOUT ${T_TIMEOUT} LABELS "${T_LABELS};np${np}")
+      ENVIRONMENT "OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1;OMP_NUM_THREADS=${T_THREADS};OMPI_MCA_rmaps_base_oversubscribe=1;ASAN_OPTIONS=detect_leaks=0"
+      PROCESSORS ${procs} TIMEOUT ${T_TIMEOUT} LABELS "${T_LABELS};np${np}")
     if(T_REGEX)
       set_tests_properties(${tname} PROPERTIES PASS_REGULAR_EXPRESSION "${T_REGEX}")
     endif()
@@ -31,11 +40,12 @@ endfunction()
 
 # pff_add_unit(<name> RANKS <n...> [ARGS ...]) builds tests/unit/<name>.c against libpfflip and registers it.
 function(pff_add_unit name)
-  cmake_parse_arguments(U "" "" "RANKS;ARGS;LABELS" ${ARGN})
+  cmake_parse_arguments(U "" "THREADS" "RANKS;ARGS;LABELS" ${ARGN})
   if(NOT TARGET ${name})
     add_executable(${name} ${name}.c)
     target_link_libraries(${name} PRIVATE pfflip)
     set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/tests)
   endif()
-  pff_add_mpi_test(${name} COMMAND $<TARGET_FILE:${name}> ${U_ARGS} RANKS ${U_RANKS} LABELS unit ${U_LABELS})
+  pff_add_mpi_test(${name} COMMAND $<TARGET_FILE:${name}> ${U_ARGS} RANKS ${U_RANKS} LABELS unit ${U_LABELS}
+                   THREADS ${U_THREADS})
 endfunction()
