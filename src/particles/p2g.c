@@ -24,6 +24,7 @@
    does not sum, so contributions to the upper wall faces (index n of the normal component) are
    dropped; the boundary conditions own those faces. */
 #include "particlesimpl.h"
+#include <omp.h>
 
 PetscErrorCode PffParticlesGetKernelSum(PffParticles p, PetscReal *rho0)
 {
@@ -92,10 +93,16 @@ static PetscErrorCode PffZeroWithGhosts(PffGrid grid, PetscInt ch, PetscInt nloc
    order, so the sums are the same. */
 static void PffSplatBlock(const PffParticleSoA *s, PetscInt i0, PetscInt i1, const PffBlockInfo *info,
                           const PffView *vm[3], const PffView *vp[3], const PffView *vv[3], float *const dm[3],
-                          float *const dp[3], float *const dv[3], const PetscReal density[])
+                          float *const dp[3], float *const dv[3], const PetscReal density[], float *tile)
 {
   const PetscReal ih = 1.0 / info->h, norm = 1.0 / (PetscReal)((PetscInt64)1 << (3 * info->level));
-  const PetscInt  n = info->n, st[8] = {0, 1, n, n + 1, n * n, n * n + 1, n * n + n, n * n + n + 1};
+  const PetscInt  n = info->n, st[8] = {0, 1, n, n + 1, n * n, n * n + 1, n * n + n, n * n + n + 1}, m = n + 2,
+                 m3 = m * m * m, nc = vv ? 3 : 2;
+  const PffView *const *vc[3] = {vm, vp, vv};
+
+  /* ghost-layer contributions are summed in a tile (channel, component, (n + 2)^3 from cell -1) and
+     added to the views once per block: PffViewsAt per corner was most of the splat's cost */
+  memset(tile, 0, sizeof(float) * (size_t)(nc * 3 * m3));
 
   for (PetscInt i = i0; i < i1; i++) {
     const PetscReal vol = (PetscReal)((PetscInt64)1 << (3 * s->level[i])) * norm, rho = density[s->type[i]];
@@ -131,20 +138,41 @@ static void PffSplatBlock(const PffParticleSoA *s, PetscInt i0, PetscInt i1, con
         }
         continue;
       }
+      const PetscBool intile =
+          (PetscBool)(c0[0] >= -1 && c0[0] < n && c0[1] >= -1 && c0[1] < n && c0[2] >= -1 && c0[2] < n);
       for (int q = 0; q < 8; q++) {
         if (w[q] == 0 && !vv) continue;
         const PetscInt ii = c0[0] + (q & 1), jj = c0[1] + ((q >> 1) & 1), kk = c0[2] + ((q >> 2) & 1);
         /* the trilinear weight reaches faces beyond Eq. 6's sphere, where mass and momentum get nothing */
-        if (w[q] != 0) {
-          *PffViewsAt(vm[d], ii, jj, kk, n) += (float)(w[q] * rho);
-          *PffViewsAt(vp[d], ii, jj, kk, n) += (float)(w[q] * rvd);
+        const PetscReal val[3] = {w[q] * rho, w[q] * rvd,
+                                  vol * lin[0][q & 1] * lin[1][(q >> 1) & 1] * lin[2][(q >> 2) & 1]};
+        const PetscBool own    = (PetscBool)(ii >= 0 && ii < n && jj >= 0 && jj < n && kk >= 0 && kk < n);
+        float *const   *dc[3]  = {dm, dp, dv};
+        for (PetscInt c = 0; c < nc; c++) {
+          if (c < 2 && w[q] == 0) continue;
+          if (own)
+            dc[c][d][ii + n * (jj + n * kk)] += (float)val[c];
+          else if (intile)
+            tile[(c * 3 + d) * m3 + (ii + 1) + m * ((jj + 1) + m * (kk + 1))] += (float)val[c];
+          else
+            *PffViewsAt(vc[c][d], ii, jj, kk, n) += (float)val[c];
         }
-        if (vv)
-          *PffViewsAt(vv[d], ii, jj, kk, n) +=
-              (float)(vol * lin[0][q & 1] * lin[1][(q >> 1) & 1] * lin[2][(q >> 2) & 1]);
       }
     }
   }
+  /* the ghost layer of the tile into the views (cells -1 and n on some axis) */
+  for (PetscInt c = 0; c < nc; c++)
+    for (int d = 0; d < 3; d++) {
+      const float *t = tile + (c * 3 + d) * m3;
+      for (PetscInt kk = -1; kk <= n; kk++)
+        for (PetscInt jj = -1; jj <= n; jj++) {
+          const PetscBool inner = (PetscBool)(jj >= 0 && jj < n && kk >= 0 && kk < n);
+          for (PetscInt ii = -1; ii <= n; ii += (inner && ii == -1) ? n + 1 : 1) {
+            const float v = t[(ii + 1) + m * ((jj + 1) + m * (kk + 1))];
+            if (v != 0) *PffViewsAt(vc[c][d], ii, jj, kk, n) += v;
+          }
+        }
+    }
 }
 
 PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTICLE_NTYPES], PetscInt chMass,
@@ -206,13 +234,16 @@ PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTI
 
   const PffParticleSoA *s     = &p->s;
   const PetscInt       *start = p->start;
+  const size_t          tsize = (size_t)(stride * (p->n0 + 2) * (p->n0 + 2) * (p->n0 + 2));
+  float                *tiles;
+  PetscCall(PffParticlesGetFloatWork_Private(p, tsize * (size_t)PetscMax(omp_get_max_threads(), 1), &tiles));
   for (int c = 0; c < 27; c++) {
 #pragma omp parallel for schedule(dynamic, 1)
     for (PetscInt e = cstart[c]; e < cstart[c + 1]; e++) {
       const PetscInt lb = order[e];
       PffSplatBlock(s, start[lb], start[lb + 1], &info[lb], &views[stride * lb], &views[stride * lb + 3],
                     nv ? &views[stride * lb + 6] : NULL, &data[stride * lb], &data[stride * lb + 3],
-                    nv ? &data[stride * lb + 6] : NULL, density);
+                    nv ? &data[stride * lb + 6] : NULL, density, tiles + tsize * (size_t)omp_get_thread_num());
     }
   }
   PetscCall(PetscFree4(info, views, data, order));

@@ -89,6 +89,7 @@ PetscErrorCode PffParticlesDestroy(PffParticles *part)
   PetscCall(PetscFree(p->local));
   PetscCall(PetscFree(p->work));
   PetscCall(PetscFree(p->iwork));
+  PetscCall(PetscFree(p->fwork));
   PetscCall(PetscFree(p));
   *part = NULL;
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -150,6 +151,18 @@ PetscErrorCode PffParticlesGetWork_Private(PffParticles p, size_t nr, PetscReal 
   }
   if (r) *r = p->work;
   if (i) *i = p->iwork;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffParticlesGetFloatWork_Private(PffParticles p, size_t n, float **f)
+{
+  PetscFunctionBeginUser;
+  if (n > p->nfwork) {
+    PetscCall(PetscFree(p->fwork));
+    p->nfwork = PetscMax(n, p->nfwork + p->nfwork / 2);
+    PetscCall(PetscMalloc1(p->nfwork, &p->fwork));
+  }
+  *f = p->fwork;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -59,6 +59,8 @@ struct _n_PffParticles {
   size_t     nwork;
   PetscInt  *iwork;
   size_t     niwork;
+  float     *fwork; /* the tiles of PffSampler and P2G */
+  size_t     nfwork;
 };
 
 /* splitmix64 finaliser: a counter-based hash, the same on every rank and thread. */
@@ -112,6 +114,9 @@ static inline void PffParticlesMove_Private(PffParticles p, PetscInt dst, PetscI
 
 PETSC_INTERN PetscErrorCode PffParticlesReserve_Private(PffParticles, PetscInt);
 PETSC_INTERN PetscErrorCode PffParticlesGetWork_Private(PffParticles, size_t, PetscReal **, size_t, PetscInt **);
+/* A float scratch of at least n values, kept between calls (grown by half): no allocation, and no
+   first-touch page faults, per step. */
+PETSC_INTERN PetscErrorCode PffParticlesGetFloatWork_Private(PffParticles, size_t n, float **);
 /* Wraps periodic axes and clamps walled axes of position x in place; returns what it did. */
 PETSC_INTERN void PffParticlesWrapClamp_Private(PffParticles, PetscReal x[3], PetscBool *wrapped, PetscBool *clamped);
 PETSC_INTERN PetscErrorCode PffParticlesCheckBinned_Private(PffParticles, const char[]);
@@ -130,7 +135,7 @@ typedef struct {
   PffGrid         grid;
   PetscInt        ch[2], nch;
   PffSampleBlock *blocks; /* [nlocal] */
-  float          *tiles;  /* storage of every block's tiles */
+  float          *tiles;  /* storage of every block's tiles (the particles' float scratch, borrowed) */
 } PffSampler;
 
 PETSC_INTERN PetscErrorCode PffSamplerCreate_Private(PffParticles, PetscInt nch, const PetscInt ch[], PffSampler *);

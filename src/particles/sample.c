@@ -29,7 +29,7 @@ PetscErrorCode PffSamplerCreate_Private(PffParticles p, PetscInt nch, const Pets
     PetscCall(PffGridGetBlockInfo(p->grid, lb, &info));
     if (!info.holes) ntile += (size_t)(3 * nch) * (size_t)((info.n + 2) * (info.n + 2) * (info.n + 2));
   }
-  PetscCall(PetscMalloc1(ntile + 1, &s->tiles));
+  PetscCall(PffParticlesGetFloatWork_Private(p, ntile + 1, &s->tiles));
   ntile = 0;
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
     PffBlockInfo    info;
@@ -78,6 +78,6 @@ PetscErrorCode PffSamplerDestroy_Private(PffSampler *s)
 {
   PetscFunctionBeginUser;
   PetscCall(PetscFree(s->blocks));
-  PetscCall(PetscFree(s->tiles));
+  s->tiles = NULL; /* the particles' float scratch */
   PetscFunctionReturn(PETSC_SUCCESS);
 }
