@@ -24,6 +24,10 @@ PETSC_EXTERN PetscErrorCode PffInitializePackage(void);
    unknown key). Collective. Call once all SetFromOptions() have run. */
 PETSC_EXTERN PetscErrorCode PffOptionsCheckUnused(MPI_Comm comm);
 
+/* Why an input file cannot be read ("no such file or not readable", "is a directory", "is not a regular
+   file"), or NULL. Plain C: also before PetscInitialize. */
+PETSC_EXTERN const char *PffFileProblem(const char path[]);
+
 /* Strict option readers, used inside PetscOptionsBegin/End like PetscOptionsReal() and friends. They
    read the raw text first and fail with "-KEY VALUE is invalid: WHY" on a value that is not a number,
    not finite, beyond +-1e12, not an integer, not a boolean, or a list longer than *n; then they call
@@ -57,10 +61,10 @@ PETSC_EXTERN PetscErrorCode PffOptionsEnum_Private(PetscOptionItems *, const cha
 PETSC_EXTERN int PffYAMLCheckFile(const char path[], char msg[], size_t len);
 
 /* The same checks for an option that another object reads (e.g. a PETSc KSP option), before it does:
-   if key is set, its value must parse and lie in the open interval (lo, hi), described by range
+   if key is set, its value must parse and lie in (lo, hi) if open, else in [lo, hi], described by range
    ("in (0, 1)"); an integer must lie in [lo, hi]. Collective. */
 PETSC_EXTERN PetscErrorCode PffOptionsCheckReal(MPI_Comm comm, const char key[], PetscReal lo, PetscReal hi,
-                                                const char range[]);
+                                                PetscBool open, const char range[]);
 PETSC_EXTERN PetscErrorCode PffOptionsCheckInt(MPI_Comm comm, const char key[], PetscInt lo, PetscInt hi);
 
 /* Library versions and build revision as one line, e.g. for HDF5 attributes. Not collective.

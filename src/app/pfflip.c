@@ -7,7 +7,6 @@
 #include <pff.h>
 #include <ctype.h>
 #include <sys/stat.h>
-#include <unistd.h>
 
 static const char usage[] =
     "pfflip: Adaptive Phase-Field-FLIP on Multiresolution Sparse Block Grids.\n"
@@ -33,6 +32,18 @@ static PetscBool PffIsInputError(PetscErrorCode n)
   default:
     return PETSC_FALSE;
   }
+}
+
+/* An option key such as -grid_h, as PETSc's PetscOptionsValidKey() decides: a value otherwise, also a
+   negative number such as -0.5, -.5 or -inf. */
+static int PffIsOptionKey(const char *arg)
+{
+  char *end;
+  if (arg[0] != '-') return 0;
+  if (arg[1] == '-') arg++;
+  if (!isalpha((unsigned char)arg[1])) return 0;
+  (void)strtod(arg, &end);
+  return end == arg || *end == '_' || isalnum((unsigned char)*end);
 }
 
 /* PETSc's option parser reports a value it cannot read ("Input string abc has no numeric value") on
@@ -67,10 +78,10 @@ static PetscBool PffNameBadOption(const char *mess, char *out, size_t len)
     }
   }
   if (!value[0] || PetscOptionsGetAll(NULL, &all) || !all) return PETSC_FALSE;
-  /* "-key value -key value ...": a token is a key when it starts with '-' and is not a number */
+  /* "-key value -key value ...", keys told from values as on the command line */
   const char *prev = NULL;
   for (char *save = NULL, *tok = strtok_r(all, " ", &save); tok && !found; tok = strtok_r(NULL, " ", &save)) {
-    const PetscBool key = (PetscBool)(tok[0] == '-' && !isdigit((unsigned char)tok[1]) && tok[1] != '.');
+    const int key = PffIsOptionKey(tok);
     if (!key && prev && !strcmp(tok, value)) {
       snprintf(out, len, "%s %s is invalid: %s", prev, value,
                strstr(mess, "logical")   ? "must be true or false"
@@ -124,28 +135,13 @@ static PetscErrorCode PffErrorHandler(MPI_Comm comm, int line, const char *fun, 
   return n;
 }
 
-/* An option key such as -grid_h, as PETSc's PetscOptionsValidKey() decides: a value otherwise, also a
-   negative number such as -0.5, -.5 or -inf. */
-static int PffIsOptionKey(const char *arg)
-{
-  char *end;
-  if (arg[0] != '-') return 0;
-  if (arg[1] == '-') arg++;
-  if (!isalpha((unsigned char)arg[1])) return 0;
-  (void)strtod(arg, &end);
-  return end == arg || *end == '_' || isalnum((unsigned char)*end);
-}
-
 /* -options_file: PETSc only needs a readable regular file (its format errors name the line). */
 static int PffCheckOptionFile(const char *path, char msg[], size_t len)
 {
   struct stat st;
-  if (stat(path, &st) || access(path, R_OK))
-    snprintf(msg, len, "%s: no such file or not readable", path);
-  else if (S_ISDIR(st.st_mode))
-    snprintf(msg, len, "%s: is a directory", path);
-  else if (!S_ISREG(st.st_mode))
-    snprintf(msg, len, "%s: is not a regular file", path);
+  const char *problem = PffFileProblem(path);
+  if (problem || stat(path, &st))
+    snprintf(msg, len, "%s: %s", path, problem ? problem : "cannot be read");
   else if (st.st_size > (1 << 24))
     snprintf(msg, len, "%s: larger than 16 MiB, not an option file", path);
   else {

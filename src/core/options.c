@@ -42,43 +42,66 @@ static const char *PffParseReal(const char *s, const char *end, PetscReal *v)
   return NULL;
 }
 
-static const char *PffParseInt(const char *s, PetscInt *v)
+/* Parses one integer from [s, end), all of it; 0 on success, else why. */
+static const char *PffParseInt(const char *s, const char *end, PetscInt *v)
 {
-  char *stop = NULL;
+  char tok[64], *stop = NULL;
 
   s = PffSkipSpace(s);
-  if (!*s) return "an integer is missing";
-  errno       = 0;
-  long long x = strtoll(s, &stop, 10);
-  if (stop == s || *PffSkipSpace(stop)) return "not an integer";
+  while (end > s && isspace((unsigned char)end[-1])) end--;
+  if (end == s) return "an integer is missing";
+  if ((size_t)(end - s) >= sizeof(tok)) return "not an integer";
+  memcpy(tok, s, (size_t)(end - s));
+  tok[end - s] = 0;
+  errno        = 0;
+  long long x  = strtoll(tok, &stop, 10);
+  if (stop == tok || *stop) return "not an integer";
   if (errno == ERANGE || x > PETSC_MAX_INT || x < PETSC_MIN_INT) return "out of the integer range";
   *v = (PetscInt)x;
   return NULL;
 }
 
-/* The raw text of an option, or set = false. The key is spelt as the user typed it, prefix included. */
-static PetscErrorCode PffOptionsRaw(PetscOptionItems *obj, const char key[], char name[], size_t nlen, char buf[],
-                                    size_t len, PetscBool *set)
+static const char *PffParseNumber(const char *s, const char *end, PetscBool integer, PetscReal *r, PetscInt *i)
+{
+  return integer ? PffParseInt(s, end, i) : PffParseReal(s, end, r);
+}
+
+/* The raw text of key in options (with prefix) and its name as the user typed it, or has = false. */
+static PetscErrorCode PffOptionsRaw(PetscOptions options, const char prefix[], const char key[], char name[],
+                                    size_t nlen, char buf[], size_t len, PetscBool *has)
 {
   PetscFunctionBeginUser;
   buf[0] = 0;
-  PetscCall(PetscSNPrintf(name, nlen, "-%s%s", obj->prefix ? obj->prefix : "", key + 1));
-  PetscCall(PetscOptionsGetString(obj->options, obj->prefix, key, buf, len, set));
+  PetscCall(PetscSNPrintf(name, nlen, "-%s%s", prefix ? prefix : "", key + 1));
+  PetscCall(PetscOptionsGetString(options, prefix, key, buf, len, has));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Reads key, if set, as one real or integer; fails on comm naming the key. */
+static PetscErrorCode PffOptionsReadNumber(MPI_Comm comm, PetscOptions options, const char prefix[], const char key[],
+                                           PetscBool integer, char name[], size_t nlen, char buf[], size_t len,
+                                           PetscBool *has, PetscReal *r, PetscInt *i)
+{
+  const char *why;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffOptionsRaw(options, prefix, key, name, nlen, buf, len, has));
+  if (!*has) PetscFunctionReturn(PETSC_SUCCESS);
+  why = PffParseNumber(buf, buf + strlen(buf), integer, r, i);
+  PetscCheck(!why, comm, PETSC_ERR_ARG_WRONG, "%s %s is invalid: %s", name, buf[0] ? buf : "(no value)", why);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 PetscErrorCode PffOptionsReal_Private(PetscOptionItems *obj, const char key[], const char text[], const char man[],
                                       PetscReal cur, PetscReal *val, PetscBool *set)
 {
-  char        name[256], buf[256];
-  PetscBool   has;
-  PetscReal   v   = 0;
-  const char *why = NULL;
+  char      name[256], buf[256];
+  PetscBool has;
+  PetscReal v;
 
   PetscFunctionBeginUser;
-  PetscCall(PffOptionsRaw(obj, key, name, sizeof(name), buf, sizeof(buf), &has));
-  if (has) why = PffParseReal(buf, buf + strlen(buf), &v);
-  PetscCheck(!why, obj->comm, PETSC_ERR_ARG_WRONG, "%s %s is invalid: %s", name, buf[0] ? buf : "(no value)", why);
+  PetscCall(PffOptionsReadNumber(obj->comm, obj->options, obj->prefix, key, PETSC_FALSE, name, sizeof(name), buf,
+                                 sizeof(buf), &has, &v, NULL));
   PetscCall(PetscOptionsReal_Private(obj, key, text, man, cur, val, set));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -86,15 +109,13 @@ PetscErrorCode PffOptionsReal_Private(PetscOptionItems *obj, const char key[], c
 PetscErrorCode PffOptionsInt_Private(PetscOptionItems *obj, const char key[], const char text[], const char man[],
                                      PetscInt cur, PetscInt *val, PetscBool *set, PetscInt lo)
 {
-  char        name[256], buf[256];
-  PetscBool   has;
-  PetscInt    v   = 0;
-  const char *why = NULL;
+  char      name[256], buf[256];
+  PetscBool has;
+  PetscInt  v = 0;
 
   PetscFunctionBeginUser;
-  PetscCall(PffOptionsRaw(obj, key, name, sizeof(name), buf, sizeof(buf), &has));
-  if (has) why = PffParseInt(buf, &v);
-  PetscCheck(!why, obj->comm, PETSC_ERR_ARG_WRONG, "%s %s is invalid: %s", name, buf[0] ? buf : "(no value)", why);
+  PetscCall(PffOptionsReadNumber(obj->comm, obj->options, obj->prefix, key, PETSC_TRUE, name, sizeof(name), buf,
+                                 sizeof(buf), &has, NULL, &v));
   PetscCheck(!has || v >= lo, obj->comm, PETSC_ERR_ARG_OUTOFRANGE, "%s %s is invalid: must be >= %" PetscInt_FMT, name,
              buf, lo);
   PetscCall(PetscOptionsInt_Private(obj, key, text, man, cur, val, set, PETSC_MIN_INT, PETSC_MAX_INT));
@@ -109,7 +130,7 @@ PetscErrorCode PffOptionsBool_Private(PetscOptionItems *obj, const char key[], c
   PetscBool                has, ok = PETSC_FALSE;
 
   PetscFunctionBeginUser;
-  PetscCall(PffOptionsRaw(obj, key, name, sizeof(name), buf, sizeof(buf), &has));
+  PetscCall(PffOptionsRaw(obj->options, obj->prefix, key, name, sizeof(name), buf, sizeof(buf), &has));
   if (has)
     for (size_t i = 0; i < PETSC_STATIC_ARRAY_LENGTH(words) && !ok; i++) PetscCall(PetscStrcasecmp(buf, words[i], &ok));
   PetscCheck(!has || ok, obj->comm, PETSC_ERR_ARG_WRONG, "%s %s is invalid: must be true or false", name, buf);
@@ -128,7 +149,7 @@ PetscErrorCode PffOptionsEnum_Private(PetscOptionItems *obj, const char key[], c
   while (list[n]) n++;
   PetscCheck(n > 2, PETSC_COMM_SELF, PETSC_ERR_PLIB, "enum list of %s is malformed", key);
   n -= 2; /* the names, then the type name and the prefix (and NULL) */
-  PetscCall(PffOptionsRaw(obj, key, name, sizeof(name), buf, sizeof(buf), &has));
+  PetscCall(PffOptionsRaw(obj->options, obj->prefix, key, name, sizeof(name), buf, sizeof(buf), &has));
   for (PetscInt i = 0; i < n && has && !ok; i++) PetscCall(PetscStrcasecmp(buf, list[i], &ok));
   if (has && !ok) {
     for (PetscInt i = 0; i < n; i++) {
@@ -151,23 +172,16 @@ static PetscErrorCode PffOptionsCheckList(PetscOptionItems *obj, const char key[
   const char *why   = NULL;
 
   PetscFunctionBeginUser;
-  PetscCall(PffOptionsRaw(obj, key, name, sizeof(name), buf, sizeof(buf), &has));
+  PetscCall(PffOptionsRaw(obj->options, obj->prefix, key, name, sizeof(name), buf, sizeof(buf), &has));
   if (!has) PetscFunctionReturn(PETSC_SUCCESS);
   for (const char *s = buf; !why;) {
     const char *comma = strchr(s, ',');
     const char *end   = comma ? comma : s + strlen(s);
-    char        tok[128];
     PetscReal   r;
     PetscInt    i;
 
     count++;
-    if (integer) {
-      size_t n = PetscMin((size_t)(end - s), sizeof(tok) - 1);
-      memcpy(tok, s, n);
-      tok[n] = 0;
-      why    = PffParseInt(tok, &i);
-    } else
-      why = PffParseReal(s, end, &r);
+    why = PffParseNumber(s, end, integer, &r, &i);
     if (!comma) break;
     s = comma + 1;
   }
@@ -195,41 +209,30 @@ PetscErrorCode PffOptionsIntArray_Private(PetscOptionItems *obj, const char key[
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Reads key from the global database, if set, as a real or an integer; fails naming the key. */
-static PetscErrorCode PffOptionsGetNumber(MPI_Comm comm, const char key[], PetscBool integer, char buf[], size_t len,
-                                          PetscReal *r, PetscInt *i, PetscBool *has)
+PetscErrorCode PffOptionsCheckReal(MPI_Comm comm, const char key[], PetscReal lo, PetscReal hi, PetscBool open,
+                                   const char range[])
 {
-  const char *why;
-
-  PetscFunctionBeginUser;
-  PetscCall(PetscOptionsGetString(NULL, NULL, key, buf, len, has));
-  if (!*has) PetscFunctionReturn(PETSC_SUCCESS);
-  why = integer ? PffParseInt(buf, i) : PffParseReal(buf, buf + strlen(buf), r);
-  PetscCheck(!why, comm, PETSC_ERR_ARG_WRONG, "%s %s is invalid: %s", key, buf[0] ? buf : "(no value)", why);
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-PetscErrorCode PffOptionsCheckReal(MPI_Comm comm, const char key[], PetscReal lo, PetscReal hi, const char range[])
-{
-  char      buf[256];
+  char      name[256], buf[256];
   PetscBool has;
   PetscReal v = 0;
 
   PetscFunctionBeginUser;
-  PetscCall(PffOptionsGetNumber(comm, key, PETSC_FALSE, buf, sizeof(buf), &v, NULL, &has));
-  PetscCheck(!has || (v > lo && v < hi), comm, PETSC_ERR_ARG_OUTOFRANGE, "%s %s is invalid: must be %s", key, buf,
-             range);
+  PetscCall(
+      PffOptionsReadNumber(comm, NULL, NULL, key, PETSC_FALSE, name, sizeof(name), buf, sizeof(buf), &has, &v, NULL));
+  PetscCheck(!has || (open ? v > lo && v < hi : v >= lo && v <= hi), comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "%s %s is invalid: must be %s", key, buf, range);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 PetscErrorCode PffOptionsCheckInt(MPI_Comm comm, const char key[], PetscInt lo, PetscInt hi)
 {
-  char      buf[256];
+  char      name[256], buf[256];
   PetscBool has;
   PetscInt  v = 0;
 
   PetscFunctionBeginUser;
-  PetscCall(PffOptionsGetNumber(comm, key, PETSC_TRUE, buf, sizeof(buf), NULL, &v, &has));
+  PetscCall(
+      PffOptionsReadNumber(comm, NULL, NULL, key, PETSC_TRUE, name, sizeof(name), buf, sizeof(buf), &has, NULL, &v));
   PetscCheck(!has || (v >= lo && v <= hi), comm, PETSC_ERR_ARG_OUTOFRANGE,
              "%s %s is invalid: must be in [%" PetscInt_FMT ", %" PetscInt_FMT "]", key, buf, lo, hi);
   PetscFunctionReturn(PETSC_SUCCESS);

@@ -104,6 +104,15 @@ static int PffYAMLIsKnownName(const char *key)
   return 0;
 }
 
+const char *PffFileProblem(const char path[])
+{
+  struct stat st;
+  if (stat(path, &st) || access(path, R_OK)) return "no such file or not readable";
+  if (S_ISDIR(st.st_mode)) return "is a directory";
+  if (!S_ISREG(st.st_mode)) return "is not a regular file";
+  return NULL;
+}
+
 typedef struct {
   const char          *path;
   const unsigned char *buf; /* the file's bytes */
@@ -265,7 +274,10 @@ static int PffYAMLCheckEvents(PffYAMLCheck *c, yaml_parser_t *parser)
     const char   *anchor = NULL, *what;
     size_t        line, column;
 
-    if (!yaml_parser_parse(parser, &e)) return PffYAMLFailParser(c, parser);
+    if (!yaml_parser_parse(parser, &e)) {
+      bad = PffYAMLFailParser(c, parser);
+      break;
+    }
     top    = depth ? &stack[depth - 1] : NULL;
     line   = e.start_mark.line + 1;
     column = e.start_mark.column + 1;
@@ -357,9 +369,9 @@ int PffYAMLCheckFile(const char path[], char msg[], size_t len)
   yaml_parser_t  parser;
   int            bad;
 
-  if (stat(path, &st) || access(path, R_OK)) return PffYAMLFail(&c, 0, 0, "no such file or not readable");
-  if (S_ISDIR(st.st_mode)) return PffYAMLFail(&c, 0, 0, "is a directory");
-  if (!S_ISREG(st.st_mode)) return PffYAMLFail(&c, 0, 0, "is not a regular file");
+  const char *problem = PffFileProblem(path);
+
+  if (problem || stat(path, &st)) return PffYAMLFail(&c, 0, 0, "%s", problem ? problem : "cannot be read");
   if (st.st_size > PFF_YAML_MAX_BYTES)
     return PffYAMLFail(&c, 0, 0, "is too large for a scene file (%lld bytes, at most %d)", (long long)st.st_size,
                        PFF_YAML_MAX_BYTES);

@@ -148,9 +148,10 @@ static PetscErrorCode PffCorrectionDisplacement(PffFlow f, PffPressureStats *st)
   PetscCall(KSPGetTolerances(ksp, &rtol, &atol, &dtol, &maxit));
   PetscCall(KSPSetTolerances(ksp, f->volCorrRtol, atol, dtol, maxit));
   PetscCall(PffPressureProject(f->press, f->chUt, 1.0, f->chCdiv, f->chQ, st));
-  PetscCall(KSPSetTolerances(ksp, rtol, atol, dtol, maxit));
+  /* while the correction's tolerance is in force, which the message quotes */
   PetscCall(PffPressureCheckSolve(f->press, st, "Correction", f->step + 1, f->t,
                                   "loosen -flow_volume_correction_rtol or raise -pressure_ksp_max_it"));
+  PetscCall(KSPSetTolerances(ksp, rtol, atol, dtol, maxit));
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));

@@ -210,10 +210,10 @@ PetscErrorCode PffFlowMaxParticleSpeed_Private(PffFlow f, PetscReal *umax)
   for (PetscInt i = 0; i < a.n; i++) {
     const PetscReal s = a.v[3 * i] * a.v[3 * i] + a.v[3 * i + 1] * a.v[3 * i + 1] + a.v[3 * i + 2] * a.v[3 * i + 2];
     m[0]              = PetscMax(m[0], s);
-    if (!PetscIsNormalReal(s + 1)) m[1] = 1;
+    if (PetscIsInfOrNanReal(s)) m[1] = 1;
   }
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, m, 2, MPIU_REAL, MPI_MAX, f->comm));
-  PetscCheck(m[1] == 0 && PetscIsNormalReal(m[0] + 1), f->comm, PETSC_ERR_NOT_CONVERGED,
+  PetscCheck(m[1] == 0 && !PetscIsInfOrNanReal(m[0]), f->comm, PETSC_ERR_NOT_CONVERGED,
              "step %" PetscInt_FMT
              " (t = %g): a particle velocity is not finite at the start of the step (the run went "
              "unstable): lower -flow_cfl or -flow_dt_max",

@@ -138,6 +138,9 @@ typedef struct {
   float          *tiles;  /* storage of every block's tiles (the particles' float scratch, borrowed) */
 } PffSampler;
 
+/* The ghost shell (cells -1 and n on some axis) of a block tile of (n + 2)^3 floats from cell -1, copied
+   from the block's views (add false) or added to them (add true; zeros skipped). */
+PETSC_INTERN void           PffTileShell_Private(const PffView *views, PetscInt n, float *tile, PetscBool add);
 PETSC_INTERN PetscErrorCode PffSamplerCreate_Private(PffParticles, PetscInt nch, const PetscInt ch[], PffSampler *);
 PETSC_INTERN PetscErrorCode PffSamplerDestroy_Private(PffSampler *);
 

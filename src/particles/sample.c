@@ -1,5 +1,22 @@
-/* The block table of PffSampler (particlesimpl.h): G2P and advection sample face channels through it. */
+/* The block table of PffSampler (particlesimpl.h): G2P and advection sample face channels through it.
+   Also the ghost shell of a block tile, which P2G sums into. */
 #include "particlesimpl.h"
+
+void PffTileShell_Private(const PffView *views, PetscInt n, float *tile, PetscBool add)
+{
+  const PetscInt m = n + 2;
+  for (PetscInt kk = -1; kk <= n; kk++)
+    for (PetscInt jj = -1; jj <= n; jj++) {
+      const PetscBool inner = (PetscBool)(jj >= 0 && jj < n && kk >= 0 && kk < n);
+      for (PetscInt ii = -1; ii <= n; ii += (inner && ii == -1) ? n + 1 : 1) {
+        float *t = &tile[(ii + 1) + m * ((jj + 1) + m * (kk + 1))];
+        if (!add)
+          *t = *PffViewsAt(views, ii, jj, kk, n);
+        else if (*t != 0)
+          *PffViewsAt(views, ii, jj, kk, n) += *t;
+      }
+    }
+}
 
 PetscErrorCode PffSamplerCreate_Private(PffParticles p, PetscInt nch, const PetscInt ch[], PffSampler *s)
 {
@@ -55,7 +72,8 @@ PetscErrorCode PffSamplerCreate_Private(PffParticles p, PetscInt nch, const Pets
         ntile += (size_t)((info.n + 2) * (info.n + 2) * (info.n + 2));
       }
   }
-  /* each block's tiles from its views, in threads (no PETSc call inside) */
+  /* each block's tiles, in threads (no PETSc call inside): the own cells row by row from the block's
+     array, the ghost shell from the views */
 #pragma omp parallel for schedule(dynamic, 1)
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
     const PffSampleBlock *b = &s->blocks[lb];
@@ -64,10 +82,11 @@ PetscErrorCode PffSamplerCreate_Private(PffParticles p, PetscInt nch, const Pets
       const PffView *views = tv[6 * lb + q];
       float         *tile  = (float *)b->tile[q / 3][q % 3];
       if (!views) continue;
-      for (PetscInt kk = -1; kk <= n; kk++)
-        for (PetscInt jj = -1; jj <= n; jj++)
-          for (PetscInt ii = -1; ii <= n; ii++)
-            tile[(ii + 1) + m * ((jj + 1) + m * (kk + 1))] = *PffViewsAt(views, ii, jj, kk, n);
+      for (PetscInt kk = 0; kk < n; kk++)
+        for (PetscInt jj = 0; jj < n; jj++)
+          memcpy(&tile[1 + m * ((jj + 1) + m * (kk + 1))], &b->data[q / 3][q % 3][n * (jj + n * kk)],
+                 sizeof(float) * (size_t)n);
+      PffTileShell_Private(views, n, tile, PETSC_FALSE);
     }
   }
   PetscCall(PetscFree(tv));

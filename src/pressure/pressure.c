@@ -58,9 +58,9 @@ PetscErrorCode PffPressureCreate(PffGrid grid, PffPressure *ps)
 static PetscErrorCode PffPressureCheckKSPOptions(MPI_Comm comm)
 {
   PetscFunctionBeginUser;
-  PetscCall(PffOptionsCheckReal(comm, "-pressure_ksp_rtol", 0, 1, "in (0, 1)"));
-  PetscCall(PffOptionsCheckReal(comm, "-pressure_ksp_atol", -1e-300, PETSC_MAX_REAL, ">= 0"));
-  PetscCall(PffOptionsCheckReal(comm, "-pressure_ksp_divtol", 1, PETSC_MAX_REAL, "> 1"));
+  PetscCall(PffOptionsCheckReal(comm, "-pressure_ksp_rtol", 0, 1, PETSC_TRUE, "in (0, 1)"));
+  PetscCall(PffOptionsCheckReal(comm, "-pressure_ksp_atol", 0, PETSC_MAX_REAL, PETSC_FALSE, ">= 0"));
+  PetscCall(PffOptionsCheckReal(comm, "-pressure_ksp_divtol", 1, PETSC_MAX_REAL, PETSC_TRUE, "> 1"));
   PetscCall(PffOptionsCheckInt(comm, "-pressure_ksp_max_it", 1, PETSC_MAX_INT));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -444,7 +444,8 @@ PetscErrorCode PffPressureCheckSolve(PffPressure ps, const PffPressureStats *st,
   char      line[640];
 
   PetscFunctionBeginUser;
-  if (st->reason >= 0 && PetscIsNormalReal(st->rnorm + 1)) PetscFunctionReturn(PETSC_SUCCESS);
+  const PetscBool finite = (PetscBool)!PetscIsInfOrNanReal(st->rnorm);
+  if (st->reason >= 0 && finite) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(KSPGetType(ps->ksp, &ktype));
   PetscCall(KSPGetPC(ps->ksp, &pc));
   PetscCall(PCGetType(pc, &ptype));
@@ -456,9 +457,9 @@ PetscErrorCode PffPressureCheckSolve(PffPressure ps, const PffPressureStats *st,
       step, (double)t, stage, ktype, ptype, st->reason < 0 ? KSPConvergedReasons[st->reason] : "non-finite residual",
       st->its, maxit, (double)st->rnorm, (double)rtol, hint));
   /* a non-finite iterate has spoilt the fields, whatever the policy */
-  const PetscBool finite = (PetscBool)(PetscIsNormalReal(st->rnorm + 1) && st->reason != KSP_DIVERGED_NANORINF &&
-                                       st->reason != KSP_DIVERGED_PC_FAILED);
-  PetscCheck(ps->onFailure == PFF_PRESSURE_FAILURE_WARN && finite, ps->comm, PETSC_ERR_NOT_CONVERGED, "%s", line);
+  const PetscBool spoilt =
+      (PetscBool)(!finite || st->reason == KSP_DIVERGED_NANORINF || st->reason == KSP_DIVERGED_PC_FAILED);
+  PetscCheck(ps->onFailure == PFF_PRESSURE_FAILURE_WARN && !spoilt, ps->comm, PETSC_ERR_NOT_CONVERGED, "%s", line);
   PetscCall(PetscPrintf(ps->comm, "pfflip: warning: %s\n", line));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

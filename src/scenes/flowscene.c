@@ -1,9 +1,7 @@
 /* The fluid-scene driver: -sim_* options, the time loop, diagnostics CSV, frames and the run
    summary with each stage's share of the step time. */
 #include "flowscene.h"
-#include <sys/stat.h>
 #include <errno.h>
-#include <unistd.h>
 
 PetscErrorCode PffFlowSceneDefault(const char key[], const char value[])
 {
@@ -80,17 +78,14 @@ static PetscErrorCode PffFlowSceneSetFromOptions(PffScene s)
   PetscOptionsEnd();
   if (fs->restart[0]) {
     PetscMPIInt rank;
-    int         err = 0;
+    int         bad     = 0;
+    const char *problem = NULL;
     PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
-    if (rank == 0) {
-      struct stat sb;
-      if (stat(fs->restart, &sb) || access(fs->restart, R_OK))
-        err = errno;
-      else if (!S_ISREG(sb.st_mode))
-        err = EISDIR;
-    }
-    PetscCallMPI(MPI_Bcast(&err, 1, MPI_INT, 0, s->comm));
-    PetscCheck(!err, s->comm, PETSC_ERR_FILE_OPEN, "-sim_restart %s cannot be read: %s", fs->restart, strerror(err));
+    if (rank == 0) problem = PffFileProblem(fs->restart);
+    bad = problem != NULL;
+    PetscCallMPI(MPI_Bcast(&bad, 1, MPI_INT, 0, s->comm));
+    PetscCheck(!bad, s->comm, PETSC_ERR_FILE_OPEN, "-sim_restart %s cannot be read: %s", fs->restart,
+               rank == 0 ? problem : "see rank 0");
   }
   PetscCheck(fs->checkpointEvery >= 0, s->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-sim_checkpoint_every %" PetscInt_FMT " is invalid: must be >= 0", fs->checkpointEvery);
