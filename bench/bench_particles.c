@@ -10,9 +10,9 @@
      RESULT copy ranks=<r> gb_s_1t=<x> gb_s_2t=<y>
      RESULT kernel=<p2g|g2p|advect> ranks=<r> particles=<n> mparts_s_1t=<x> mparts_s_2t=<y> bytes=<b>
             copy_share_1t=<s> copy_share_2t=<s>
-   bytes is the particle state a kernel must move at least (positions and velocities in double,
-   type and level bytes: P2G reads x, v, type, level = 50 B; G2P reads x, v, type and writes v = 73 B;
-   advection reads and writes x = 48 B), and copy_share the share of the copy's bandwidth that the
+   bytes is the particle state a kernel must move at least in the compact store (float positions and
+   velocities, a 4-byte word): P2G reads x, v, word = 28 B; G2P reads x, v, word and writes v = 40 B;
+   advection reads x, word and writes x = 28 B), and copy_share the share of the copy's bandwidth that the
    rate times bytes reaches (issue 12: a kernel at memory speed reaches about 1). */
 #include <pff.h>
 #include <omp.h>
@@ -122,7 +122,7 @@ int main(int argc, char **argv)
   PetscCall(
       PetscPrintf(PETSC_COMM_WORLD, "RESULT copy ranks=%d gb_s_1t=%.2f gb_s_2t=%.2f\n", (int)size, gbs[0], gbs[1]));
   const char  *names[3] = {"p2g", "g2p", "advect"};
-  const double bytes[3] = {50, 73, 48};
+  const double bytes[3] = {28, 40, 28};
   for (int k = 0; k < 3; k++)
     PetscCall(PetscPrintf(PETSC_COMM_WORLD,
                           "RESULT kernel=%s ranks=%d particles=%.0f mparts_s_1t=%.2f mparts_s_2t=%.2f bytes=%.0f "

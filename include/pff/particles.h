@@ -11,24 +11,58 @@ typedef struct _n_PffParticles *PffParticles;
 typedef enum { PFF_PARTICLE_LIQUID, PFF_PARTICLE_AIR, PFF_PARTICLE_NTYPES } PffParticleType;
 PETSC_EXTERN const char *const PffParticleTypes[];
 
-/* Flag bits of PffParticleArrays.flags. */
+/* The packed word of a particle: type in bits 0-3, level in bits 4-7, flags from bit 8. */
+#define PFF_PARTICLE_FLAG_SHIFT 8
 #define PFF_PARTICLE_FLAG_DROPLET 0x1 /* liquid particle found in air (Sec. 3.4): droplet candidate */
+#define PFF_PARTICLE_FLAG_REMOVE 0x2  /* marked for PffParticlesRemove */
+
+static inline uint32_t PffParticleWord(PetscInt type, PetscInt level, uint32_t flags)
+{
+  return (uint32_t)type | (uint32_t)level << 4 | flags << PFF_PARTICLE_FLAG_SHIFT;
+}
+static inline PetscInt PffParticleWordType(uint32_t w)
+{
+  return (PetscInt)(w & 0xfu);
+}
+static inline PetscInt PffParticleWordLevel(uint32_t w)
+{
+  return (PetscInt)(w >> 4 & 0xfu);
+}
+static inline uint32_t PffParticleWordFlags(uint32_t w)
+{
+  return w >> PFF_PARTICLE_FLAG_SHIFT;
+}
+/* w with the flag bits set (on true) or cleared (on false) */
+static inline uint32_t PffParticleWordSetFlags(uint32_t w, uint32_t flags, PetscBool on)
+{
+  return on ? w | flags << PFF_PARTICLE_FLAG_SHIFT : w & ~(flags << PFF_PARTICLE_FLAG_SHIFT);
+}
 
 #define PFF_PARTICLES_PER_AXIS 2 /* 2 x 2 x 2 = 8 particles per cell at seeding */
 
-/* The arrays of the n particles on this rank; borrowed, valid until the next call that adds,
-   removes or moves particles (Seed, Migrate, Remove, Advect). After PffParticlesBin (and after
-   Seed and Migrate, which bin) the particles of local block lb are [start[lb], start[lb + 1]). */
+/* The arrays of the n particles on this rank (the compact store, 36 B per particle; docs/particles.md);
+   borrowed, valid until the next call that adds, removes or moves particles (Seed, Migrate, Remove,
+   Advect). After PffParticlesBin (and after Seed and Migrate, which bin) the particles of local block lb
+   are [start[lb], start[lb + 1]).
+
+   Positions are floats in grid units, g = (x - origin) / h0 (PffParticleArraysWorld gives x): 24 bits
+   of mantissa keep every position within cells * 2^-24 finest cells of the double it was rounded from,
+   2^-10 of a cell at 16384 cells per axis, independent of where the domain lies. */
 typedef struct {
-  PetscInt        n;
-  PetscReal      *x;     /* [3n] position */
-  PetscReal      *v;     /* [3n] velocity */
-  uint64_t       *id;    /* [n] unique, deterministic: the same scene gives the same ids on any rank count */
-  uint8_t        *type;  /* [n] PffParticleType */
-  int8_t         *level; /* [n] particle level l_p: radius r_p = h0 * 2^l_p, volume V_p = 8^l_p */
-  uint8_t        *flags; /* [n] PFF_PARTICLE_FLAG_* */
-  const PetscInt *start; /* [nlocal + 1] block bins */
+  PetscInt  n;
+  float    *x;    /* [3n] position in grid units */
+  float    *v;    /* [3n] velocity (world units) */
+  uint64_t *id;   /* [n] unique, deterministic: the same scene gives the same ids on any rank count */
+  uint32_t *word; /* [n] PffParticleWord(type, level, flags): level l_p gives radius r_p = h0 2^l_p, volume 8^l_p */
+  const PetscInt *start;         /* [nlocal + 1] block bins */
+  PetscReal       origin[3], h0; /* the grid's: x = origin + h0 g */
 } PffParticleArrays;
+
+/* World position of particle i. */
+static inline void PffParticleArraysWorld(const PffParticleArrays *a, PetscInt i, PetscReal x[3])
+{
+  for (int d = 0; d < 3; d++) x[d] = a->origin[d] + a->h0 * (PetscReal)a->x[3 * i + d];
+}
 
 /* Seeding callback: type of the particle at x (PFF_PARTICLE_LIQUID, PFF_PARTICLE_AIR, or -1 for no
    particle, e.g. inside a solid) and its initial velocity v. Must be deterministic. */
@@ -66,8 +100,9 @@ PETSC_EXTERN PetscErrorCode PffParticlesBin(PffParticles p);
 /* Wraps periodic axes, clamps into walled axes, sends every particle to the owner of its block, bins.
    Nothing is lost: a particle in an inactive block is an error. Collective. */
 PETSC_EXTERN PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats);
-/* Removes the particles with remove[i] true (keeps the order of the others, rebins). Not collective. */
-PETSC_EXTERN PetscErrorCode PffParticlesRemove(PffParticles p, const PetscBool remove[]);
+/* Removes the particles flagged PFF_PARTICLE_FLAG_REMOVE (keeps the order of the others, rebins). Not
+   collective. */
+PETSC_EXTERN PetscErrorCode PffParticlesRemove(PffParticles p);
 /* Global count and mass per type (mass = density[type] * particle volume). Collective. */
 PETSC_EXTERN PetscErrorCode PffParticlesGetTotals(PffParticles p, const PetscReal density[PFF_PARTICLE_NTYPES],
                                                   PetscInt64 count[PFF_PARTICLE_NTYPES],
@@ -109,9 +144,10 @@ PETSC_EXTERN PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const Pets
                                                       PetscReal dt, PffSolidFn solid, void *solidctx,
                                                       PffParticleStats *stats);
 
-/* Appends m particles (copied) anywhere in the domain, ids chosen by the caller; call
-   PffParticlesMigrate next to send them to their owners and bin them. For restart and tests.
-   Not collective. */
+/* Appends m particles anywhere in the domain, ids chosen by the caller, from world positions (rounded to
+   the store's float grid units; a position the store wrote comes back exactly) and velocities; flags
+   may be NULL. Call PffParticlesMigrate next to send them to their owners and bin them. For restart and
+   tests. Not collective. */
 PETSC_EXTERN PetscErrorCode PffParticlesAdd(PffParticles p, PetscInt m, const PetscReal x[], const PetscReal v[],
                                             const uint64_t id[], const uint8_t type[], const int8_t level[],
                                             const uint8_t flags[]);

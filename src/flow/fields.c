@@ -172,28 +172,32 @@ PetscErrorCode PffFlowFlipRatios_Private(PffFlow f, PetscReal dt, PetscReal alph
    flagged as a droplet candidate. Reads the cell phase field (ghosts current). */
 PetscErrorCode PffFlowEscaped_Private(PffFlow f, PetscInt64 *bubbles, PetscInt64 *droplets)
 {
+  enum { CHUNK = 1024 }; /* world positions in chunks on the stack: no allocation, no per-particle scratch */
   PffParticleArrays a;
   PetscInt64        cnt[2] = {0, 0};
-  PetscBool        *remove;
-  PetscReal        *phi;
+  PetscReal         xw[3 * CHUNK], phi[CHUNK];
 
   PetscFunctionBeginUser;
   PetscCall(PffParticlesGetArrays(f->part, &a));
-  PetscCall(PetscMalloc2(a.n, &remove, a.n, &phi));
-  PetscCall(PffGridInterpolate(f->grid, f->chPhi, a.n, a.x, phi));
-  for (PetscInt i = 0; i < a.n; i++) {
-    remove[i] = PETSC_FALSE;
-    if (a.type[i] == PFF_PARTICLE_AIR && phi[i] > 0.5 + f->deltaPhi) {
-      remove[i] = f->deleteBubbles;
-      cnt[0]++;
-    } else if (a.type[i] == PFF_PARTICLE_LIQUID && phi[i] < 0.5 - f->deltaPhi) {
-      a.flags[i] |= PFF_PARTICLE_FLAG_DROPLET;
-      cnt[1]++;
-    } else
-      a.flags[i] &= (uint8_t)~PFF_PARTICLE_FLAG_DROPLET;
+  for (PetscInt i0 = 0; i0 < a.n; i0 += CHUNK) {
+    const PetscInt m = PetscMin(CHUNK, a.n - i0);
+    for (PetscInt j = 0; j < m; j++) PffParticleArraysWorld(&a, i0 + j, &xw[3 * j]);
+    PetscCall(PffGridInterpolate(f->grid, f->chPhi, m, xw, phi));
+    for (PetscInt j = 0; j < m; j++) {
+      const PetscInt i = i0 + j, type = PffParticleWordType(a.word[i]);
+      PetscBool      drop = PETSC_FALSE, rm = PETSC_FALSE;
+      if (type == PFF_PARTICLE_AIR && phi[j] > 0.5 + f->deltaPhi) {
+        rm = f->deleteBubbles;
+        cnt[0]++;
+      } else if (type == PFF_PARTICLE_LIQUID && phi[j] < 0.5 - f->deltaPhi) {
+        drop = PETSC_TRUE;
+        cnt[1]++;
+      }
+      a.word[i] = PffParticleWordSetFlags(a.word[i], PFF_PARTICLE_FLAG_DROPLET, drop);
+      a.word[i] = PffParticleWordSetFlags(a.word[i], PFF_PARTICLE_FLAG_REMOVE, rm);
+    }
   }
-  if (f->deleteBubbles && cnt[0]) PetscCall(PffParticlesRemove(f->part, remove));
-  PetscCall(PetscFree2(remove, phi));
+  if (f->deleteBubbles && cnt[0]) PetscCall(PffParticlesRemove(f->part));
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, cnt, 2, MPIU_INT64, MPI_SUM, f->comm));
   *bubbles  = cnt[0];
   *droplets = cnt[1];
@@ -208,8 +212,8 @@ PetscErrorCode PffFlowMaxParticleSpeed_Private(PffFlow f, PetscReal *umax)
   PetscFunctionBeginUser;
   PetscCall(PffParticlesGetArrays(f->part, &a));
   for (PetscInt i = 0; i < a.n; i++) {
-    const PetscReal s = a.v[3 * i] * a.v[3 * i] + a.v[3 * i + 1] * a.v[3 * i + 1] + a.v[3 * i + 2] * a.v[3 * i + 2];
-    m[0]              = PetscMax(m[0], s);
+    const PetscReal vx = a.v[3 * i], vy = a.v[3 * i + 1], vz = a.v[3 * i + 2], s = vx * vx + vy * vy + vz * vz;
+    m[0] = PetscMax(m[0], s);
     if (PetscIsInfOrNanReal(s)) m[1] = 1;
   }
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, m, 2, MPIU_REAL, MPI_MAX, f->comm));

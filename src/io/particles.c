@@ -76,29 +76,47 @@ PetscErrorCode PffIOWriteParticles_Private(PffParticles particles, MPI_Comm comm
         PffH5WriteAttribute_Private(group, "rank_counts", H5T_STD_I64LE, H5T_NATIVE_INT64, (hsize_t)size, counts));
     PetscCall(PetscFree(counts));
   }
-  for (int k = 0; k < 2; k++) {
-    const char      *name = k == 0 ? "x" : "v";
-    const PetscReal *src  = k == 0 ? a.x : a.v;
+  /* world positions (double in checkpoints: the store's floats come back exactly), velocities as
+     stored or widened, and the packed word unpacked into the file's three byte datasets */
+  {
+    PetscReal *xw = NULL;
+    float     *xf = NULL;
+    uint8_t   *bytes;
+    PetscCall(PetscMalloc1(n + 1, &bytes));
     if (dbl) {
-      PetscCall(PffIOWriteRows(group, name, ftype, PFF_H5T_NATIVE_PETSCREAL, (hsize_t)total, 3, (hsize_t)start,
-                               (hsize_t)n, dxpl, src));
+      PetscCall(PetscMalloc1(3 * n + 1, &xw));
+      for (PetscInt64 i = 0; i < n; i++) PffParticleArraysWorld(&a, (PetscInt)i, &xw[3 * i]);
+      PetscCall(PffIOWriteRows(group, "x", ftype, PFF_H5T_NATIVE_PETSCREAL, (hsize_t)total, 3, (hsize_t)start,
+                               (hsize_t)n, dxpl, xw));
+      for (PetscInt64 i = 0; i < 3 * n; i++) xw[i] = (PetscReal)a.v[i];
+      PetscCall(PffIOWriteRows(group, "v", ftype, PFF_H5T_NATIVE_PETSCREAL, (hsize_t)total, 3, (hsize_t)start,
+                               (hsize_t)n, dxpl, xw));
     } else {
-      float *buf;
-      PetscCall(PetscMalloc1(3 * n + 1, &buf));
-      for (PetscInt64 i = 0; i < 3 * n; i++) buf[i] = (float)src[i];
-      PetscCall(PffIOWriteRows(group, name, ftype, H5T_NATIVE_FLOAT, (hsize_t)total, 3, (hsize_t)start, (hsize_t)n,
-                               dxpl, buf));
-      PetscCall(PetscFree(buf));
+      PetscCall(PetscMalloc1(3 * n + 1, &xf));
+      for (PetscInt64 i = 0; i < 3 * n; i++) xf[i] = (float)(a.origin[i % 3] + a.h0 * (PetscReal)a.x[i]);
+      PetscCall(
+          PffIOWriteRows(group, "x", ftype, H5T_NATIVE_FLOAT, (hsize_t)total, 3, (hsize_t)start, (hsize_t)n, dxpl, xf));
+      PetscCall(PffIOWriteRows(group, "v", ftype, H5T_NATIVE_FLOAT, (hsize_t)total, 3, (hsize_t)start, (hsize_t)n, dxpl,
+                               a.v));
     }
+    PetscCall(PffIOWriteRows(group, "id", H5T_STD_U64LE, H5T_NATIVE_UINT64, (hsize_t)total, 0, (hsize_t)start,
+                             (hsize_t)n, dxpl, a.id));
+    const char *const names[3]  = {"type", "level", "flags"};
+    const hid_t       ftypes[3] = {H5T_STD_U8LE, H5T_STD_I8LE, H5T_STD_U8LE};
+    for (int k = 0; k < 3; k++) {
+      for (PetscInt64 i = 0; i < n; i++) {
+        const uint32_t w = a.word[i];
+        bytes[i]         = (uint8_t)(k == 0   ? (uint32_t)PffParticleWordType(w)
+                                     : k == 1 ? (uint32_t)PffParticleWordLevel(w)
+                                              : PffParticleWordFlags(w));
+      }
+      PetscCall(PffIOWriteRows(group, names[k], ftypes[k], H5T_NATIVE_UINT8, (hsize_t)total, 0, (hsize_t)start,
+                               (hsize_t)n, dxpl, bytes));
+    }
+    PetscCall(PetscFree(xw));
+    PetscCall(PetscFree(xf));
+    PetscCall(PetscFree(bytes));
   }
-  PetscCall(PffIOWriteRows(group, "id", H5T_STD_U64LE, H5T_NATIVE_UINT64, (hsize_t)total, 0, (hsize_t)start, (hsize_t)n,
-                           dxpl, a.id));
-  PetscCall(PffIOWriteRows(group, "type", H5T_STD_U8LE, H5T_NATIVE_UINT8, (hsize_t)total, 0, (hsize_t)start, (hsize_t)n,
-                           dxpl, a.type));
-  PetscCall(PffIOWriteRows(group, "level", H5T_STD_I8LE, H5T_NATIVE_INT8, (hsize_t)total, 0, (hsize_t)start, (hsize_t)n,
-                           dxpl, a.level));
-  PetscCall(PffIOWriteRows(group, "flags", H5T_STD_U8LE, H5T_NATIVE_UINT8, (hsize_t)total, 0, (hsize_t)start,
-                           (hsize_t)n, dxpl, a.flags));
   PffCallHDF5(H5Gclose(group));
   *count = total;
   PetscFunctionReturn(PETSC_SUCCESS);

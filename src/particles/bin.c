@@ -2,7 +2,12 @@
    particles of local block lb are contiguous, [start[lb], start[lb + 1]). This gives cache-coherent
    traversal and the per-block work lists of the 8-colour lock-free P2G. The sort runs in threads over
    contiguous chunks whose offsets keep the chunks in order, so its result does not depend on the
-   thread count (bit-exact restarts rely on the order). */
+   thread count (bit-exact restarts rely on the order).
+
+   No second copy of the store (issue 12): the sort computes each particle's destination (4 B per
+   particle) and then moves the store one 4-byte lane at a time (x, y, z of x and v, the two halves of
+   the id, the word) through a lane buffer of 4 B per particle. A store that is already in order is
+   left as it is. */
 #include "particlesimpl.h"
 #include <omp.h>
 
@@ -31,44 +36,57 @@ static PetscErrorCode PffParticlesUpdateBlocks(PffParticles p)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Moves 4-byte lane `lane` of the records of `size` bytes at base to their destinations dst through
+   buf: lane by lane keeps the scratch at 4 B per particle. */
+static void PffBinScatterLane(void *base, size_t size, size_t lane, PetscInt n, const int32_t dst[], float *buf)
+{
+  char *b = (char *)base + 4 * lane;
+#pragma omp parallel for schedule(static)
+  for (PetscInt i = 0; i < n; i++) memcpy(&buf[dst[i]], b + size * (size_t)i, 4);
+#pragma omp parallel for schedule(static)
+  for (PetscInt j = 0; j < n; j++) memcpy(b + size * (size_t)j, &buf[j], 4);
+}
+
 PetscErrorCode PffParticlesBin(PffParticles p)
 {
   const PetscInt *level;
-  PetscInt        nb[3], nbad = 0;
+  PetscInt        nb[3], nbad = 0, moved = 0;
   const PetscInt  n = p->n;
+  int32_t        *dst;
 
   PetscFunctionBeginUser;
   PetscCall(PetscLogEventBegin(PFF_PartBin, 0, 0, 0, 0));
+  PetscCheck(n < INT32_MAX, PETSC_COMM_SELF, PETSC_ERR_SUP,
+             "%" PetscInt_FMT " particles on one rank: the binning indexes them with 32 bits; use more ranks", n);
   PetscCall(PffParticlesUpdateBlocks(p));
   PetscCall(PffGridGetRaster(p->grid, nb, &level, NULL));
-  PetscCall(PffParticlesReserve_Private(p, n));
-  PetscInt *blk = p->blk, *local = p->local;
+  PetscCall(PffParticlesGetIntWork_Private(p, (size_t)n + 1, &dst));
+  const PetscInt *local = p->local;
 #pragma omp          parallel for reduction(+ : nbad) schedule(static)
   for (PetscInt i = 0; i < n; i++) {
              const PetscInt gid = PffParticlesLocate_Private(p, &p->s.x[3 * i], level);
-             blk[i]             = gid >= 0 ? local[gid] : -1;
-             if (blk[i] < 0) nbad++;
+             dst[i]             = gid >= 0 ? (int32_t)local[gid] : -1;
+             if (dst[i] < 0) nbad++;
   }
            if (nbad > 0) {
              PetscInt i = 0;
-             while (blk[i] >= 0) i++;
+             while (dst[i] >= 0) i++;
     SETERRQ(PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
                      "%" PetscInt_FMT " particles are not in a block owned by rank %d, e.g. id %" PetscInt64_FMT
                      " at (%g, %g, %g): call PffParticlesMigrate",
-                     nbad, (int)p->rank, (PetscInt64)p->s.id[i], (double)p->s.x[3 * i], (double)p->s.x[3 * i + 1],
-                     (double)p->s.x[3 * i + 2]);
+                     nbad, (int)p->rank, (PetscInt64)p->s.id[i], (double)(p->origin[0] + p->h0 * p->s.x[3 * i]),
+                     (double)(p->origin[1] + p->h0 * p->s.x[3 * i + 1]), (double)(p->origin[2] + p->h0 * p->s.x[3 * i + 2]));
   }
-  /* stable counting sort in threads: each thread counts and then scatters its own contiguous chunk,
+  /* stable counting sort in threads: each thread counts and then numbers its own contiguous chunk,
      from offsets that put the chunks in order, so the result is the serial sort's */
   PetscInt      *start = p->start, *counts;
   const PetscInt nl = p->nlocal, nt = (PetscInt)PetscMax(omp_get_max_threads(), 1);
   PetscCall(PetscCalloc1((size_t)nt * (size_t)(nl + 1), &counts));
-  PffParticleSoA *s = &p->s, *t = &p->tmp;
-         #pragma omp parallel num_threads(nt)
+         #pragma omp parallel num_threads(nt) reduction(+ : moved)
   {
              const PetscInt th = omp_get_thread_num(), nth = omp_get_num_threads(), i0 = n * th / nth, i1 = n * (th + 1) / nth;
              PetscInt      *c = counts + (size_t)th * (size_t)(nl + 1);
-             for (PetscInt i = i0; i < i1; i++) c[blk[i]]++;
+             for (PetscInt i = i0; i < i1; i++) c[dst[i]]++;
 #pragma omp barrier
 #pragma omp          single
     {
@@ -85,24 +103,21 @@ PetscErrorCode PffParticlesBin(PffParticles p)
       start[nl] = off;
     }
     for (PetscInt i = i0; i < i1; i++) {
-               const PetscInt j = c[blk[i]]++;
-               for (int d = 0; d < 3; d++) {
-                 t->x[3 * j + d] = s->x[3 * i + d];
-                 t->v[3 * j + d] = s->v[3 * i + d];
-      }
-               t->id[j]    = s->id[i];
-               t->type[j]  = s->type[i];
-               t->level[j] = s->level[i];
-               t->flags[j] = s->flags[i];
+               dst[i] = (int32_t)c[dst[i]]++;
+               moved += dst[i] != i;
     }
   }
   PetscCall(PetscFree(counts));
-  const PffParticleSoA swap = p->s;
-  p->s                      = p->tmp;
-  p->tmp                    = swap;
-#pragma omp parallel for schedule(dynamic, 4)
-  for (PetscInt lb = 0; lb < p->nlocal; lb++)
-    for (PetscInt i = start[lb]; i < start[lb + 1]; i++) blk[i] = lb;
+  if (moved) {
+    float *buf;
+    PetscCall(PffParticlesGetFloatWork_Private(p, (size_t)n + 1, &buf));
+    for (size_t l = 0; l < 3; l++) {
+      PffBinScatterLane(p->s.x, 3 * sizeof(float), l, n, dst, buf);
+      PffBinScatterLane(p->s.v, 3 * sizeof(float), l, n, dst, buf);
+    }
+    for (size_t l = 0; l < 2; l++) PffBinScatterLane(p->s.id, sizeof(uint64_t), l, n, dst, buf);
+    PffBinScatterLane(p->s.word, sizeof(uint32_t), 0, n, dst, buf);
+  }
   p->binned = PETSC_TRUE;
   PetscCall(PetscLogEventEnd(PFF_PartBin, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);

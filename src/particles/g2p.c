@@ -19,20 +19,21 @@ PetscErrorCode PffParticlesG2P(PffParticles p, PetscInt chU, PetscInt chDU, cons
   PetscCheck(alpha != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "PffParticlesG2P needs the FLIP weights alpha");
   PetscCall(PetscLogEventBegin(PFF_G2P, 0, 0, 0, 0));
   PetscCall(PffSamplerCreate_Private(p, 2, ch, &s));
-  const PetscReal *x       = p->s.x;
-  PetscReal       *v       = p->s.v;
-  const uint8_t   *type    = p->s.type;
-  const PetscInt   nlevels = p->nlevels;
+  const float    *x       = p->s.x;
+  float          *v       = p->s.v;
+  const uint32_t *word    = p->s.word;
+  const PetscInt  nlevels = p->nlevels;
 #pragma omp parallel for schedule(dynamic, 1)
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
     const PffSampleBlock *b = &s.blocks[lb];
     for (PetscInt i = p->start[lb]; i < p->start[lb + 1]; i++) {
-      const PetscReal a = alpha[type[i] * nlevels + b->level];
+      const PetscReal a    = alpha[PffParticleWordType(word[i]) * nlevels + b->level];
+      const PetscReal g[3] = {x[3 * i], x[3 * i + 1], x[3 * i + 2]};
       PetscReal       lp[3], uv[2];
-      PffSamplerLocal_Private(p, b, &x[3 * i], lp);
+      PffSamplerLocal_Private(p, b, g, lp);
       for (PetscInt d = 0; d < 3; d++) {
         PffSamplerFace_Private(&s, lb, 0, 2, d, lp, uv);
-        v[3 * i + d] = a * (v[3 * i + d] + uv[1]) + (1 - a) * uv[0];
+        v[3 * i + d] = (float)(a * ((PetscReal)v[3 * i + d] + uv[1]) + (1 - a) * uv[0]);
       }
     }
   }

@@ -13,12 +13,12 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
   PetscInt           nb[3], nbad = 0;
   PetscInt64         loc[3] = {0, 0, 0}; /* sent, wrapped, clamped */
   const PetscInt     n      = p->n;
-  PetscInt          *dest;
+  int32_t           *dest;
 
   PetscFunctionBeginUser;
   PetscCall(PetscLogEventBegin(PFF_PartMigrate, 0, 0, 0, 0));
   PetscCall(PffGridGetRaster(p->grid, nb, &level, &owner));
-  PetscCall(PffParticlesGetWork_Private(p, 0, NULL, (size_t)n, &dest));
+  PetscCall(PffParticlesGetIntWork_Private(p, (size_t)n + 1, &dest));
   PetscInt64 sent = 0, wrapped = 0, clamped = 0;
 #pragma omp parallel for reduction(+ : sent, wrapped, clamped, nbad) schedule(static)
   for (PetscInt i = 0; i < n; i++) {
@@ -27,7 +27,7 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
     wrapped += w;
     clamped += c;
     const PetscInt gid = PffParticlesLocate_Private(p, &p->s.x[3 * i], level);
-    dest[i]            = gid >= 0 ? (PetscInt)owner[gid] : -1;
+    dest[i]            = gid >= 0 ? (int32_t)owner[gid] : -1;
     if (gid < 0)
       nbad++;
     else if (dest[i] != p->rank)
@@ -41,7 +41,8 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
     while (dest[i] >= 0) i++;
     SETERRQ(PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
             "%" PetscInt_FMT " particles lie in inactive blocks, e.g. id %" PetscInt64_FMT " at (%g, %g, %g)", nbad,
-            (PetscInt64)p->s.id[i], (double)p->s.x[3 * i], (double)p->s.x[3 * i + 1], (double)p->s.x[3 * i + 2]);
+            (PetscInt64)p->s.id[i], (double)(p->origin[0] + p->h0 * p->s.x[3 * i]),
+            (double)(p->origin[1] + p->h0 * p->s.x[3 * i + 1]), (double)(p->origin[2] + p->h0 * p->s.x[3 * i + 2]));
   }
   if (p->size > 1) {
     PetscMPIInt *scount, *rcount, *sdispl, *rdispl;
@@ -78,11 +79,9 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
           q->x[d] = p->s.x[3 * i + d];
           q->v[d] = p->s.v[3 * i + d];
         }
-        q->id    = p->s.id[i];
-        q->type  = p->s.type[i];
-        q->level = p->s.level[i];
-        q->flags = p->s.flags[i];
-        PetscCall(PetscArrayzero(q->pad, 5));
+        q->id   = p->s.id[i];
+        q->word = p->s.word[i];
+        q->pad  = 0;
         continue;
       }
       if (m != i) PffParticlesMove_Private(p, m, i);
@@ -104,10 +103,8 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
         p->s.x[3 * j + d] = q->x[d];
         p->s.v[3 * j + d] = q->v[d];
       }
-      p->s.id[j]    = q->id;
-      p->s.type[j]  = q->type;
-      p->s.level[j] = q->level;
-      p->s.flags[j] = q->flags;
+      p->s.id[j]   = q->id;
+      p->s.word[j] = q->word;
     }
     PetscCall(PetscFree2(sbuf, rbuf));
     PetscCall(PetscFree4(scount, rcount, sdispl, rdispl));

@@ -93,10 +93,13 @@ static PetscErrorCode PffZeroWithGhosts(PffGrid grid, PetscInt ch, PetscInt nloc
    order, so the sums are the same. */
 static void PffSplatBlock(const PffParticleSoA *s, PetscInt i0, PetscInt i1, const PffBlockInfo *info,
                           const PffView *vm[3], const PffView *vp[3], const PffView *vv[3], float *const dm[3],
-                          float *const dp[3], float *const dv[3], const PetscReal density[], float *tile)
+                          float *const dp[3], float *const dv[3], const PetscReal density[], PetscInt n0, float *tile)
 {
-  const PetscReal ih = 1.0 / info->h, norm = 1.0 / (PetscReal)((PetscInt64)1 << (3 * info->level));
-  const PetscInt  n = info->n, st[8] = {0, 1, n, n + 1, n * n, n * n + 1, n * n + n, n * n + n + 1}, m = n + 2,
+  const PetscReal lo[3] = {(PetscReal)(info->ijk[0] * n0), (PetscReal)(info->ijk[1] * n0),
+                           (PetscReal)(info->ijk[2] * n0)}; /* grid units */
+  const PetscReal ih    = 1.0 / (PetscReal)((PetscInt)1 << info->level),
+                  norm  = 1.0 / (PetscReal)((PetscInt64)1 << (3 * info->level));
+  const PetscInt n = info->n, st[8] = {0, 1, n, n + 1, n * n, n * n + 1, n * n + n, n * n + n + 1}, m = n + 2,
                  m3 = m * m * m, nc = vv ? 3 : 2;
   const PffView *const *vc[3] = {vm, vp, vv};
 
@@ -105,9 +108,11 @@ static void PffSplatBlock(const PffParticleSoA *s, PetscInt i0, PetscInt i1, con
   memset(tile, 0, sizeof(float) * (size_t)(nc * 3 * m3));
 
   for (PetscInt i = i0; i < i1; i++) {
-    const PetscReal vol = (PetscReal)((PetscInt64)1 << (3 * s->level[i])) * norm, rho = density[s->type[i]];
-    PetscReal       sp[3];
-    for (int a = 0; a < 3; a++) sp[a] = (s->x[3 * i + a] - info->lo[a]) * ih;
+    const uint32_t  word = s->word[i];
+    const PetscReal vol  = (PetscReal)((PetscInt64)1 << (3 * PffParticleWordLevel(word))) * norm,
+                    rho  = density[PffParticleWordType(word)];
+    PetscReal sp[3];
+    for (int a = 0; a < 3; a++) sp[a] = ((PetscReal)s->x[3 * i + a] - lo[a]) * ih;
     for (int d = 0; d < 3; d++) {
       PetscInt  c0[3];
       PetscReal q2[3][2], lin[3][2];
@@ -126,7 +131,7 @@ static void PffSplatBlock(const PffParticleSoA *s, PetscInt i0, PetscInt i1, con
         const PetscReal r = 1 - (q2[0][q & 1] + q2[1][(q >> 1) & 1] + q2[2][(q >> 2) & 1]);
         w[q]              = r > 0 ? r * r * r * vol : 0;
       }
-      const PetscReal rvd = rho * s->v[3 * i + d];
+      const PetscReal rvd = rho * (PetscReal)s->v[3 * i + d];
       if (inside) {
         const PetscInt o = c0[0] + n * (c0[1] + n * c0[2]);
         for (int q = 0; q < 8; q++) {
@@ -232,7 +237,7 @@ PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTI
       const PetscInt lb = order[e];
       PffSplatBlock(s, start[lb], start[lb + 1], &info[lb], &views[stride * lb], &views[stride * lb + 3],
                     nv ? &views[stride * lb + 6] : NULL, &data[stride * lb], &data[stride * lb + 3],
-                    nv ? &data[stride * lb + 6] : NULL, density, tiles + tsize * (size_t)omp_get_thread_num());
+                    nv ? &data[stride * lb + 6] : NULL, density, p->n0, tiles + tsize * (size_t)omp_get_thread_num());
     }
   }
   PetscCall(PetscFree4(info, views, data, order));

@@ -61,9 +61,7 @@ static PetscErrorCode PffParticleSoAFree(PffParticleSoA *s)
   PetscCall(PetscFree(s->x));
   PetscCall(PetscFree(s->v));
   PetscCall(PetscFree(s->id));
-  PetscCall(PetscFree(s->type));
-  PetscCall(PetscFree(s->level));
-  PetscCall(PetscFree(s->flags));
+  PetscCall(PetscFree(s->word));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -82,13 +80,10 @@ PetscErrorCode PffParticlesDestroy(PffParticles *part)
   if (part == NULL || *part == NULL) PetscFunctionReturn(PETSC_SUCCESS);
   PffParticles p = *part;
   PetscCall(PffParticleSoAFree(&p->s));
-  PetscCall(PffParticleSoAFree(&p->tmp));
   PetscCall(PetscFree(p->start));
-  PetscCall(PetscFree(p->blk));
   PetscCall(PetscFree(p->lgid));
   PetscCall(PetscFree(p->local));
-  PetscCall(PetscFree(p->work));
-  PetscCall(PetscFree(p->iwork));
+  PetscCall(PetscFree(p->i32work));
   PetscCall(PetscFree(p->fwork));
   PetscCall(PetscFree(p));
   *part = NULL;
@@ -104,53 +99,40 @@ static PetscErrorCode PffParticleSoAGrow(PffParticleSoA *s, PetscInt n, PetscInt
   PetscCall(PetscMalloc1(3 * cap, &t.x));
   PetscCall(PetscMalloc1(3 * cap, &t.v));
   PetscCall(PetscMalloc1(cap, &t.id));
-  PetscCall(PetscMalloc1(cap, &t.type));
-  PetscCall(PetscMalloc1(cap, &t.level));
-  PetscCall(PetscMalloc1(cap, &t.flags));
+  PetscCall(PetscMalloc1(cap, &t.word));
   if (n > 0) {
     PetscCall(PetscArraycpy(t.x, s->x, 3 * n));
     PetscCall(PetscArraycpy(t.v, s->v, 3 * n));
     PetscCall(PetscArraycpy(t.id, s->id, n));
-    PetscCall(PetscArraycpy(t.type, s->type, n));
-    PetscCall(PetscArraycpy(t.level, s->level, n));
-    PetscCall(PetscArraycpy(t.flags, s->flags, n));
+    PetscCall(PetscArraycpy(t.word, s->word, n));
   }
   PetscCall(PffParticleSoAFree(s));
   *s = t;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Ensures capacity for m particles (geometric growth); keeps the n stored ones. */
+/* Ensures capacity for m particles (geometric growth); keeps the n stored ones. The slack is never
+   touched until used, so it costs address space, not resident memory. */
 PetscErrorCode PffParticlesReserve_Private(PffParticles p, PetscInt m)
 {
   PetscFunctionBeginUser;
   if (m <= p->cap) PetscFunctionReturn(PETSC_SUCCESS);
   const PetscInt cap = PetscMax(m, PetscMax(1024, p->cap + p->cap / 2));
   PetscCall(PffParticleSoAGrow(&p->s, p->n, cap));
-  PetscCall(PffParticleSoAGrow(&p->tmp, 0, cap));
-  PetscCall(PetscFree(p->blk));
-  PetscCall(PetscMalloc1(cap, &p->blk));
   p->cap    = cap;
   p->binned = PETSC_FALSE;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Scratch arrays of at least nr reals and ni integers (either pointer may be NULL); borrowed until the next call. */
-PetscErrorCode PffParticlesGetWork_Private(PffParticles p, size_t nr, PetscReal **r, size_t ni, PetscInt **i)
+PetscErrorCode PffParticlesGetIntWork_Private(PffParticles p, size_t n, int32_t **w)
 {
   PetscFunctionBeginUser;
-  if (nr > p->nwork) {
-    PetscCall(PetscFree(p->work));
-    p->nwork = PetscMax(nr, p->nwork + p->nwork / 2);
-    PetscCall(PetscMalloc1(p->nwork, &p->work));
+  if (n > p->ni32work) {
+    PetscCall(PetscFree(p->i32work));
+    p->ni32work = PetscMax(n, p->ni32work + p->ni32work / 2);
+    PetscCall(PetscMalloc1(p->ni32work, &p->i32work));
   }
-  if (ni > p->niwork) {
-    PetscCall(PetscFree(p->iwork));
-    p->niwork = PetscMax(ni, p->niwork + p->niwork / 2);
-    PetscCall(PetscMalloc1(p->niwork, &p->iwork));
-  }
-  if (r) *r = p->work;
-  if (i) *i = p->iwork;
+  *w = p->i32work;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -175,29 +157,28 @@ PetscErrorCode PffParticlesCheckBinned_Private(PffParticles p, const char caller
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Periodic axes: the image in [origin, origin + L), wrapped in index space like PffGridLocate. Walled
-   axes: clamped a millionth of a finest cell inside, so the point lies strictly within the domain. */
-void PffParticlesWrapClamp_Private(PffParticles p, PetscReal x[3], PetscBool *wrapped, PetscBool *clamped)
+/* Periodic axes: the image in [0, cells), wrapped like PffGridLocate. Walled axes: clamped a millionth
+   of a finest cell inside at the lower wall and one float step inside at the upper one, so the point
+   lies strictly within the domain. */
+void PffParticlesWrapClamp_Private(PffParticles p, float g[3], PetscBool *wrapped, PetscBool *clamped)
 {
   *wrapped = *clamped = PETSC_FALSE;
   for (int d = 0; d < 3; d++) {
-    const PetscReal nc = (PetscReal)p->cells[d], s = (x[d] - p->origin[d]) / p->h0;
+    const float nc = (float)p->cells[d];
     if (p->periodic[d]) {
-      if (s >= 0 && s < nc) continue;
-      PetscReal t = PetscFmodReal(s, nc);
-      if (t < 0) t += nc;
-      if (t >= nc) t = 0;
-      x[d]     = p->origin[d] + t * p->h0;
+      if (g[d] >= 0 && g[d] < nc) continue;
+      float t = fmodf(g[d], nc); /* exact */
+      if (t < 0) t += nc;        /* may round up to nc */
+      if (!(t < nc)) t = 0;
+      g[d]     = t;
       *wrapped = PETSC_TRUE;
-      /* the division in PffGridLocate may still round up to nc */
-      if ((x[d] - p->origin[d]) / p->h0 >= nc) x[d] = p->origin[d];
     } else {
-      const PetscReal eps = 1e-6;
-      if (s < eps) {
-        x[d]     = p->origin[d] + eps * p->h0;
+      const float lo = 1e-6f, hi = nextafterf(nc, 0);
+      if (!(g[d] >= lo)) {
+        g[d]     = lo;
         *clamped = PETSC_TRUE;
-      } else if (s > nc - eps) {
-        x[d]     = p->origin[d] + (nc - eps) * p->h0;
+      } else if (g[d] > hi) {
+        g[d]     = hi;
         *clamped = PETSC_TRUE;
       }
     }
@@ -212,10 +193,10 @@ PetscErrorCode PffParticlesGetArrays(PffParticles p, PffParticleArrays *a)
   a->x     = p->s.x;
   a->v     = p->s.v;
   a->id    = p->s.id;
-  a->type  = p->s.type;
-  a->level = p->s.level;
-  a->flags = p->s.flags;
+  a->word  = p->s.word;
   a->start = p->binned ? p->start : NULL;
+  a->h0    = p->h0;
+  for (int d = 0; d < 3; d++) a->origin[d] = p->origin[d];
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -233,28 +214,29 @@ PetscErrorCode PffParticlesAdd(PffParticles p, PetscInt m, const PetscReal x[], 
                p->nlevels - 1);
   }
   PetscCall(PffParticlesReserve_Private(p, p->n + m));
-  PetscCall(PetscArraycpy(p->s.x + 3 * p->n, x, 3 * m));
-  PetscCall(PetscArraycpy(p->s.v + 3 * p->n, v, 3 * m));
-  PetscCall(PetscArraycpy(p->s.id + p->n, id, m));
-  PetscCall(PetscArraycpy(p->s.type + p->n, type, m));
-  PetscCall(PetscArraycpy(p->s.level + p->n, level, m));
-  if (flags)
-    PetscCall(PetscArraycpy(p->s.flags + p->n, flags, m));
-  else
-    PetscCall(PetscArrayzero(p->s.flags + p->n, m));
+  for (PetscInt i = 0; i < m; i++) {
+    const PetscInt j = p->n + i;
+    for (int d = 0; d < 3; d++) {
+      p->s.x[3 * j + d] = (float)((x[3 * i + d] - p->origin[d]) / p->h0);
+      p->s.v[3 * j + d] = (float)v[3 * i + d];
+    }
+    p->s.id[j]   = id[i];
+    p->s.word[j] = PffParticleWord(type[i], level[i], flags ? flags[i] : 0);
+  }
   p->n += m;
   p->binned = PETSC_FALSE;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode PffParticlesRemove(PffParticles p, const PetscBool remove[])
+PetscErrorCode PffParticlesRemove(PffParticles p)
 {
-  PetscInt  m   = 0;
-  PetscBool bin = p->binned;
+  PetscInt       m   = 0;
+  PetscBool      bin = p->binned;
+  const uint32_t rm  = PffParticleWordSetFlags(0, PFF_PARTICLE_FLAG_REMOVE, PETSC_TRUE);
 
   PetscFunctionBeginUser;
   for (PetscInt i = 0; i < p->n; i++) {
-    if (remove[i]) continue;
+    if (p->s.word[i] & rm) continue;
     if (m != i) PffParticlesMove_Private(p, m, i);
     m++;
   }
@@ -272,8 +254,9 @@ PetscErrorCode PffParticlesGetTotals(PffParticles p, const PetscReal density[PFF
 
   PetscFunctionBeginUser;
   for (PetscInt i = 0; i < p->n; i++) {
-    c[p->s.type[i]]++;
-    vol[p->s.type[i]] += (PetscReal)((PetscInt64)1 << (3 * p->s.level[i]));
+    const PetscInt t = PffParticleWordType(p->s.word[i]);
+    c[t]++;
+    vol[t] += (PetscReal)((PetscInt64)1 << (3 * PffParticleWordLevel(p->s.word[i])));
   }
   if (count) PetscCallMPI(MPI_Allreduce(c, count, PFF_PARTICLE_NTYPES, MPIU_INT64, MPI_SUM, p->comm));
   if (mass) {

@@ -11,23 +11,19 @@
 /* Purposes of the counter-based RNG (the third key besides the seed and the particle id). */
 enum { PFF_RNG_SEED_JITTER = 1 };
 
-/* One particle packed for migration. */
+/* One particle packed for migration (40 B). */
 typedef struct {
-  PetscReal x[3], v[3];
-  uint64_t  id;
-  uint8_t   type;
-  int8_t    level;
-  uint8_t   flags;
-  uint8_t   pad[5];
+  float    x[3], v[3];
+  uint64_t id;
+  uint32_t word;
+  uint32_t pad;
 } PffPackedParticle;
 
-/* The structure-of-arrays store: n particles of capacity cap. */
+/* The structure-of-arrays store (36 B per particle): n particles of capacity cap. */
 typedef struct {
-  PetscReal *x, *v;
-  uint64_t  *id;
-  uint8_t   *type;
-  int8_t    *level;
-  uint8_t   *flags;
+  float    *x, *v; /* x in grid units (world - origin) / h0 */
+  uint64_t *id;
+  uint32_t *word; /* PffParticleWord(type, level, flags) */
 } PffParticleSoA;
 
 struct _n_PffParticles {
@@ -39,13 +35,13 @@ struct _n_PffParticles {
   PetscReal jitter, substepCfl;
   uint64_t  seed;
 
-  /* store; tmp is the scatter target of the counting sort (same capacity), swapped with s */
+  /* store */
   PetscInt       n, cap;
-  PffParticleSoA s, tmp;
+  PffParticleSoA s;
 
-  /* bins: particles of local block lb are [start[lb], start[lb + 1]); blk[i] = local block of particle i */
+  /* bins: particles of local block lb are [start[lb], start[lb + 1]) */
   PetscBool binned;
-  PetscInt  nlocal, *start, *blk, *lgid;
+  PetscInt  nlocal, *start, *lgid;
   PetscInt *local; /* [nblocks] local index of global block or -1; rebuilt by every Bin */
   PetscInt  nblocksCache;
 
@@ -54,13 +50,12 @@ struct _n_PffParticles {
   PetscReal origin[3], h0;
   PetscBool periodic[3];
 
-  /* scratch for the hot paths, grown on demand */
-  PetscReal *work;
-  size_t     nwork;
-  PetscInt  *iwork;
-  size_t     niwork;
-  float     *fwork; /* the tiles of PffSampler and P2G */
-  size_t     nfwork;
+  /* scratch, grown on demand and kept: 4 B per particle each at most (the binning's destination
+     index and its lane buffer), plus the tiles of PffSampler and P2G */
+  int32_t *i32work;
+  size_t   ni32work;
+  float   *fwork;
+  size_t   nfwork;
 };
 
 /* splitmix64 finaliser: a counter-based hash, the same on every rank and thread. */
@@ -79,14 +74,14 @@ static inline PetscReal PffRandom01_Private(uint64_t seed, uint64_t id, uint64_t
   return (PetscReal)(h >> 11) / 9007199254740992.0;
 }
 
-/* Global block of world position x as PffGridLocate computes it (periodic axes wrapped), -1 outside
-   the domain; the level map decides activity. */
-static inline PetscInt PffParticlesLocate_Private(PffParticles p, const PetscReal x[3], const PetscInt level[])
+/* Global block of grid position g (grid units; periodic axes wrapped), as PffGridLocate computes it for
+   the world point origin + h0 g; -1 outside the domain; the level map decides activity. */
+static inline PetscInt PffParticlesLocateReal_Private(PffParticles p, const PetscReal g[3], const PetscInt level[])
 {
   PetscInt b[3];
   for (int d = 0; d < 3; d++) {
     const PetscReal nc = (PetscReal)p->cells[d];
-    PetscReal       s  = (x[d] - p->origin[d]) / p->h0;
+    PetscReal       s  = g[d];
     if (p->periodic[d]) {
       s = PetscFmodReal(s, nc);
       if (s < 0) s += nc;
@@ -99,6 +94,13 @@ static inline PetscInt PffParticlesLocate_Private(PffParticles p, const PetscRea
   return level[gid] >= 0 ? gid : -1;
 }
 
+/* The same for a stored position. */
+static inline PetscInt PffParticlesLocate_Private(PffParticles p, const float g[3], const PetscInt level[])
+{
+  const PetscReal r[3] = {g[0], g[1], g[2]};
+  return PffParticlesLocateReal_Private(p, r, level);
+}
+
 /* Moves particle src to slot dst (compaction after removals or sends). */
 static inline void PffParticlesMove_Private(PffParticles p, PetscInt dst, PetscInt src)
 {
@@ -106,19 +108,18 @@ static inline void PffParticlesMove_Private(PffParticles p, PetscInt dst, PetscI
     p->s.x[3 * dst + d] = p->s.x[3 * src + d];
     p->s.v[3 * dst + d] = p->s.v[3 * src + d];
   }
-  p->s.id[dst]    = p->s.id[src];
-  p->s.type[dst]  = p->s.type[src];
-  p->s.level[dst] = p->s.level[src];
-  p->s.flags[dst] = p->s.flags[src];
+  p->s.id[dst]   = p->s.id[src];
+  p->s.word[dst] = p->s.word[src];
 }
 
 PETSC_INTERN PetscErrorCode PffParticlesReserve_Private(PffParticles, PetscInt);
-PETSC_INTERN PetscErrorCode PffParticlesGetWork_Private(PffParticles, size_t, PetscReal **, size_t, PetscInt **);
+/* An int32 scratch of at least n values, kept between calls like the float scratch below. */
+PETSC_INTERN PetscErrorCode PffParticlesGetIntWork_Private(PffParticles, size_t n, int32_t **);
 /* A float scratch of at least n values, kept between calls (grown by half): no allocation, and no
    first-touch page faults, per step. */
 PETSC_INTERN PetscErrorCode PffParticlesGetFloatWork_Private(PffParticles, size_t n, float **);
-/* Wraps periodic axes and clamps walled axes of position x in place; returns what it did. */
-PETSC_INTERN void PffParticlesWrapClamp_Private(PffParticles, PetscReal x[3], PetscBool *wrapped, PetscBool *clamped);
+/* Wraps periodic axes and clamps walled axes of grid position g in place; returns what it did. */
+PETSC_INTERN void PffParticlesWrapClamp_Private(PffParticles, float g[3], PetscBool *wrapped, PetscBool *clamped);
 PETSC_INTERN PetscErrorCode PffParticlesCheckBinned_Private(PffParticles, const char[]);
 
 /* Block-batched sampling of face channels (G2P and advection; sample.c). A table built once per call
@@ -144,14 +145,15 @@ PETSC_INTERN void           PffTileShell_Private(const PffView *views, PetscInt 
 PETSC_INTERN PetscErrorCode PffSamplerCreate_Private(PffParticles, PetscInt nch, const PetscInt ch[], PffSampler *);
 PETSC_INTERN PetscErrorCode PffSamplerDestroy_Private(PffSampler *);
 
-/* Position of world point x in cell units of local block lb's level, from its lower corner, as
-   PffGridInterpolateFrom() computes it: on a periodic axis the image nearest to the block's centre. */
-static inline void PffSamplerLocal_Private(const PffParticles p, const PffSampleBlock *b, const PetscReal x[3],
+/* Position of grid point g (grid units) in cell units of local block lb's level, from its lower corner,
+   as PffGridInterpolateFrom() computes it for the world point origin + h0 g: on a periodic axis the
+   image nearest to the block's centre. */
+static inline void PffSamplerLocal_Private(const PffParticles p, const PffSampleBlock *b, const PetscReal g[3],
                                            PetscReal lp[3])
 {
   const PetscReal inv = 1.0 / (PetscReal)((PetscInt)1 << b->level);
   for (int d = 0; d < 3; d++) {
-    PetscReal sp = (x[d] - p->origin[d]) / p->h0;
+    PetscReal sp = g[d];
     if (p->periodic[d]) { /* the shift floor((sp - centre) / L + 0.5) L, without its division */
       const PetscReal L = (PetscReal)p->cells[d], centre = (PetscReal)(b->ijk[d] * p->n0) + 0.5 * (PetscReal)p->n0;
       if (sp - centre >= 0.5 * L)

@@ -29,7 +29,8 @@ PetscErrorCode PffParticlesSeed(PffParticles p, PffSeedFn fn, void *ctx)
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(p->grid, lb, &info));
-    const PetscInt n = info.n;
+    const PetscInt  n     = info.n;
+    const PetscReal scale = (PetscReal)((PetscInt)1 << info.level);
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt j = 0; j < n; j++)
         for (PetscInt i = 0; i < n; i++) {
@@ -38,11 +39,14 @@ PetscErrorCode PffParticlesSeed(PffParticles p, PffSeedFn fn, void *ctx)
             const uint64_t id   = ((uint64_t)info.gid * (uint64_t)(p->n0 * p->n0 * p->n0) + cell) * 8 + (uint64_t)sub;
             const PetscInt c[3] = {i, j, k};
             PetscReal      x[3], v[3] = {0, 0, 0};
+            float          g[3];
             PetscInt       type = -1;
+            /* the callback sees the world point of the stored float position */
             for (int a = 0; a < 3; a++) {
               const PetscReal u = PffRandom01_Private(p->seed, id, PFF_RNG_SEED_JITTER, (uint64_t)a);
               const PetscReal s = 0.25 + 0.5 * (PetscReal)((sub >> a) & 1) + p->jitter * (u - 0.5) * 0.5;
-              x[a]              = info.lo[a] + ((PetscReal)c[a] + s) * info.h;
+              g[a]              = (float)((PetscReal)(info.ijk[a] * p->n0) + ((PetscReal)c[a] + s) * scale);
+              x[a]              = p->origin[a] + p->h0 * (PetscReal)g[a];
             }
             PetscCall(fn(x, &type, v, ctx));
             if (type < 0) continue;
@@ -50,13 +54,11 @@ PetscErrorCode PffParticlesSeed(PffParticles p, PffSeedFn fn, void *ctx)
                        "seeding function returned type %" PetscInt_FMT ", not a PffParticleType or -1", type);
             const PetscInt m = p->n++;
             for (int a = 0; a < 3; a++) {
-              p->s.x[3 * m + a] = x[a];
-              p->s.v[3 * m + a] = v[a];
+              p->s.x[3 * m + a] = g[a];
+              p->s.v[3 * m + a] = (float)v[a];
             }
-            p->s.id[m]    = id;
-            p->s.type[m]  = (uint8_t)type;
-            p->s.level[m] = (int8_t)info.level;
-            p->s.flags[m] = 0;
+            p->s.id[m]   = id;
+            p->s.word[m] = PffParticleWord(type, info.level, 0);
           }
         }
   }

@@ -133,8 +133,8 @@ static PetscErrorCode PffFluidGasHeight(PffFlowScene *fs, PetscReal *yg)
   PetscCall(PffFlowGetParticles(fs->flow, &p));
   PetscCall(PffParticlesGetArrays(p, &a));
   for (PetscInt i = 0; i < a.n; i++) {
-    if (a.type[i] != PFF_PARTICLE_AIR) continue;
-    s[0] += a.x[3 * i + 1];
+    if (PffParticleWordType(a.word[i]) != PFF_PARTICLE_AIR) continue;
+    s[0] += a.origin[1] + a.h0 * (PetscReal)a.x[3 * i + 1];
     s[1] += 1;
   }
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, s, 2, MPIU_REAL, MPI_SUM, fs->scene->comm));

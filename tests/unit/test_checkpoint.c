@@ -129,13 +129,13 @@ static PetscErrorCode GetInvariants(PffGrid grid, PffParticles p, Invariants *in
     loc[0] += h;
     lxor ^= h;
     for (int d = 0; d < 3; d++) {
-      uint64_t xb, vb;
+      uint32_t xb, vb; /* the stored floats' bits */
       memcpy(&xb, &a.x[3 * i + d], sizeof(xb));
       memcpy(&vb, &a.v[3 * i + d], sizeof(vb));
       loc[1] += PffTestHash64(a.id[i] * 3 + (uint64_t)d) * xb;
       loc[2] += PffTestHash64(a.id[i] * 3 + (uint64_t)d + 1000) * vb;
     }
-    loc[1] += PffTestHash64(a.id[i] ^ 0x5555) * (uint64_t)(a.type[i] + 7 * (a.level[i] + 3) + 101 * a.flags[i]);
+    loc[1] += PffTestHash64(a.id[i] ^ 0x5555) * (uint64_t)a.word[i];
   }
   PetscCall(PffGridGetNumChannels(grid, &nch));
   for (PetscInt c = 0; c < nch; c++) PetscCall(ChannelSum(grid, c, &loc[3]));

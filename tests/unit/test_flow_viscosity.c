@@ -59,7 +59,9 @@ static PetscErrorCode Amplitude(PffFlow f, MPI_Comm comm, PetscReal *amp)
   PetscCall(PffFlowGetParticles(f, &p));
   PetscCall(PffParticlesGetArrays(p, &a));
   for (PetscInt i = 0; i < a.n; i++) {
-    const PetscReal g = Shape(&a.x[3 * i], NULL);
+    PetscReal x[3];
+    PffParticleArraysWorld(&a, i, x);
+    const PetscReal g = Shape(x, NULL);
     s[0] += a.v[3 * i] * g;
     s[1] += g * g;
   }
