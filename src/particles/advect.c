@@ -40,9 +40,9 @@ static PetscBool PffAdvectFix(PffParticles p, const PffAdvectBlock *blocks, cons
 
   for (int a = 0; a < 3; a++) {
     rel[a] = gs[a] - b->c[a];
-    if (p->periodic[a]) {
+    if (p->periodic[a]) { /* the nearest image; rel is nearly always within half a period already */
       const PetscReal L = (PetscReal)p->cells[a];
-      rel[a] -= L * PetscFloorReal(rel[a] / L + 0.5);
+      if (!(rel[a] >= -0.5 * L && rel[a] < 0.5 * L)) rel[a] -= L * PetscFloorReal(rel[a] / L + 0.5);
     }
     if (PetscAbsReal(rel[a]) > b->bound) within = PETSC_FALSE;
   }
@@ -70,12 +70,10 @@ static inline void PffAdvectSample(PffParticles p, const PffSampler *s, PetscInt
                                    PetscReal u[3])
 {
   const PetscReal ih0 = 1.0 / p->h0;
-  PetscReal       lp[3];
+  PetscReal       lp[3], v[2][3];
   PffSamplerLocal_Private(p, &s->blocks[lb], g, lp);
-  for (PetscInt d = 0; d < 3; d++) {
-    PffSamplerFace_Private(s, lb, k, 1, d, lp, &u[d]);
-    u[d] *= ih0;
-  }
+  PffSamplerVector_Private(s, lb, k, 1, lp, v);
+  for (PetscInt d = 0; d < 3; d++) u[d] = v[0][d] * ih0;
 }
 
 PetscErrorCode PffParticlesAdvect(PffParticles p, PetscInt chU, PetscReal dt, PffSolidFn solid, void *solidctx,

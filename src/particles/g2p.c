@@ -4,9 +4,11 @@
    the artificial viscosity of Eq. 13 across particle types and cell sizes (Sec. 5.3). I is the
    grid's trilinear MAC interpolation on the lattice of the particle's bin block.
 
-   Block-batched (issue 12): threads take whole blocks, and per particle and component one set of
-   trilinear weights serves both u and du (PffSamplerFace_Private); the result is bit-identical to
-   interpolating u and du separately with PffGridInterpolateFrom(). */
+   Block-batched (issue 12): threads take whole blocks. In a block with ghost tiles (no wall or hole
+   beside it) every stencil of its particles lies in the tiles, so chunks of particles are interpolated
+   in float without a branch (PffChunkLattice_Private locates the lattices once per chunk and serves u
+   and du). Blocks beside walls or holes go point by point through PffSamplerVector_Private, in double,
+   which falls back to the grid's general path where the tiles do not reach. */
 #include "particlesimpl.h"
 
 PetscErrorCode PffParticlesG2P(PffParticles p, PetscInt chU, PetscInt chDU, const PetscReal alpha[])
@@ -25,15 +27,51 @@ PetscErrorCode PffParticlesG2P(PffParticles p, PetscInt chU, PetscInt chDU, cons
   const PetscInt  nlevels = p->nlevels;
 #pragma omp parallel for schedule(dynamic, 1)
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
-    const PffSampleBlock *b = &s.blocks[lb];
-    for (PetscInt i = p->start[lb]; i < p->start[lb + 1]; i++) {
-      const PetscReal a    = alpha[PffParticleWordType(word[i]) * nlevels + b->level];
-      const PetscReal g[3] = {x[3 * i], x[3 * i + 1], x[3 * i + 2]};
-      PetscReal       lp[3], uv[2];
-      PffSamplerLocal_Private(p, b, g, lp);
-      for (PetscInt d = 0; d < 3; d++) {
-        PffSamplerFace_Private(&s, lb, 0, 2, d, lp, uv);
-        v[3 * i + d] = (float)(a * ((PetscReal)v[3 * i + d] + uv[1]) + (1 - a) * uv[0]);
+    const PffSampleBlock *b  = &s.blocks[lb];
+    const PetscInt        i0 = p->start[lb], i1 = p->start[lb + 1];
+    if (!b->tile[0][0] || !b->tile[1][0]) { /* a block beside a wall or a hole: point by point */
+      for (PetscInt i = i0; i < i1; i++) {
+        const PetscReal a    = alpha[PffParticleWordType(word[i]) * nlevels + b->level];
+        const PetscReal g[3] = {x[3 * i], x[3 * i + 1], x[3 * i + 2]};
+        PetscReal       lp[3], uv[2][3];
+        PffSamplerLocal_Private(p, b, g, lp);
+        PffSamplerVector_Private(&s, lb, 0, 2, lp, uv);
+        for (PetscInt d = 0; d < 3; d++)
+          v[3 * i + d] = (float)(a * ((PetscReal)v[3 * i + d] + uv[1][d]) + (1 - a) * uv[0][d]);
+      }
+      continue;
+    }
+    /* every stencil of a binned particle lies in the tiles: chunks of particles, float weights, no branch */
+    const PetscInt n = b->n, mm = n + 2;
+    const PetscInt st[8] = {0, 1, mm, mm + 1, mm * mm, mm * mm + 1, mm * mm + mm, mm * mm + mm + 1};
+    const float    ih    = 1.0f / (float)((PetscInt)1 << b->level);
+    const float    lo[3] = {(float)(b->ijk[0] * p->n0), (float)(b->ijk[1] * p->n0), (float)(b->ijk[2] * p->n0)};
+    for (PetscInt j0 = i0; j0 < i1; j0 += PFF_CHUNK) {
+      const PetscInt  m = PetscMin(PFF_CHUNK, i1 - j0);
+      float           a[PFF_CHUNK];
+      PffChunkLattice L;
+      for (PetscInt j = 0; j < m; j++) a[j] = (float)alpha[PffParticleWordType(word[j0 + j]) * nlevels + b->level];
+      PffChunkLattice_Private(&x[3 * j0], m, lo, ih, n, &L);
+      for (int d = 0; d < 3; d++) {
+        const int32_t *c[3];
+        const float   *t[3], *tu = b->tile[0][d], *tdu = b->tile[1][d];
+        PffChunkLatticeOf_Private(&L, d, c, t);
+        const int32_t *restrict cx = c[0], *restrict cy = c[1], *restrict cz = c[2];
+        const float *restrict tx = t[0], *restrict ty = t[1], *restrict tz = t[2];
+        float ur[PFF_CHUNK], dr[PFF_CHUNK];
+        for (PetscInt j = 0; j < m; j++) {
+          const int32_t o  = (cx[j] + 1) + (int32_t)mm * ((cy[j] + 1) + (int32_t)mm * (cz[j] + 1));
+          const float   x1 = tx[j], y1 = ty[j], z1 = tz[j], x0 = 1 - x1, y0 = 1 - y1, z0 = 1 - z1;
+          ur[j] =
+              z0 * (y0 * (x0 * tu[o + st[0]] + x1 * tu[o + st[1]]) + y1 * (x0 * tu[o + st[2]] + x1 * tu[o + st[3]])) +
+              z1 * (y0 * (x0 * tu[o + st[4]] + x1 * tu[o + st[5]]) + y1 * (x0 * tu[o + st[6]] + x1 * tu[o + st[7]]));
+          dr[j] = z0 * (y0 * (x0 * tdu[o + st[0]] + x1 * tdu[o + st[1]]) +
+                        y1 * (x0 * tdu[o + st[2]] + x1 * tdu[o + st[3]])) +
+                  z1 * (y0 * (x0 * tdu[o + st[4]] + x1 * tdu[o + st[5]]) +
+                        y1 * (x0 * tdu[o + st[6]] + x1 * tdu[o + st[7]]));
+        }
+        float *vd = &v[3 * j0 + d];
+        for (PetscInt j = 0; j < m; j++) vd[3 * j] = a[j] * (vd[3 * j] + dr[j]) + (1 - a[j]) * ur[j];
       }
     }
   }

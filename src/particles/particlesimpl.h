@@ -82,7 +82,7 @@ static inline PetscInt PffParticlesLocateReal_Private(PffParticles p, const Pets
   for (int d = 0; d < 3; d++) {
     const PetscReal nc = (PetscReal)p->cells[d];
     PetscReal       s  = g[d];
-    if (p->periodic[d]) {
+    if (p->periodic[d] && !(s >= 0 && s < nc)) {
       s = PetscFmodReal(s, nc);
       if (s < 0) s += nc;
       if (s >= nc) s = 0;
@@ -139,6 +139,58 @@ typedef struct {
   float          *tiles;  /* storage of every block's tiles (the particles' float scratch, borrowed) */
 } PffSampler;
 
+/* The face lattices of a chunk of at most PFF_CHUNK particles of one block (P2G and G2P): per axis the
+   lattice of the faces normal to it (integer positions, c) and of the faces across it (half-integer, h):
+   lower index and fraction. For a particle in the block the indices lie in [0, n - 1] and [-1, n - 1], so
+   every 2 x 2 x 2 stencil lies in the block's tile of (n + 2)^3 from cell -1; they are clamped there so
+   that a rounding at the block's edge cannot reach beyond it. Computed in float in loops without
+   dependences, which the compiler vectorises. */
+#define PFF_CHUNK 64
+typedef struct {
+  int32_t ic[3][PFF_CHUNK], ih[3][PFF_CHUNK];
+  float   tc[3][PFF_CHUNK], th[3][PFF_CHUNK];
+} PffChunkLattice;
+
+/* x: the chunk's first position (grid units); lo: the block's lower corner (grid units); ih: 1 / its
+   cell size. */
+/* floorf for |v| < 2^31 by truncation and a correction, which the vectoriser takes (floorf it does not) */
+static inline float PffFloorf_Private(float v)
+{
+  const float t = (float)(int32_t)v;
+  return t > v ? t - 1 : t;
+}
+
+static inline void PffChunkAxis_Private(float g, float lo, float ih, int32_t n, int32_t *ic, float *tc, int32_t *ih2,
+                                        float *th)
+{
+  /* exact in float: lo is an integer and g - lo lies in [0, g]; ih is a power of two */
+  const float sp = (g - lo) * ih, fc = PffFloorf_Private(sp), fh = PffFloorf_Private(sp - 0.5f);
+  *ic  = PetscMin(PetscMax((int32_t)fc, 0), n - 1);
+  *tc  = sp - fc;
+  *ih2 = PetscMin(PetscMax((int32_t)fh, -1), n - 1);
+  *th  = sp - 0.5f - fh;
+}
+
+static inline void PffChunkLattice_Private(const float *x, PetscInt m, const float lo[3], float ih, PetscInt n,
+                                           PffChunkLattice *L)
+{
+  /* the axes written out: the three loads of x form one interleaved group the vectoriser handles */
+  for (PetscInt j = 0; j < m; j++) {
+    PffChunkAxis_Private(x[3 * j], lo[0], ih, (int32_t)n, &L->ic[0][j], &L->tc[0][j], &L->ih[0][j], &L->th[0][j]);
+    PffChunkAxis_Private(x[3 * j + 1], lo[1], ih, (int32_t)n, &L->ic[1][j], &L->tc[1][j], &L->ih[1][j], &L->th[1][j]);
+    PffChunkAxis_Private(x[3 * j + 2], lo[2], ih, (int32_t)n, &L->ic[2][j], &L->tc[2][j], &L->ih[2][j], &L->th[2][j]);
+  }
+}
+
+/* The lattice of face component d: per axis the normal lattice on axis d, the half one on the others. */
+static inline void PffChunkLatticeOf_Private(const PffChunkLattice *L, int d, const int32_t *c[3], const float *t[3])
+{
+  for (int a = 0; a < 3; a++) {
+    c[a] = a == d ? L->ic[a] : L->ih[a];
+    t[a] = a == d ? L->tc[a] : L->th[a];
+  }
+}
+
 /* The ghost shell (cells -1 and n on some axis) of a block tile of (n + 2)^3 floats from cell -1, copied
    from the block's views (add false) or added to them (add true; zeros skipped). */
 PETSC_INTERN void           PffTileShell_Private(const PffView *views, PetscInt n, float *tile, PetscBool add);
@@ -166,28 +218,20 @@ static inline void PffSamplerLocal_Private(const PffParticles p, const PffSample
 }
 
 /* Face component d of channels k0 and (if nk = 2) k0 + 1 at lp in local block lb, with one set of
-   trilinear weights: the block's own cells when the stencil lies inside them, the block's tile when it
-   reaches one ghost layer and the block has one, else the grid's general path (walls, farther
-   ghosts). Bit-identical to PffGridInterpolateFrom(). */
-static inline void PffSamplerFace_Private(const PffSampler *s, PetscInt lb, PetscInt k0, PetscInt nk, PetscInt d,
-                                          const PetscReal lp[3], PetscReal val[2])
+   trilinear weights (lower lattice index i0 and fraction t per axis): the block's own cells when the
+   stencil lies inside them, the block's tile when it reaches one ghost layer and the block has one,
+   else the grid's general path (walls, farther ghosts), PffGridInterpolateInBlock(). The fast paths
+   interpolate axis by axis and so agree with the general path to rounding. */
+static inline void PffSamplerFaceAt_Private(const PffSampler *s, PetscInt lb, PetscInt k0, PetscInt nk, PetscInt d,
+                                            const PetscInt i0[3], const PetscReal t[3], const PetscReal lp[3],
+                                            PetscReal val[2])
 {
   const PffSampleBlock *b = &s->blocks[lb];
   const PetscInt        n = b->n;
-  PetscInt              i0[3];
-  PetscReal             t[3];
-  PetscBool             inside = PETSC_TRUE;
+  PetscInt              o, m = n;
+  const float          *base[2] = {NULL, NULL};
 
-  for (int e = 0; e < 3; e++) {
-    const PetscReal x = lp[e] - (e == d ? 0.0 : 0.5);
-    i0[e]             = (PetscInt)PetscFloorReal(x);
-    t[e]              = x - (PetscReal)i0[e];
-    if (i0[e] < 0 || i0[e] + 1 >= n) inside = PETSC_FALSE;
-  }
-  const PetscReal wx[2] = {1 - t[0], t[0]}, wy[2] = {1 - t[1], t[1]}, wz[2] = {1 - t[2], t[2]};
-  PetscInt        o, m = n;
-  const float    *base[2] = {NULL, NULL};
-  if (inside) {
+  if (i0[0] >= 0 && i0[0] + 1 < n && i0[1] >= 0 && i0[1] + 1 < n && i0[2] >= 0 && i0[2] + 1 < n) {
     o = i0[0] + n * (i0[1] + n * i0[2]);
     for (PetscInt k = 0; k < nk; k++) base[k] = b->data[k0 + k][d];
   } else if (b->tile[k0][d] && i0[0] >= -1 && i0[0] < n && i0[1] >= -1 && i0[1] < n && i0[2] >= -1 && i0[2] < n) {
@@ -198,12 +242,34 @@ static inline void PffSamplerFace_Private(const PffSampler *s, PetscInt lb, Pets
     for (PetscInt k = 0; k < nk; k++) val[k] = PffGridInterpolateInBlock(s->grid, s->ch[k0 + k], lb, d, lp);
     return;
   }
-  const PetscInt st[8] = {0, 1, m, m + 1, m * m, m * m + 1, m * m + m, m * m + m + 1};
+  const PetscReal wx0 = 1 - t[0], wy0 = 1 - t[1], wz0 = 1 - t[2];
   for (PetscInt k = 0; k < nk; k++) {
-    const float *a = base[k] + o;
-    PetscReal    v = 0;
-    /* the grid skips terms of weight 0; adding w * value = +0 leaves the sum as it is */
-    for (int q = 0; q < 8; q++) v += wx[q & 1] * wy[(q >> 1) & 1] * wz[(q >> 2) & 1] * (PetscReal)a[st[q]];
-    val[k] = v;
+    const float    *a   = base[k] + o;
+    const PetscReal c00 = wx0 * a[0] + t[0] * a[1], c10 = wx0 * a[m] + t[0] * a[m + 1];
+    const PetscReal c01 = wx0 * a[m * m] + t[0] * a[m * m + 1], c11 = wx0 * a[m * m + m] + t[0] * a[m * m + m + 1];
+    val[k] = wz0 * (wy0 * c00 + t[1] * c10) + t[2] * (wy0 * c01 + t[1] * c11);
+  }
+}
+
+/* All three face components of channel k0 (and k0 + 1 if nk = 2) at lp: val[k][d]. The two lattices
+   per axis (faces normal to it and across it) are located once. */
+static inline void PffSamplerVector_Private(const PffSampler *s, PetscInt lb, PetscInt k0, PetscInt nk,
+                                            const PetscReal lp[3], PetscReal val[2][3])
+{
+  PetscInt  ic[3], ih[3];
+  PetscReal tc[3], th[3];
+  for (int e = 0; e < 3; e++) {
+    const PetscReal xh = lp[e] - 0.5;
+    ic[e]              = (PetscInt)PetscFloorReal(lp[e]);
+    tc[e]              = lp[e] - (PetscReal)ic[e];
+    ih[e]              = (PetscInt)PetscFloorReal(xh);
+    th[e]              = xh - (PetscReal)ih[e];
+  }
+  for (PetscInt d = 0; d < 3; d++) {
+    const PetscInt  i0[3] = {d == 0 ? ic[0] : ih[0], d == 1 ? ic[1] : ih[1], d == 2 ? ic[2] : ih[2]};
+     const PetscReal t[3] = {d == 0 ? tc[0] : th[0], d == 1 ? tc[1] : th[1], d == 2 ? tc[2] : th[2]};
+     PetscReal v[2];
+    PffSamplerFaceAt_Private(s, lb, k0, nk, d, i0, t, lp, v);
+    for (PetscInt k = 0; k < nk; k++) val[k][d] = v[k];
   }
 }

@@ -43,10 +43,12 @@ PetscErrorCode PffParticlesSeed(PffParticles p, PffSeedFn fn, void *ctx)
             PetscInt       type = -1;
             /* the callback sees the world point of the stored float position */
             for (int a = 0; a < 3; a++) {
-              const PetscReal u = PffRandom01_Private(p->seed, id, PFF_RNG_SEED_JITTER, (uint64_t)a);
-              const PetscReal s = 0.25 + 0.5 * (PetscReal)((sub >> a) & 1) + p->jitter * (u - 0.5) * 0.5;
-              g[a]              = (float)((PetscReal)(info.ijk[a] * p->n0) + ((PetscReal)c[a] + s) * scale);
-              x[a]              = p->origin[a] + p->h0 * (PetscReal)g[a];
+              const PetscReal u  = PffRandom01_Private(p->seed, id, PFF_RNG_SEED_JITTER, (uint64_t)a);
+              const PetscReal s  = 0.25 + 0.5 * (PetscReal)((sub >> a) & 1) + p->jitter * (u - 0.5) * 0.5;
+              const PetscReal lo = (PetscReal)(info.ijk[a] * p->n0) + (PetscReal)c[a] * scale;
+              /* rounding to float must not carry the particle into the next cell (or block, or rank) */
+              g[a] = PetscMin((float)(lo + s * scale), nextafterf((float)(lo + scale), 0));
+              x[a] = p->origin[a] + p->h0 * (PetscReal)g[a];
             }
             PetscCall(fn(x, &type, v, ctx));
             if (type < 0) continue;

@@ -147,6 +147,10 @@ static PetscErrorCode TestSeed(const PffTestCtx *ctx, const SeedCtx *sc, PffPart
                       eps = 1e-5;
       PetscCheck(a.x[3 * i + d] >= lo - eps && a.x[3 * i + d] <= lo + 0.5 * h + eps, PETSC_COMM_SELF, PETSC_ERR_PLIB,
                  "particle %" PetscInt64_FMT " lies outside its sub-cell along axis %d", (PetscInt64)a.id[i], d);
+      /* and strictly inside its cell: rounding must not carry it into the next one */
+      const PetscReal cell = (PetscReal)(ijk[d] * N0) + (PetscReal)cc[d] * h;
+      PetscCheck(a.x[3 * i + d] >= cell && a.x[3 * i + d] < cell + h, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+                 "particle %" PetscInt64_FMT " left its cell along axis %d", (PetscInt64)a.id[i], d);
       /* the callback saw the world point of the stored position (to the rounding of v to float; the
          compiler may fuse origin + h0 g differently in the library and here) */
       PetscCheck(PetscAbsReal(a.v[3 * i + d] - x[d]) <= 1e-7 * (PetscAbsReal(x[d]) + 1), PETSC_COMM_SELF,
