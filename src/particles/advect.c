@@ -76,6 +76,150 @@ static inline void PffAdvectSample(PffParticles p, const PffSampler *s, PetscInt
   for (PetscInt d = 0; d < 3; d++) u[d] = v[0][d] * ih0;
 }
 
+/* One particle's RK3 sub-steps in double and grid units through the general sampler: the path of the
+   particles the chunk path does not take. Returns the sub-step count and adds the clamps to *nclamp. */
+static PetscInt PffAdvectParticle(PffParticles p, const PffSampler *s, const PffAdvectBlock *blocks,
+                                  const PetscInt level[], PetscInt lb, PetscInt k, PetscReal dt, float xi[3],
+                                  PetscInt *nclamp)
+{
+  PetscReal g[3] = {xi[0], xi[1], xi[2]}, k1[3], k2[3], k3[3], gs[3];
+  PetscInt  cur  = lb, bl;
+
+  PffAdvectSample(p, s, cur, k, g, k1);
+  const PetscReal cells =
+      PetscSqrtReal(k1[0] * k1[0] + k1[1] * k1[1] + k1[2] * k1[2]) * dt / (p->substepCfl * blocks[lb].h);
+  const PetscInt  m  = PetscMax(1, cells < (PetscReal)PFF_PARTICLES_MAX_SUBSTEPS ? (PetscInt)PetscCeilReal(cells)
+                                                                                 : PFF_PARTICLES_MAX_SUBSTEPS);
+  const PetscReal hs = dt / (PetscReal)m;
+  for (PetscInt sub = 0; sub < m; sub++) {
+    if (sub > 0) PffAdvectSample(p, s, cur, k, g, k1);
+    /* k2 at g + dt/2 k1, k3 at g + 3 dt/4 k2 */
+    for (int a = 0; a < 3; a++) gs[a] = g[a] + 0.5 * hs * k1[a];
+    *nclamp += PffAdvectFix(p, blocks, level, cur, gs, &bl);
+    PffAdvectSample(p, s, bl, k, gs, k2);
+    for (int a = 0; a < 3; a++) gs[a] = g[a] + 0.75 * hs * k2[a];
+    *nclamp += PffAdvectFix(p, blocks, level, cur, gs, &bl);
+    PffAdvectSample(p, s, bl, k, gs, k3);
+    for (int a = 0; a < 3; a++) g[a] += hs * (2 * k1[a] + 3 * k2[a] + 4 * k3[a]) / 9;
+    *nclamp += PffAdvectFix(p, blocks, level, cur, g, &cur);
+  }
+  for (int a = 0; a < 3; a++) xi[a] = (float)g[a];
+  return m;
+}
+
+/* Lower tile index (clamped into the tile of gw ghost layers) and fraction of coordinate v (finite, within
+   2^31); a v outside the tile gives garbage that the caller discards. */
+static inline void PffAdvectAxis(float v, int32_t gw, int32_t n, int32_t *i0, float *t)
+{
+  const float f = PffFloorf_Private(v);
+  *i0           = PetscMin(PetscMax((int32_t)f, -gw), n + gw - 2);
+  *t            = v - f;
+}
+
+/* Face component with lattice offsets off of the chunk's points (px, py, pz) from a tile of gw ghost
+   layers, times scale, into od; restrict parameters let the gathers vectorise. */
+static void PffAdvectChunkComponent(PetscInt m, const float *restrict px, const float *restrict py,
+                                    const float *restrict pz, const float off[3], const float *restrict tile,
+                                    const int32_t *restrict koff, int32_t gw, int32_t n, float scale,
+                                    float *restrict od)
+{
+  const int32_t mm = n + 2 * gw, st[8] = {0, 1, mm, mm + 1, mm * mm, mm * mm + 1, mm * mm + mm, mm * mm + mm + 1};
+  for (PetscInt j = 0; j < m; j++) {
+    int32_t ix, iy, iz;
+    float   x1, y1, z1;
+    PffAdvectAxis(px[j] - off[0], gw, n, &ix, &x1);
+    PffAdvectAxis(py[j] - off[1], gw, n, &iy, &y1);
+    PffAdvectAxis(pz[j] - off[2], gw, n, &iz, &z1);
+    const float   x0 = 1 - x1, y0 = 1 - y1, z0 = 1 - z1;
+    const int32_t o = (ix + gw) + mm * ((iy + gw) + mm * (iz + gw)) + koff[j];
+    od[j]           = scale * (z0 * (y0 * (x0 * tile[o + st[0]] + x1 * tile[o + st[1]]) +
+                           y1 * (x0 * tile[o + st[2]] + x1 * tile[o + st[3]])) +
+                     z1 * (y0 * (x0 * tile[o + st[4]] + x1 * tile[o + st[5]]) +
+                           y1 * (x0 * tile[o + st[6]] + x1 * tile[o + st[7]])));
+  }
+}
+
+/* Velocity samples of a chunk at block-local points lp (cell units of the block, from its lower corner)
+   from the block's tiles (gw ghost layers), times scale: out[d][j]. koff[j] selects the particle's
+   channel. Points outside the tiles give garbage that the caller discards (indices are clamped so that
+   no read leaves the tile). */
+static void PffAdvectChunkSample(const PffSampleBlock *b, PetscInt gw, PetscInt m, float lp[3][PFF_CHUNK],
+                                 const int32_t koff[], float scale, float out[3][PFF_CHUNK])
+{
+  for (int d = 0; d < 3; d++) {
+    const float off[3] = {d == 0 ? 0.0f : 0.5f, d == 1 ? 0.0f : 0.5f, d == 2 ? 0.0f : 0.5f};
+    PffAdvectChunkComponent(m, lp[0], lp[1], lp[2], off, b->tile[0][d], koff, (int32_t)gw, (int32_t)b->n, scale,
+                            out[d]);
+  }
+}
+
+/* ok[j] &= every coordinate of point j lies in [lo, hi) (false for NaN); a point outside is replaced by
+   the origin, so that the samples' float-to-int conversions stay defined. */
+static void PffAdvectChunkInside(PetscInt m, float pt[3][PFF_CHUNK], float lo, float hi, uint8_t ok[])
+{
+  float *restrict x = pt[0], *restrict y = pt[1], *restrict z = pt[2];
+  for (PetscInt j = 0; j < m; j++) {
+    const int in = (x[j] >= lo) & (x[j] < hi) & (y[j] >= lo) & (y[j] < hi) & (z[j] >= lo) & (z[j] < hi);
+    ok[j] &= (uint8_t)in;
+    x[j] = in ? x[j] : 0.0f;
+    y[j] = in ? y[j] : 0.0f;
+    z[j] = in ? z[j] : 0.0f;
+  }
+}
+
+/* The particles [i0, i1) of local block lb, which has tiles. Chunks run one RK3 step in float in the
+   block's local cell units, vectorised: every stage point within one cell of the block (inside the reach
+   of any velocity halo and inside the tiles) and one sub-step enough. The others take the general path. */
+static void PffAdvectBlockChunks(PffParticles p, const PffSampler *s, const PffAdvectBlock *blocks,
+                                 const PetscInt level[], PetscInt lb, PetscReal dt, PetscInt *maxsub, PetscInt *nclamp)
+{
+  const PffSampleBlock *b  = &s->blocks[lb];
+  const PetscInt        i1 = p->start[lb + 1], kair = s->nch - 1;
+  const float           hl = (float)((PetscInt)1 << b->level), ihl = 1 / hl;
+  const float           lo[3] = {(float)(b->ijk[0] * p->n0), (float)(b->ijk[1] * p->n0), (float)(b->ijk[2] * p->n0)};
+  const float           scale = (float)(dt / (p->h0 * (PetscReal)hl)), cfl = (float)p->substepCfl;
+  const float           rlo = -1 + 1e-6f, rhi = (float)b->n + 1 - 1e-6f;
+  const int32_t         air = (int32_t)(b->tile[kair][0] - b->tile[0][0]); /* tiles are channel-major */
+  float                *x   = p->s.x;
+
+  for (PetscInt j0 = p->start[lb]; j0 < i1; j0 += PFF_CHUNK) {
+    const PetscInt m = PetscMin(PFF_CHUNK, i1 - j0);
+    float          l0[3][PFF_CHUNK], st[3][PFF_CHUNK], k1[3][PFF_CHUNK], k2[3][PFF_CHUNK], k3[3][PFF_CHUNK];
+    int32_t        koff[PFF_CHUNK];
+    uint8_t        ok[PFF_CHUNK];
+    for (PetscInt j = 0; j < m; j++) {
+      koff[j] = PffParticleWordType(p->s.word[j0 + j]) == PFF_PARTICLE_LIQUID ? 0 : air;
+      ok[j]   = 1;
+      for (int a = 0; a < 3; a++) l0[a][j] = (x[3 * (j0 + j) + a] - lo[a]) * ihl; /* exact */
+    }
+    PffAdvectChunkSample(b, s->gw, m, l0, koff, scale, k1);
+    for (PetscInt j = 0; j < m; j++) /* one sub-step: the displacement within -particles_substep_cfl cells */
+      ok[j] &= (uint8_t)(k1[0][j] * k1[0][j] + k1[1][j] * k1[1][j] + k1[2][j] * k1[2][j] <= cfl * cfl);
+    for (int a = 0; a < 3; a++)
+      for (PetscInt j = 0; j < m; j++) st[a][j] = l0[a][j] + 0.5f * k1[a][j];
+    PffAdvectChunkInside(m, st, rlo, rhi, ok);
+    PffAdvectChunkSample(b, s->gw, m, st, koff, scale, k2);
+    for (int a = 0; a < 3; a++)
+      for (PetscInt j = 0; j < m; j++) st[a][j] = l0[a][j] + 0.75f * k2[a][j];
+    PffAdvectChunkInside(m, st, rlo, rhi, ok);
+    PffAdvectChunkSample(b, s->gw, m, st, koff, scale, k3);
+    for (int a = 0; a < 3; a++)
+      for (PetscInt j = 0; j < m; j++) st[a][j] = l0[a][j] + (2 * k1[a][j] + 3 * k2[a][j] + 4 * k3[a][j]) / 9;
+    PffAdvectChunkInside(m, st, rlo, rhi, ok);
+    for (PetscInt j = 0; j < m; j++) {
+      float *xi = &x[3 * (j0 + j)];
+      if (ok[j]) {
+        for (int a = 0; a < 3; a++) xi[a] = lo[a] + st[a][j] * hl;
+        *maxsub = PetscMax(*maxsub, 1);
+      } else {
+        /* (PetscMax evaluates its arguments twice) */
+        const PetscInt k = koff[j] ? kair : 0, nsub = PffAdvectParticle(p, s, blocks, level, lb, k, dt, xi, nclamp);
+        *maxsub = PetscMax(*maxsub, nsub);
+      }
+    }
+  }
+}
+
 PetscErrorCode PffParticlesAdvect(PffParticles p, PetscInt chU, PetscReal dt, PffSolidFn solid, void *solidctx,
                                   PffParticleStats *stats)
 {
@@ -113,7 +257,7 @@ PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const PetscInt chU[PFF_
              "advection time step %g is invalid", (double)dt);
   PetscCall(PetscLogEventBegin(PFF_Advect, 0, 0, 0, 0));
   PetscCall(PffGridGetRaster(p->grid, nb, &level, NULL));
-  PetscCall(PffSamplerCreate_Private(p, chU[0] == chU[1] ? 1 : 2, chU, &sampler));
+  PetscCall(PffSamplerCreate_Private(p, chU[0] == chU[1] ? 1 : 2, chU, 2, &sampler));
   PetscCall(PetscMalloc1(PetscMax(p->nlocal, 1), &blocks));
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
     PffBlockInfo info;
@@ -125,37 +269,19 @@ PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const PetscInt chU[PFF_
     blocks[lb].h     = h;
   }
 
-  /* each particle runs all its sub-steps in registers: no per-particle scratch; threads take blocks */
-  const PetscReal cflh = p->substepCfl;
-  float          *x    = p->s.x;
-  const uint32_t *word = p->s.word;
-  const PetscInt  kair = sampler.nch - 1;
+  /* threads take blocks; blocks with tiles go by chunks, the others particle by particle */
+  const PetscInt kair = sampler.nch - 1;
 #pragma omp parallel for reduction(max : maxsub) reduction(+ : nclamp) schedule(dynamic, 1)
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
+    const PffSampleBlock *b = &sampler.blocks[lb];
+    if (b->tile[0][0] && b->tile[kair][0]) {
+      PffAdvectBlockChunks(p, &sampler, blocks, level, lb, dt, &maxsub, &nclamp);
+      continue;
+    }
     for (PetscInt i = p->start[lb]; i < p->start[lb + 1]; i++) {
-      const PetscInt k    = PffParticleWordType(word[i]) == PFF_PARTICLE_LIQUID ? 0 : kair;
-      PetscReal      g[3] = {x[3 * i], x[3 * i + 1], x[3 * i + 2]}, k1[3], k2[3], k3[3], gs[3];
-      PetscInt       cur  = lb, bl;
-
-      PffAdvectSample(p, &sampler, cur, k, g, k1);
-      const PetscReal cells = PetscSqrtReal(k1[0] * k1[0] + k1[1] * k1[1] + k1[2] * k1[2]) * dt / (cflh * blocks[lb].h);
-      const PetscInt  m     = PetscMax(1, cells < (PetscReal)PFF_PARTICLES_MAX_SUBSTEPS ? (PetscInt)PetscCeilReal(cells)
-                                                                                        : PFF_PARTICLES_MAX_SUBSTEPS);
-      const PetscReal hs    = dt / (PetscReal)m;
-      maxsub                = PetscMax(maxsub, m);
-      for (PetscInt sub = 0; sub < m; sub++) {
-        if (sub > 0) PffAdvectSample(p, &sampler, cur, k, g, k1);
-        /* k2 at g + dt/2 k1, k3 at g + 3 dt/4 k2 */
-        for (int a = 0; a < 3; a++) gs[a] = g[a] + 0.5 * hs * k1[a];
-        nclamp += PffAdvectFix(p, blocks, level, cur, gs, &bl);
-        PffAdvectSample(p, &sampler, bl, k, gs, k2);
-        for (int a = 0; a < 3; a++) gs[a] = g[a] + 0.75 * hs * k2[a];
-        nclamp += PffAdvectFix(p, blocks, level, cur, gs, &bl);
-        PffAdvectSample(p, &sampler, bl, k, gs, k3);
-        for (int a = 0; a < 3; a++) g[a] += hs * (2 * k1[a] + 3 * k2[a] + 4 * k3[a]) / 9;
-        nclamp += PffAdvectFix(p, blocks, level, cur, g, &cur);
-      }
-      for (int a = 0; a < 3; a++) x[3 * i + a] = (float)g[a];
+      const PetscInt k    = PffParticleWordType(p->s.word[i]) == PFF_PARTICLE_LIQUID ? 0 : kair;
+      const PetscInt nsub = PffAdvectParticle(p, &sampler, blocks, level, lb, k, dt, &p->s.x[3 * i], &nclamp);
+      maxsub              = PetscMax(maxsub, nsub);
     }
   }
   PetscCall(PetscFree(blocks));
@@ -164,6 +290,7 @@ PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const PetscInt chU[PFF_
 
   /* push out of solids along the distance gradient (a few Newton-like steps), in world units */
   if (solid != NULL) {
+    float          *x = p->s.x;
     const PetscReal ulp4 =
         4 * p->h0 * (PetscReal)PetscMax(p->cells[0], PetscMax(p->cells[1], p->cells[2])) / 16777216.0;
     for (PetscInt i = 0; i < p->n; i++) {

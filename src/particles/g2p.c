@@ -20,7 +20,7 @@ PetscErrorCode PffParticlesG2P(PffParticles p, PetscInt chU, PetscInt chDU, cons
   PetscCall(PffParticlesCheckBinned_Private(p, "PffParticlesG2P"));
   PetscCheck(alpha != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "PffParticlesG2P needs the FLIP weights alpha");
   PetscCall(PetscLogEventBegin(PFF_G2P, 0, 0, 0, 0));
-  PetscCall(PffSamplerCreate_Private(p, 2, ch, &s));
+  PetscCall(PffSamplerCreate_Private(p, 2, ch, 1, &s));
   const float    *x       = p->s.x;
   float          *v       = p->s.v;
   const uint32_t *word    = p->s.word;

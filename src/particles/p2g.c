@@ -165,7 +165,7 @@ static void PffSplatBlock(const PffParticleSoA *s, PetscInt i0, PetscInt i1, con
           float       *dst = data + n * (jj + n * kk);
           for (PetscInt ii = 0; ii < n; ii++) dst[ii] += row[ii];
         }
-      PffTileShell_Private(vc[c][d], n, (float *)t, PETSC_TRUE);
+      PffTileShell_Private(vc[c][d], n, 1, (float *)t, PETSC_TRUE);
     }
 }
 

@@ -129,12 +129,12 @@ PETSC_INTERN PetscErrorCode PffParticlesCheckBinned_Private(PffParticles, const 
 typedef struct {
   PetscInt     n, level, ijk[3];
   const float *data[2][3]; /* channel k, face component d: the block's own n^3 cells */
-  const float *tile[2][3]; /* the same with one ghost layer, (n + 2)^3 from cell -1, or NULL (see sample.c) */
+  const float *tile[2][3]; /* the same with gw ghost layers, (n + 2 gw)^3 from cell -gw, or NULL (see sample.c) */
 } PffSampleBlock;
 
 typedef struct {
   PffGrid         grid;
-  PetscInt        ch[2], nch;
+  PetscInt        ch[2], nch, gw;
   PffSampleBlock *blocks; /* [nlocal] */
   float          *tiles;  /* storage of every block's tiles (the particles' float scratch, borrowed) */
 } PffSampler;
@@ -191,10 +191,12 @@ static inline void PffChunkLatticeOf_Private(const PffChunkLattice *L, int d, co
   }
 }
 
-/* The ghost shell (cells -1 and n on some axis) of a block tile of (n + 2)^3 floats from cell -1, copied
+/* The ghost shell (the gw layers beyond the block) of a block tile of (n + 2 gw)^3 floats from cell -gw, copied
    from the block's views (add false) or added to them (add true; zeros skipped). */
-PETSC_INTERN void           PffTileShell_Private(const PffView *views, PetscInt n, float *tile, PetscBool add);
-PETSC_INTERN PetscErrorCode PffSamplerCreate_Private(PffParticles, PetscInt nch, const PetscInt ch[], PffSampler *);
+PETSC_INTERN void PffTileShell_Private(const PffView *views, PetscInt n, PetscInt gw, float *tile, PetscBool add);
+/* A sampler of nch channels whose tiles hold gw ghost layers (the channels' halos must be as wide). */
+PETSC_INTERN PetscErrorCode PffSamplerCreate_Private(PffParticles, PetscInt nch, const PetscInt ch[], PetscInt gw,
+                                                     PffSampler *);
 PETSC_INTERN PetscErrorCode PffSamplerDestroy_Private(PffSampler *);
 
 /* Position of grid point g (grid units) in cell units of local block lb's level, from its lower corner,
@@ -219,7 +221,8 @@ static inline void PffSamplerLocal_Private(const PffParticles p, const PffSample
 
 /* Face component d of channels k0 and (if nk = 2) k0 + 1 at lp in local block lb, with one set of
    trilinear weights (lower lattice index i0 and fraction t per axis): the block's own cells when the
-   stencil lies inside them, the block's tile when it reaches one ghost layer and the block has one,
+   stencil lies inside them, the block's tile when it reaches no farther than its gw ghost layers and the
+   block has one,
    else the grid's general path (walls, farther ghosts), PffGridInterpolateInBlock(). The fast paths
    interpolate axis by axis and so agree with the general path to rounding. */
 static inline void PffSamplerFaceAt_Private(const PffSampler *s, PetscInt lb, PetscInt k0, PetscInt nk, PetscInt d,
@@ -234,9 +237,11 @@ static inline void PffSamplerFaceAt_Private(const PffSampler *s, PetscInt lb, Pe
   if (i0[0] >= 0 && i0[0] + 1 < n && i0[1] >= 0 && i0[1] + 1 < n && i0[2] >= 0 && i0[2] + 1 < n) {
     o = i0[0] + n * (i0[1] + n * i0[2]);
     for (PetscInt k = 0; k < nk; k++) base[k] = b->data[k0 + k][d];
-  } else if (b->tile[k0][d] && i0[0] >= -1 && i0[0] < n && i0[1] >= -1 && i0[1] < n && i0[2] >= -1 && i0[2] < n) {
-    m = n + 2;
-    o = (i0[0] + 1) + m * ((i0[1] + 1) + m * (i0[2] + 1));
+  } else if (b->tile[k0][d] && i0[0] >= -s->gw && i0[0] + 1 < n + s->gw && i0[1] >= -s->gw &&
+             i0[1] + 1 < n + s->gw && i0[2] >= -s->gw && i0[2] + 1 < n + s->gw) {
+    const PetscInt gw = s->gw;
+    m                 = n + 2 * gw;
+    o                 = (i0[0] + gw) + m * ((i0[1] + gw) + m * (i0[2] + gw));
     for (PetscInt k = 0; k < nk; k++) base[k] = b->tile[k0 + k][d];
   } else {
     for (PetscInt k = 0; k < nk; k++) val[k] = PffGridInterpolateInBlock(s->grid, s->ch[k0 + k], lb, d, lp);

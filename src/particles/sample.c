@@ -2,14 +2,14 @@
    Also the ghost shell of a block tile, which P2G sums into. */
 #include "particlesimpl.h"
 
-void PffTileShell_Private(const PffView *views, PetscInt n, float *tile, PetscBool add)
+void PffTileShell_Private(const PffView *views, PetscInt n, PetscInt gw, float *tile, PetscBool add)
 {
-  const PetscInt m = n + 2;
-  for (PetscInt kk = -1; kk <= n; kk++)
-    for (PetscInt jj = -1; jj <= n; jj++) {
+  const PetscInt m = n + 2 * gw;
+  for (PetscInt kk = -gw; kk < n + gw; kk++)
+    for (PetscInt jj = -gw; jj < n + gw; jj++) {
       const PetscBool inner = (PetscBool)(jj >= 0 && jj < n && kk >= 0 && kk < n);
-      for (PetscInt ii = -1; ii <= n; ii += (inner && ii == -1) ? n + 1 : 1) {
-        float *t = &tile[(ii + 1) + m * ((jj + 1) + m * (kk + 1))];
+      for (PetscInt ii = -gw; ii < n + gw; ii += (inner && ii == -1) ? n + 1 : 1) {
+        float *t = &tile[(ii + gw) + m * ((jj + gw) + m * (kk + gw))];
         if (!add)
           *t = *PffViewsAt(views, ii, jj, kk, n);
         else if (*t != 0)
@@ -18,12 +18,13 @@ void PffTileShell_Private(const PffView *views, PetscInt n, float *tile, PetscBo
     }
 }
 
-PetscErrorCode PffSamplerCreate_Private(PffParticles p, PetscInt nch, const PetscInt ch[], PffSampler *s)
+PetscErrorCode PffSamplerCreate_Private(PffParticles p, PetscInt nch, const PetscInt ch[], PetscInt gw, PffSampler *s)
 {
   PetscFunctionBeginUser;
   PetscCheck(nch >= 1 && nch <= 2, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE, "a sampler takes 1 or 2 channels");
   s->grid = p->grid;
   s->nch  = nch;
+  s->gw   = gw;
   for (PetscInt k = 0; k < nch; k++) {
     PffChannelKind kind;
     PetscInt       width;
@@ -31,8 +32,9 @@ PetscErrorCode PffSamplerCreate_Private(PffParticles p, PetscInt nch, const Pets
     PetscCall(PffGridGetChannelInfo(p->grid, ch[k], &name, &kind, NULL, &width));
     PetscCheck(kind == PFF_CHANNEL_FACE, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "channel %s must be a face channel",
                name);
-    /* a point in its block reaches one cell beyond it */
-    PetscCheck(width >= 1, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "channel %s needs a halo of at least one cell", name);
+    /* a point in its block reaches one cell beyond it, and the tiles hold gw ghost layers */
+    PetscCheck(width >= PetscMax(gw, 1), PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
+               "channel %s needs a halo of at least %" PetscInt_FMT " cells", name, PetscMax(gw, 1));
     s->ch[k] = ch[k];
   }
   PetscCall(PetscMalloc1(PetscMax(p->nlocal, 1), &s->blocks));
@@ -44,7 +46,7 @@ PetscErrorCode PffSamplerCreate_Private(PffParticles p, PetscInt nch, const Pets
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(p->grid, lb, &info));
-    if (!info.holes) ntile += (size_t)(3 * nch) * (size_t)((info.n + 2) * (info.n + 2) * (info.n + 2));
+    if (!info.holes) ntile += (size_t)(3 * nch) * (size_t)((info.n + 2 * gw) * (info.n + 2 * gw) * (info.n + 2 * gw));
   }
   PetscCall(PffParticlesGetFloatWork_Private(p, ntile + 1, &s->tiles));
   ntile = 0;
@@ -69,7 +71,7 @@ PetscErrorCode PffSamplerCreate_Private(PffParticles p, PetscInt nch, const Pets
         if (info.holes) continue;
         PetscCall(PffGridGetBlockViews(p->grid, ch[k], lb, d, &tv[6 * lb + 3 * k + d]));
         b->tile[k][d] = s->tiles + ntile;
-        ntile += (size_t)((info.n + 2) * (info.n + 2) * (info.n + 2));
+        ntile += (size_t)((info.n + 2 * gw) * (info.n + 2 * gw) * (info.n + 2 * gw));
       }
   }
   /* each block's tiles, in threads (no PETSc call inside): the own cells row by row from the block's
@@ -77,16 +79,16 @@ PetscErrorCode PffSamplerCreate_Private(PffParticles p, PetscInt nch, const Pets
 #pragma omp parallel for schedule(dynamic, 1)
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
     const PffSampleBlock *b = &s->blocks[lb];
-    const PetscInt        n = b->n, m = n + 2;
+    const PetscInt        n = b->n, m = n + 2 * gw;
     for (PetscInt q = 0; q < 6; q++) {
       const PffView *views = tv[6 * lb + q];
       float         *tile  = (float *)b->tile[q / 3][q % 3];
       if (!views) continue;
       for (PetscInt kk = 0; kk < n; kk++)
         for (PetscInt jj = 0; jj < n; jj++)
-          memcpy(&tile[1 + m * ((jj + 1) + m * (kk + 1))], &b->data[q / 3][q % 3][n * (jj + n * kk)],
+          memcpy(&tile[gw + m * ((jj + gw) + m * (kk + gw))], &b->data[q / 3][q % 3][n * (jj + n * kk)],
                  sizeof(float) * (size_t)n);
-      PffTileShell_Private(views, n, tile, PETSC_FALSE);
+      PffTileShell_Private(views, n, gw, tile, PETSC_FALSE);
     }
   }
   PetscCall(PetscFree(tv));

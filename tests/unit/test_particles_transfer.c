@@ -7,9 +7,11 @@
    Constant velocity: v_p = (1, -2, 0.5), P2G, u = mom / mass, du = 0, G2P with alpha 0 and 1 gives
    v_p = (1, -2, 0.5) to 1e-6, on the 2-level periodic grid and on a grid walled in z (the test owns
    the wall ghost faces and sets them to the constant, as boundary conditions would).
-   Advection: a uniform field moving 2.5 cells per step in a periodic domain (velocity channel of
-   width 4) moves every particle by u t (mod period) to 1e-6 of the domain size (float store) after 4 steps, and with
-   one field per particle type (PffParticlesAdvectPerType) each type by its own u t; a rigid
+   Advection: a uniform field moving 2.5 cells per step (3 sub-steps, particle by particle) and 0.4
+   cells per step (one sub-step, the vectorised chunks of whole blocks) in a periodic domain (velocity
+   channel of width 4) moves every particle by u t (mod period) to 1e-6 of the domain size (float store)
+   after 4 steps, and with one field per particle type (PffParticlesAdvectPerType) each type by its own
+   u t; a rigid
    rotation in a walled box keeps every particle inside and the count; zero velocity with a sphere
    solid leaves no particle inside the sphere, and pushed equals the number that were inside.
 
@@ -217,7 +219,7 @@ static PetscErrorCode TestConstantVelocity(PetscInt nlevels, PetscBool wallz)
 
 /* perType: liquid particles (x < 0.5 at seeding) move through one uniform field, air particles through
    another (PffParticlesAdvectPerType); otherwise every particle through the first (PffParticlesAdvect). */
-static PetscErrorCode TestUniformAdvection(PetscBool perType)
+static PetscErrorCode TestUniformAdvection(PetscBool perType, PetscReal cellsPerStep)
 {
   const PetscInt   nb[3]       = {3, 2, 2};
   const PetscBool  periodic[3] = {PETSC_TRUE, PETSC_TRUE, PETSC_TRUE};
@@ -240,7 +242,8 @@ static PetscErrorCode TestUniformAdvection(PetscBool perType)
   }
   PetscCall(CreateParticles(&ctx, "1", perType ? SeedRememberMixed : SeedRemember, &part));
   PetscCall(PffParticlesGetTotals(part, NULL, c0, NULL));
-  const PetscReal *u = uv[0], speed = PetscSqrtReal(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]), dt = 2.5 * ctx.h0 / speed;
+  const PetscReal *u = uv[0], speed = PetscSqrtReal(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]),
+                  dt = cellsPerStep * ctx.h0 / speed;
   for (PetscInt s = 0; s < nsteps; s++) {
     if (perType)
       PetscCall(PffParticlesAdvectPerType(part, chU, dt, NULL, NULL, &st));
@@ -265,10 +268,13 @@ static PetscErrorCode TestUniformAdvection(PetscBool perType)
   PetscCheck(!perType || (c1[0] > 0 && c1[1] > 0), ctx.comm, PETSC_ERR_PLIB, "the per-type test needs both types");
   /* the float store rounds the start (kept in v) and each step's end by 2^-24 of the coordinate */
   PetscCheck(err <= 1e-6, ctx.comm, PETSC_ERR_PLIB, "uniform advection error %g (relative to the period)", (double)err);
+  PetscCheck(st.substeps == (PetscInt)PetscCeilReal(cellsPerStep), ctx.comm, PETSC_ERR_PLIB,
+             "%" PetscInt_FMT " sub-steps per step at %g cells per step", st.substeps, (double)cellsPerStep);
   PetscCall(PetscPrintf(ctx.comm,
-                        "advect uniform%s: %" PetscInt64_FMT " + %" PetscInt64_FMT " particles, %" PetscInt_FMT
-                        " sub-steps per step, max error %.1e of the period\n",
-                        perType ? " (one field per type)" : "", c1[0], c1[1], st.substeps, (double)err));
+                        "advect uniform %g cells/step%s: %" PetscInt64_FMT " + %" PetscInt64_FMT
+                        " particles, %" PetscInt_FMT " sub-steps per step, max error %.1e of the period\n",
+                        (double)cellsPerStep, perType ? " (one field per type)" : "", c1[0], c1[1], st.substeps,
+                        (double)err));
   PetscCall(PffParticlesDestroy(&part));
   PetscCall(PffGridDestroy(&ctx.grid));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -380,8 +386,10 @@ int main(int argc, char **argv)
   PetscCall(TestKernelSum(2, -1));
   PetscCall(TestConstantVelocity(2, PETSC_FALSE));
   PetscCall(TestConstantVelocity(1, PETSC_TRUE));
-  PetscCall(TestUniformAdvection(PETSC_FALSE));
-  PetscCall(TestUniformAdvection(PETSC_TRUE));
+  for (int k = 0; k < 2; k++) {
+    PetscCall(TestUniformAdvection(PETSC_FALSE, k ? 0.4 : 2.5));
+    PetscCall(TestUniformAdvection(PETSC_TRUE, k ? 0.4 : 2.5));
+  }
   PetscCall(TestWalledRotationAndSolid());
   PetscCall(PetscFinalize());
   return 0;
