@@ -12,7 +12,7 @@
 #include <omp.h>
 
 /* Refreshes the owned-block tables (the grid may have been re-partitioned since the last call). */
-static PetscErrorCode PffParticlesUpdateBlocks(PffParticles p)
+PetscErrorCode PffParticlesUpdateBlocks_Private(PffParticles p)
 {
   PetscInt nlocal, nblocks = p->nb[0] * p->nb[1] * p->nb[2];
 
@@ -50,43 +50,55 @@ static void PffBinScatterLane(void *base, size_t size, size_t lane, PetscInt n, 
 PetscErrorCode PffParticlesBin(PffParticles p)
 {
   const PetscInt *level;
-  PetscInt        nb[3], nbad = 0, moved = 0;
+  PetscInt        nb[3], nbad = 0;
   const PetscInt  n = p->n;
   int32_t        *dst;
 
   PetscFunctionBeginUser;
   PetscCall(PetscLogEventBegin(PFF_PartBin, 0, 0, 0, 0));
-  PetscCheck(n < INT32_MAX, PETSC_COMM_SELF, PETSC_ERR_SUP,
-             "%" PetscInt_FMT " particles on one rank: the binning indexes them with 32 bits; use more ranks", n);
-  PetscCall(PffParticlesUpdateBlocks(p));
+  PetscCall(PffParticlesUpdateBlocks_Private(p));
   PetscCall(PffGridGetRaster(p->grid, nb, &level, NULL));
   PetscCall(PffParticlesGetIntWork_Private(p, (size_t)n + 1, &dst));
   const PetscInt *local = p->local;
-#pragma omp          parallel for reduction(+ : nbad) schedule(static)
+#pragma omp parallel for reduction(+ : nbad) schedule(static)
   for (PetscInt i = 0; i < n; i++) {
-             const PetscInt gid = PffParticlesLocate_Private(p, &p->s.x[3 * i], level);
-             dst[i]             = gid >= 0 ? (int32_t)local[gid] : -1;
-             if (dst[i] < 0) nbad++;
+    const PetscInt gid = PffParticlesLocate_Private(p, &p->s.x[3 * i], level);
+    dst[i]             = gid >= 0 ? (int32_t)local[gid] : -1;
+    if (dst[i] < 0) nbad++;
   }
-           if (nbad > 0) {
-             PetscInt i = 0;
-             while (dst[i] >= 0) i++;
+  if (nbad > 0) {
+    PetscInt i = 0;
+    while (dst[i] >= 0) i++;
     SETERRQ(PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
-                     "%" PetscInt_FMT " particles are not in a block owned by rank %d, e.g. id %" PetscInt64_FMT
-                     " at (%g, %g, %g): call PffParticlesMigrate",
-                     nbad, (int)p->rank, (PetscInt64)p->s.id[i], (double)(p->origin[0] + p->h0 * p->s.x[3 * i]),
-                     (double)(p->origin[1] + p->h0 * p->s.x[3 * i + 1]), (double)(p->origin[2] + p->h0 * p->s.x[3 * i + 2]));
+            "%" PetscInt_FMT " particles are not in a block owned by rank %d, e.g. id %" PetscInt64_FMT
+            " at (%g, %g, %g): call PffParticlesMigrate",
+            nbad, (int)p->rank, (PetscInt64)p->s.id[i], (double)(p->origin[0] + p->h0 * p->s.x[3 * i]),
+            (double)(p->origin[1] + p->h0 * p->s.x[3 * i + 1]), (double)(p->origin[2] + p->h0 * p->s.x[3 * i + 2]));
   }
+  PetscCall(PffParticlesSort_Private(p));
+  PetscCall(PetscLogEventEnd(PFF_PartBin, 0, 0, 0, 0));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffParticlesSort_Private(PffParticles p)
+{
+  PetscInt       moved = 0;
+  const PetscInt n     = p->n;
+  int32_t       *dst   = p->i32work;
+
+  PetscFunctionBeginUser;
+  PetscCheck(n < INT32_MAX, PETSC_COMM_SELF, PETSC_ERR_SUP,
+             "%" PetscInt_FMT " particles on one rank: the binning indexes them with 32 bits; use more ranks", n);
   /* stable counting sort in threads: each thread counts and then numbers its own contiguous chunk,
      from offsets that put the chunks in order, so the result is the serial sort's */
   PetscInt      *start = p->start, *counts;
   const PetscInt nl = p->nlocal, nt = (PetscInt)PetscMax(omp_get_max_threads(), 1);
   PetscCall(PetscCalloc1((size_t)nt * (size_t)(nl + 1), &counts));
-         #pragma omp parallel num_threads(nt) reduction(+ : moved)
+#pragma omp parallel num_threads(nt) reduction(+ : moved)
   {
-             const PetscInt th = omp_get_thread_num(), nth = omp_get_num_threads(), i0 = n * th / nth, i1 = n * (th + 1) / nth;
-             PetscInt      *c = counts + (size_t)th * (size_t)(nl + 1);
-             for (PetscInt i = i0; i < i1; i++) c[dst[i]]++;
+    const PetscInt th = omp_get_thread_num(), nth = omp_get_num_threads(), i0 = n * th / nth, i1 = n * (th + 1) / nth;
+    PetscInt      *c = counts + (size_t)th * (size_t)(nl + 1);
+    for (PetscInt i = i0; i < i1; i++) c[dst[i]]++;
 #pragma omp barrier
 #pragma omp          single
     {
@@ -119,6 +131,5 @@ PetscErrorCode PffParticlesBin(PffParticles p)
     PffBinScatterLane(p->s.word, sizeof(uint32_t), 0, n, dst, buf);
   }
   p->binned = PETSC_TRUE;
-  PetscCall(PetscLogEventEnd(PFF_PartBin, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -2,8 +2,8 @@
    containing it. Periodic axes are wrapped and walled axes clamped first (so nothing leaves the
    domain), then counts by destination are exchanged (MPI_Alltoall) and the particles themselves in
    one MPI_Alltoallv of packed records. Kept particles stay in order, received ones are appended in
-   rank order, then everything is binned. Nothing is created or lost: a particle in an inactive block
-   is an error, so the global count and mass per type are invariant. */
+   rank order, then everything is binned by the local blocks found here (no second locate). Nothing is created or lost:
+   a particle in an inactive block is an error, so the global count and mass per type are invariant. */
 #include "particlesimpl.h"
 
 PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
@@ -18,7 +18,11 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
   PetscFunctionBeginUser;
   PetscCall(PetscLogEventBegin(PFF_PartMigrate, 0, 0, 0, 0));
   PetscCall(PffGridGetRaster(p->grid, nb, &level, &owner));
+  PetscCall(PffParticlesUpdateBlocks_Private(p));
   PetscCall(PffParticlesGetIntWork_Private(p, (size_t)n + 1, &dest));
+  const PetscInt *local = p->local;
+  /* dest[i]: the local block of a particle that stays (the binning's input, so it locates nothing
+     again), -2 - r for one that goes to rank r, -1 outside every active block */
   PetscInt64 sent = 0, wrapped = 0, clamped = 0;
 #pragma omp parallel for reduction(+ : sent, wrapped, clamped, nbad) schedule(static)
   for (PetscInt i = 0; i < n; i++) {
@@ -27,18 +31,22 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
     wrapped += w;
     clamped += c;
     const PetscInt gid = PffParticlesLocate_Private(p, &p->s.x[3 * i], level);
-    dest[i]            = gid >= 0 ? (int32_t)owner[gid] : -1;
-    if (gid < 0)
+    if (gid < 0) {
+      dest[i] = -1;
       nbad++;
-    else if (dest[i] != p->rank)
+    } else if (owner[gid] == p->rank)
+      dest[i] = (int32_t)local[gid];
+    else {
+      dest[i] = -2 - (int32_t)owner[gid];
       sent++;
+    }
   }
   loc[0] = sent;
   loc[1] = wrapped;
   loc[2] = clamped;
   if (nbad > 0) {
     PetscInt i = 0;
-    while (dest[i] >= 0) i++;
+    while (dest[i] != -1) i++;
     SETERRQ(PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
             "%" PetscInt_FMT " particles lie in inactive blocks, e.g. id %" PetscInt64_FMT " at (%g, %g, %g)", nbad,
             (PetscInt64)p->s.id[i], (double)(p->origin[0] + p->h0 * p->s.x[3 * i]),
@@ -50,7 +58,7 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
     PetscCall(PetscCalloc4(p->size, &scount, p->size, &rcount, p->size + 1, &sdispl, p->size + 1, &rdispl));
     PetscCall(PetscMalloc1(p->size, &fill));
     for (PetscInt i = 0; i < n; i++)
-      if (dest[i] != p->rank) scount[dest[i]]++;
+      if (dest[i] < 0) scount[-2 - dest[i]]++;
     PetscCallMPI(MPI_Alltoall(scount, 1, MPI_INT, rcount, 1, MPI_INT, p->comm));
     PetscInt64 ns = 0, nr = 0;
     for (PetscMPIInt r = 0; r < p->size; r++) {
@@ -73,8 +81,8 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
     /* pack the leavers and compact the stayers in place, keeping their order */
     PetscInt m = 0;
     for (PetscInt i = 0; i < n; i++) {
-      if (dest[i] != p->rank) {
-        PffPackedParticle *q = &sbuf[fill[dest[i]]++];
+      if (dest[i] < 0) {
+        PffPackedParticle *q = &sbuf[fill[-2 - dest[i]]++];
         for (int d = 0; d < 3; d++) {
           q->x[d] = p->s.x[3 * i + d];
           q->v[d] = p->s.v[3 * i + d];
@@ -85,7 +93,7 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
         continue;
       }
       if (m != i) PffParticlesMove_Private(p, m, i);
-      m++;
+      dest[m++] = dest[i];
     }
     for (PetscMPIInt r = 0; r < p->size; r++) {
       sdispl[r] *= rec;
@@ -96,6 +104,7 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
     PetscCallMPI(MPI_Alltoallv(sbuf, scount, sdispl, MPI_BYTE, rbuf, rcount, rdispl, MPI_BYTE, p->comm));
     p->n = m;
     PetscCall(PffParticlesReserve_Private(p, m + (PetscInt)nr));
+    PetscCall(PffParticlesGrowIntWork_Private(p, (size_t)(m + nr) + 1, m, &dest));
     for (PetscInt64 r = 0; r < nr; r++) {
       const PffPackedParticle *q = &rbuf[r];
       const PetscInt           j = p->n++;
@@ -105,6 +114,12 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
       }
       p->s.id[j]   = q->id;
       p->s.word[j] = q->word;
+      /* the sender found it in a block of this rank */
+      const PetscInt gid = PffParticlesLocate_Private(p, &p->s.x[3 * j], level);
+      PetscCheck(gid >= 0 && owner[gid] == p->rank, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+                 "particle %" PetscInt64_FMT " received by rank %d is not in one of its blocks", (PetscInt64)q->id,
+                 (int)p->rank);
+      dest[j] = (int32_t)local[gid];
     }
     PetscCall(PetscFree2(sbuf, rbuf));
     PetscCall(PetscFree4(scount, rcount, sdispl, rdispl));
@@ -112,7 +127,9 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
   }
   p->binned = PETSC_FALSE;
   PetscCall(PetscLogEventEnd(PFF_PartMigrate, 0, 0, 0, 0));
-  PetscCall(PffParticlesBin(p));
+  PetscCall(PetscLogEventBegin(PFF_PartBin, 0, 0, 0, 0));
+  PetscCall(PffParticlesSort_Private(p));
+  PetscCall(PetscLogEventEnd(PFF_PartBin, 0, 0, 0, 0));
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, loc, 3, MPIU_INT64, MPI_SUM, p->comm));
   if (stats) {
     stats->sent     = loc[0];

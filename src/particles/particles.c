@@ -136,6 +136,21 @@ PetscErrorCode PffParticlesGetIntWork_Private(PffParticles p, size_t n, int32_t 
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+PetscErrorCode PffParticlesGrowIntWork_Private(PffParticles p, size_t n, PetscInt keep, int32_t **w)
+{
+  PetscFunctionBeginUser;
+  if (n > p->ni32work) {
+    int32_t *t;
+    p->ni32work = PetscMax(n, p->ni32work + p->ni32work / 2);
+    PetscCall(PetscMalloc1(p->ni32work, &t));
+    if (keep > 0) PetscCall(PetscArraycpy(t, p->i32work, keep));
+    PetscCall(PetscFree(p->i32work));
+    p->i32work = t;
+  }
+  *w = p->i32work;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffParticlesGetFloatWork_Private(PffParticles p, size_t n, float **f)
 {
   PetscFunctionBeginUser;

@@ -115,12 +115,18 @@ static inline void PffParticlesMove_Private(PffParticles p, PetscInt dst, PetscI
 PETSC_INTERN PetscErrorCode PffParticlesReserve_Private(PffParticles, PetscInt);
 /* An int32 scratch of at least n values, kept between calls like the float scratch below. */
 PETSC_INTERN PetscErrorCode PffParticlesGetIntWork_Private(PffParticles, size_t n, int32_t **);
+/* The same, keeping the first keep values. */
+PETSC_INTERN PetscErrorCode PffParticlesGrowIntWork_Private(PffParticles, size_t n, PetscInt keep, int32_t **);
 /* A float scratch of at least n values, kept between calls (grown by half): no allocation, and no
    first-touch page faults, per step. */
 PETSC_INTERN PetscErrorCode PffParticlesGetFloatWork_Private(PffParticles, size_t n, float **);
 /* Wraps periodic axes and clamps walled axes of grid position g in place; returns what it did. */
 PETSC_INTERN void PffParticlesWrapClamp_Private(PffParticles, float g[3], PetscBool *wrapped, PetscBool *clamped);
 PETSC_INTERN PetscErrorCode PffParticlesCheckBinned_Private(PffParticles, const char[]);
+/* The binning in two parts: the owned-block tables (p->local, p->lgid, p->nlocal), and the stable sort
+   by the local block of each particle that the int32 scratch holds (Migrate knows them already). */
+PETSC_INTERN PetscErrorCode PffParticlesUpdateBlocks_Private(PffParticles);
+PETSC_INTERN PetscErrorCode PffParticlesSort_Private(PffParticles);
 
 /* Block-batched sampling of face channels (G2P and advection; sample.c). A table built once per call
    holds, per local block, its level, size and raster place and the data of each face component of up
@@ -237,8 +243,8 @@ static inline void PffSamplerFaceAt_Private(const PffSampler *s, PetscInt lb, Pe
   if (i0[0] >= 0 && i0[0] + 1 < n && i0[1] >= 0 && i0[1] + 1 < n && i0[2] >= 0 && i0[2] + 1 < n) {
     o = i0[0] + n * (i0[1] + n * i0[2]);
     for (PetscInt k = 0; k < nk; k++) base[k] = b->data[k0 + k][d];
-  } else if (b->tile[k0][d] && i0[0] >= -s->gw && i0[0] + 1 < n + s->gw && i0[1] >= -s->gw &&
-             i0[1] + 1 < n + s->gw && i0[2] >= -s->gw && i0[2] + 1 < n + s->gw) {
+  } else if (b->tile[k0][d] && i0[0] >= -s->gw && i0[0] + 1 < n + s->gw && i0[1] >= -s->gw && i0[1] + 1 < n + s->gw &&
+             i0[2] >= -s->gw && i0[2] + 1 < n + s->gw) {
     const PetscInt gw = s->gw;
     m                 = n + 2 * gw;
     o                 = (i0[0] + gw) + m * ((i0[1] + gw) + m * (i0[2] + gw));
