@@ -125,6 +125,13 @@ PETSC_EXTERN PetscErrorCode PffParticlesGetKernelSum(PffParticles p, PetscReal *
 PETSC_EXTERN PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTICLE_NTYPES],
                                             PetscInt chMass, PetscInt chMom, PetscInt chVolume);
 
+/* Trilinear interpolation of cell channel ch (ghosts current) at every particle, in float: fn receives
+   the values of particles [i0, i0 + m) of one block and may change their words (for example flag
+   them). fn runs in OpenMP threads, several calls at once, each on its own particles: it must be
+   thread-safe (shared counters need atomics). Not collective. */
+typedef void (*PffParticleCellFn)(PetscInt i0, PetscInt m, const float val[], void *ctx);
+PETSC_EXTERN PetscErrorCode PffParticlesInterpolateCell(PffParticles p, PetscInt ch, PffParticleCellFn fn, void *ctx);
+
 /* G2P (Eq. 12): v_p <- alpha (v_p + I(du, x_p)) + (1 - alpha) I(u, x_p) with
    alpha = alpha[type * nlevels + level of the block containing p]. Ghosts of chU and chDU must be
    current. Not collective. */

@@ -168,36 +168,54 @@ PetscErrorCode PffFlowFlipRatios_Private(PffFlow f, PetscReal dt, PetscReal alph
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+typedef struct {
+  PffParticleArrays a;
+  PetscReal         lo, hi; /* 0.5 -+ deltaPhi */
+  PetscBool         del;
+  PetscInt64        bubbles, droplets;
+} PffEscapedCtx;
+
+/* Classifies particles [i0, i0 + m) by the phase field at them (runs in threads). */
+static void PffEscapedClassify(PetscInt i0, PetscInt m, const float phi[], void *ctx)
+{
+  PffEscapedCtx *e  = (PffEscapedCtx *)ctx;
+  PetscInt64     nb = 0, nd = 0;
+  for (PetscInt j = 0; j < m; j++) {
+    const PetscInt i = i0 + j, type = PffParticleWordType(e->a.word[i]);
+    PetscBool      drop = PETSC_FALSE, rm = PETSC_FALSE;
+    if (type == PFF_PARTICLE_AIR && phi[j] > e->hi) {
+      rm = e->del;
+      nb++;
+    } else if (type == PFF_PARTICLE_LIQUID && phi[j] < e->lo) {
+      drop = PETSC_TRUE;
+      nd++;
+    }
+    e->a.word[i] = PffParticleWordSetFlags(e->a.word[i], PFF_PARTICLE_FLAG_DROPLET, drop);
+    e->a.word[i] = PffParticleWordSetFlags(e->a.word[i], PFF_PARTICLE_FLAG_REMOVE, rm);
+  }
+#pragma omp atomic
+  e->bubbles += nb;
+#pragma omp atomic
+  e->droplets += nd;
+}
+
 /* Escaped particles (Sec. 3.4): air deep in liquid is deleted (bubbles), liquid deep in air is
-   flagged as a droplet candidate. Reads the cell phase field (ghosts current). */
+   flagged as a droplet candidate. Reads the cell phase field (ghosts current) through the particles'
+   block tiles, in threads, without per-particle scratch. */
 PetscErrorCode PffFlowEscaped_Private(PffFlow f, PetscInt64 *bubbles, PetscInt64 *droplets)
 {
-  enum { CHUNK = 1024 }; /* world positions in chunks on the stack: no allocation, no per-particle scratch */
-  PffParticleArrays a;
-  PetscInt64        cnt[2] = {0, 0};
-  PetscReal         xw[3 * CHUNK], phi[CHUNK];
+  PffEscapedCtx e;
 
   PetscFunctionBeginUser;
-  PetscCall(PffParticlesGetArrays(f->part, &a));
-  for (PetscInt i0 = 0; i0 < a.n; i0 += CHUNK) {
-    const PetscInt m = PetscMin(CHUNK, a.n - i0);
-    for (PetscInt j = 0; j < m; j++) PffParticleArraysWorld(&a, i0 + j, &xw[3 * j]);
-    PetscCall(PffGridInterpolate(f->grid, f->chPhi, m, xw, phi));
-    for (PetscInt j = 0; j < m; j++) {
-      const PetscInt i = i0 + j, type = PffParticleWordType(a.word[i]);
-      PetscBool      drop = PETSC_FALSE, rm = PETSC_FALSE;
-      if (type == PFF_PARTICLE_AIR && phi[j] > 0.5 + f->deltaPhi) {
-        rm = f->deleteBubbles;
-        cnt[0]++;
-      } else if (type == PFF_PARTICLE_LIQUID && phi[j] < 0.5 - f->deltaPhi) {
-        drop = PETSC_TRUE;
-        cnt[1]++;
-      }
-      a.word[i] = PffParticleWordSetFlags(a.word[i], PFF_PARTICLE_FLAG_DROPLET, drop);
-      a.word[i] = PffParticleWordSetFlags(a.word[i], PFF_PARTICLE_FLAG_REMOVE, rm);
-    }
-  }
-  if (f->deleteBubbles && cnt[0]) PetscCall(PffParticlesRemove(f->part));
+  PetscCall(PffParticlesGetArrays(f->part, &e.a));
+  e.lo       = 0.5 - f->deltaPhi;
+  e.hi       = 0.5 + f->deltaPhi;
+  e.del      = f->deleteBubbles;
+  e.bubbles  = 0;
+  e.droplets = 0;
+  PetscCall(PffParticlesInterpolateCell(f->part, f->chPhi, PffEscapedClassify, &e));
+  if (f->deleteBubbles && e.bubbles) PetscCall(PffParticlesRemove(f->part));
+  PetscInt64 cnt[2] = {e.bubbles, e.droplets};
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, cnt, 2, MPIU_INT64, MPI_SUM, f->comm));
   *bubbles  = cnt[0];
   *droplets = cnt[1];

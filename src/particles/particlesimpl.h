@@ -140,9 +140,9 @@ typedef struct {
 
 typedef struct {
   PffGrid         grid;
-  PetscInt        ch[2], nch, gw;
-  PffSampleBlock *blocks; /* [nlocal] */
-  float          *tiles;  /* storage of every block's tiles (the particles' float scratch, borrowed) */
+  PetscInt        ch[2], nch, gw, ncomp; /* ncomp: 3 for face channels, 1 for cell channels */
+  PffSampleBlock *blocks;                /* [nlocal] */
+  float          *tiles;                 /* storage of every block's tiles (the particles' float scratch, borrowed) */
 } PffSampler;
 
 /* The face lattices of a chunk of at most PFF_CHUNK particles of one block (P2G and G2P): per axis the

@@ -30,8 +30,11 @@ PetscErrorCode PffSamplerCreate_Private(PffParticles p, PetscInt nch, const Pets
     PetscInt       width;
     const char    *name;
     PetscCall(PffGridGetChannelInfo(p->grid, ch[k], &name, &kind, NULL, &width));
-    PetscCheck(kind == PFF_CHANNEL_FACE, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "channel %s must be a face channel",
-               name);
+    PetscCheck(kind == PFF_CHANNEL_FACE || kind == PFF_CHANNEL_CELL, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
+               "channel %s must be a face or cell channel", name);
+    if (k == 0) s->ncomp = kind == PFF_CHANNEL_FACE ? 3 : 1;
+    PetscCheck((kind == PFF_CHANNEL_FACE ? 3 : 1) == s->ncomp, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
+               "the channels of a sampler must be of one kind (%s is not)", name);
     /* a point in its block reaches one cell beyond it, and the tiles hold gw ghost layers */
     PetscCheck(width >= PetscMax(gw, 1), PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
                "channel %s needs a halo of at least %" PetscInt_FMT " cells", name, PetscMax(gw, 1));
@@ -46,7 +49,8 @@ PetscErrorCode PffSamplerCreate_Private(PffParticles p, PetscInt nch, const Pets
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(p->grid, lb, &info));
-    if (!info.holes) ntile += (size_t)(3 * nch) * (size_t)((info.n + 2 * gw) * (info.n + 2 * gw) * (info.n + 2 * gw));
+    if (!info.holes)
+      ntile += (size_t)(s->ncomp * nch) * (size_t)((info.n + 2 * gw) * (info.n + 2 * gw) * (info.n + 2 * gw));
   }
   PetscCall(PffParticlesGetFloatWork_Private(p, ntile + 1, &s->tiles));
   ntile = 0;
@@ -64,7 +68,7 @@ PetscErrorCode PffSamplerCreate_Private(PffParticles p, PetscInt nch, const Pets
         tv[6 * lb + 3 * k + d] = NULL;
       }
     for (PetscInt k = 0; k < nch; k++)
-      for (int d = 0; d < 3; d++) {
+      for (int d = 0; d < s->ncomp; d++) {
         float *data;
         PetscCall(PffGridGetBlockData(p->grid, ch[k], lb, d, &data));
         b->data[k][d] = data;
