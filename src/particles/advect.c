@@ -66,40 +66,46 @@ static PetscBool PffAdvectFix(PffParticles p, const PffAdvectBlock *blocks, cons
 
 /* Velocity at grid position g through local block lb, channel k of the sampler, in grid units per
    unit time. */
-static inline void PffAdvectSample(PffParticles p, const PffSampler *s, PetscInt lb, PetscInt k, const PetscReal g[3],
-                                   PetscReal u[3])
+static inline void PffAdvectSample(PffParticles p, const PffSampler *s, const PffSampleBlock *b, PetscInt lb,
+                                   PetscInt k, const PetscReal g[3], PetscReal u[3])
 {
   const PetscReal ih0 = 1.0 / p->h0;
   PetscReal       lp[3], v[2][3];
-  PffSamplerLocal_Private(p, &s->blocks[lb], g, lp);
-  PffSamplerVector_Private(s, lb, k, 1, lp, v);
+  PffSamplerLocal_Private(p, b, g, lp);
+  PffSamplerVector_Private(s, b, lb, k, 1, lp, v);
   for (PetscInt d = 0; d < 3; d++) u[d] = v[0][d] * ih0;
+}
+
+/* The thread's copy of its own block lb (with tiles), the sampler's table for another block c. */
+static inline const PffSampleBlock *PffAdvectBlk(const PffSampler *s, const PffSampleBlock *tb, PetscInt lb, PetscInt c)
+{
+  return c == lb ? tb : &s->blocks[c];
 }
 
 /* One particle's RK3 sub-steps in double and grid units through the general sampler: the path of the
    particles the chunk path does not take. Returns the sub-step count and adds the clamps to *nclamp. */
-static PetscInt PffAdvectParticle(PffParticles p, const PffSampler *s, const PffAdvectBlock *blocks,
-                                  const PetscInt level[], PetscInt lb, PetscInt k, PetscReal dt, float xi[3],
-                                  PetscInt *nclamp)
+static PetscInt PffAdvectParticle(PffParticles p, const PffSampler *s, const PffSampleBlock *tb,
+                                  const PffAdvectBlock *blocks, const PetscInt level[], PetscInt lb, PetscInt k,
+                                  PetscReal dt, float xi[3], PetscInt *nclamp)
 {
   PetscReal g[3] = {xi[0], xi[1], xi[2]}, k1[3], k2[3], k3[3], gs[3];
   PetscInt  cur  = lb, bl;
 
-  PffAdvectSample(p, s, cur, k, g, k1);
+  PffAdvectSample(p, s, PffAdvectBlk(s, tb, lb, cur), cur, k, g, k1);
   const PetscReal cells =
       PetscSqrtReal(k1[0] * k1[0] + k1[1] * k1[1] + k1[2] * k1[2]) * dt / (p->substepCfl * blocks[lb].h);
   const PetscInt  m  = PetscMax(1, cells < (PetscReal)PFF_PARTICLES_MAX_SUBSTEPS ? (PetscInt)PetscCeilReal(cells)
                                                                                  : PFF_PARTICLES_MAX_SUBSTEPS);
   const PetscReal hs = dt / (PetscReal)m;
   for (PetscInt sub = 0; sub < m; sub++) {
-    if (sub > 0) PffAdvectSample(p, s, cur, k, g, k1);
+    if (sub > 0) PffAdvectSample(p, s, PffAdvectBlk(s, tb, lb, cur), cur, k, g, k1);
     /* k2 at g + dt/2 k1, k3 at g + 3 dt/4 k2 */
     for (int a = 0; a < 3; a++) gs[a] = g[a] + 0.5 * hs * k1[a];
     *nclamp += PffAdvectFix(p, blocks, level, cur, gs, &bl);
-    PffAdvectSample(p, s, bl, k, gs, k2);
+    PffAdvectSample(p, s, PffAdvectBlk(s, tb, lb, bl), bl, k, gs, k2);
     for (int a = 0; a < 3; a++) gs[a] = g[a] + 0.75 * hs * k2[a];
     *nclamp += PffAdvectFix(p, blocks, level, cur, gs, &bl);
-    PffAdvectSample(p, s, bl, k, gs, k3);
+    PffAdvectSample(p, s, PffAdvectBlk(s, tb, lb, bl), bl, k, gs, k3);
     for (int a = 0; a < 3; a++) g[a] += hs * (2 * k1[a] + 3 * k2[a] + 4 * k3[a]) / 9;
     *nclamp += PffAdvectFix(p, blocks, level, cur, g, &cur);
   }
@@ -170,10 +176,11 @@ static void PffAdvectChunkInside(PetscInt m, float pt[3][PFF_CHUNK], float lo, f
 /* The particles [i0, i1) of local block lb, which has tiles. Chunks run one RK3 step in float in the
    block's local cell units, vectorised: every stage point within one cell of the block (inside the reach
    of any velocity halo and inside the tiles) and one sub-step enough. The others take the general path. */
-static void PffAdvectBlockChunks(PffParticles p, const PffSampler *s, const PffAdvectBlock *blocks,
-                                 const PetscInt level[], PetscInt lb, PetscReal dt, PetscInt *maxsub, PetscInt *nclamp)
+static void PffAdvectBlockChunks(PffParticles p, const PffSampler *s, const PffSampleBlock *tb,
+                                 const PffAdvectBlock *blocks, const PetscInt level[], PetscInt lb, PetscReal dt,
+                                 PetscInt *maxsub, PetscInt *nclamp)
 {
-  const PffSampleBlock *b  = &s->blocks[lb];
+  const PffSampleBlock *b  = tb;
   const PetscInt        i1 = p->start[lb + 1], kair = s->nch - 1;
   const float           hl = (float)((PetscInt)1 << b->level), ihl = 1 / hl;
   const float           lo[3] = {(float)(b->ijk[0] * p->n0), (float)(b->ijk[1] * p->n0), (float)(b->ijk[2] * p->n0)};
@@ -213,7 +220,7 @@ static void PffAdvectBlockChunks(PffParticles p, const PffSampler *s, const PffA
         *maxsub = PetscMax(*maxsub, 1);
       } else {
         /* (PetscMax evaluates its arguments twice) */
-        const PetscInt k = koff[j] ? kair : 0, nsub = PffAdvectParticle(p, s, blocks, level, lb, k, dt, xi, nclamp);
+        const PetscInt k = koff[j] ? kair : 0, nsub = PffAdvectParticle(p, s, tb, blocks, level, lb, k, dt, xi, nclamp);
         *maxsub = PetscMax(*maxsub, nsub);
       }
     }
@@ -273,14 +280,17 @@ PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const PetscInt chU[PFF_
   const PetscInt kair = sampler.nch - 1;
 #pragma omp parallel for reduction(max : maxsub) reduction(+ : nclamp) schedule(dynamic, 1)
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
-    const PffSampleBlock *b = &sampler.blocks[lb];
+    PffSampleBlock tb;
+    if (p->start[lb] == p->start[lb + 1]) continue;
+    PffSamplerBlockTiles_Private(&sampler, lb, &tb);
+    const PffSampleBlock *b = &tb;
     if (b->tile[0][0] && b->tile[kair][0]) {
-      PffAdvectBlockChunks(p, &sampler, blocks, level, lb, dt, &maxsub, &nclamp);
+      PffAdvectBlockChunks(p, &sampler, &tb, blocks, level, lb, dt, &maxsub, &nclamp);
       continue;
     }
     for (PetscInt i = p->start[lb]; i < p->start[lb + 1]; i++) {
       const PetscInt k    = PffParticleWordType(p->s.word[i]) == PFF_PARTICLE_LIQUID ? 0 : kair;
-      const PetscInt nsub = PffAdvectParticle(p, &sampler, blocks, level, lb, k, dt, &p->s.x[3 * i], &nclamp);
+      const PetscInt nsub = PffAdvectParticle(p, &sampler, &tb, blocks, level, lb, k, dt, &p->s.x[3 * i], &nclamp);
       maxsub              = PetscMax(maxsub, nsub);
     }
   }

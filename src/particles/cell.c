@@ -15,7 +15,10 @@ PetscErrorCode PffParticlesInterpolateCell(PffParticles p, PetscInt ch, PffParti
   const float *x = p->s.x;
 #pragma omp parallel for schedule(dynamic, 1)
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
-    const PffSampleBlock *b  = &s.blocks[lb];
+    PffSampleBlock tb;
+    if (p->start[lb] == p->start[lb + 1]) continue;
+    PffSamplerBlockTiles_Private(&s, lb, &tb);
+    const PffSampleBlock *b  = &tb;
     const PetscInt        i1 = p->start[lb + 1], n = b->n, mm = n + 2;
     const PetscInt        st[8] = {0, 1, mm, mm + 1, mm * mm, mm * mm + 1, mm * mm + mm, mm * mm + mm + 1};
     const float           ih    = 1.0f / (float)((PetscInt)1 << b->level);

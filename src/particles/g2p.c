@@ -27,7 +27,10 @@ PetscErrorCode PffParticlesG2P(PffParticles p, PetscInt chU, PetscInt chDU, cons
   const PetscInt  nlevels = p->nlevels;
 #pragma omp parallel for schedule(dynamic, 1)
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
-    const PffSampleBlock *b  = &s.blocks[lb];
+    PffSampleBlock tb;
+    if (p->start[lb] == p->start[lb + 1]) continue;
+    PffSamplerBlockTiles_Private(&s, lb, &tb);
+    const PffSampleBlock *b  = &tb;
     const PetscInt        i0 = p->start[lb], i1 = p->start[lb + 1];
     if (!b->tile[0][0] || !b->tile[1][0]) { /* a block beside a wall or a hole: point by point */
       for (PetscInt i = i0; i < i1; i++) {
@@ -35,7 +38,7 @@ PetscErrorCode PffParticlesG2P(PffParticles p, PetscInt chU, PetscInt chDU, cons
         const PetscReal g[3] = {x[3 * i], x[3 * i + 1], x[3 * i + 2]};
         PetscReal       lp[3], uv[2][3];
         PffSamplerLocal_Private(p, b, g, lp);
-        PffSamplerVector_Private(&s, lb, 0, 2, lp, uv);
+        PffSamplerVector_Private(&s, b, lb, 0, 2, lp, uv);
         for (PetscInt d = 0; d < 3; d++)
           v[3 * i + d] = (float)(a * ((PetscReal)v[3 * i + d] + uv[1][d]) + (1 - a) * uv[0][d]);
       }

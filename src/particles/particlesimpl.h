@@ -134,15 +134,19 @@ PETSC_INTERN PetscErrorCode PffParticlesSort_Private(PffParticles);
    threads. */
 typedef struct {
   PetscInt     n, level, ijk[3];
+  PetscBool    tiled;      /* no wall or hole beside it: its stencils may read tiles */
   const float *data[2][3]; /* channel k, face component d: the block's own n^3 cells */
-  const float *tile[2][3]; /* the same with gw ghost layers, (n + 2 gw)^3 from cell -gw, or NULL (see sample.c) */
+  const float *tile[2][3]; /* the same with gw ghost layers, (n + 2 gw)^3 from cell -gw: NULL in the sampler's
+                              table, set in the thread's copy by PffSamplerBlockTiles_Private */
 } PffSampleBlock;
 
 typedef struct {
   PffGrid         grid;
   PetscInt        ch[2], nch, gw, ncomp; /* ncomp: 3 for face channels, 1 for cell channels */
   PffSampleBlock *blocks;                /* [nlocal] */
-  float          *tiles;                 /* storage of every block's tiles (the particles' float scratch, borrowed) */
+  const PffView **views;                 /* [6 nlocal]: channel k, component d of block lb at 6 lb + 3 k + d */
+  float          *tiles;                 /* per-thread tile buffers (the particles' float scratch, borrowed) */
+  size_t          tstride;               /* floats per thread */
 } PffSampler;
 
 /* The face lattices of a chunk of at most PFF_CHUNK particles of one block (P2G and G2P): per axis the
@@ -204,6 +208,9 @@ PETSC_INTERN void PffTileShell_Private(const PffView *views, PetscInt n, PetscIn
 PETSC_INTERN PetscErrorCode PffSamplerCreate_Private(PffParticles, PetscInt nch, const PetscInt ch[], PetscInt gw,
                                                      PffSampler *);
 PETSC_INTERN PetscErrorCode PffSamplerDestroy_Private(PffSampler *);
+/* The calling thread's copy of block lb's table entry, with its tiles built in the thread's buffer when
+   the block is tiled (valid until the thread's next call). */
+PETSC_INTERN void PffSamplerBlockTiles_Private(const PffSampler *, PetscInt lb, PffSampleBlock *);
 
 /* Position of grid point g (grid units) in cell units of local block lb's level, from its lower corner,
    as PffGridInterpolateFrom() computes it for the world point origin + h0 g: on a periodic axis the
@@ -231,14 +238,13 @@ static inline void PffSamplerLocal_Private(const PffParticles p, const PffSample
    block has one,
    else the grid's general path (walls, farther ghosts), PffGridInterpolateInBlock(). The fast paths
    interpolate axis by axis and so agree with the general path to rounding. */
-static inline void PffSamplerFaceAt_Private(const PffSampler *s, PetscInt lb, PetscInt k0, PetscInt nk, PetscInt d,
-                                            const PetscInt i0[3], const PetscReal t[3], const PetscReal lp[3],
-                                            PetscReal val[2])
+static inline void PffSamplerFaceAt_Private(const PffSampler *s, const PffSampleBlock *b, PetscInt lb, PetscInt k0,
+                                            PetscInt nk, PetscInt d, const PetscInt i0[3], const PetscReal t[3],
+                                            const PetscReal lp[3], PetscReal val[2])
 {
-  const PffSampleBlock *b = &s->blocks[lb];
-  const PetscInt        n = b->n;
-  PetscInt              o, m = n;
-  const float          *base[2] = {NULL, NULL};
+  const PetscInt n = b->n;
+  PetscInt       o, m = n;
+  const float   *base[2] = {NULL, NULL};
 
   if (i0[0] >= 0 && i0[0] + 1 < n && i0[1] >= 0 && i0[1] + 1 < n && i0[2] >= 0 && i0[2] + 1 < n) {
     o = i0[0] + n * (i0[1] + n * i0[2]);
@@ -264,8 +270,8 @@ static inline void PffSamplerFaceAt_Private(const PffSampler *s, PetscInt lb, Pe
 
 /* All three face components of channel k0 (and k0 + 1 if nk = 2) at lp: val[k][d]. The two lattices
    per axis (faces normal to it and across it) are located once. */
-static inline void PffSamplerVector_Private(const PffSampler *s, PetscInt lb, PetscInt k0, PetscInt nk,
-                                            const PetscReal lp[3], PetscReal val[2][3])
+static inline void PffSamplerVector_Private(const PffSampler *s, const PffSampleBlock *b, PetscInt lb, PetscInt k0,
+                                            PetscInt nk, const PetscReal lp[3], PetscReal val[2][3])
 {
   PetscInt  ic[3], ih[3];
   PetscReal tc[3], th[3];
@@ -280,7 +286,7 @@ static inline void PffSamplerVector_Private(const PffSampler *s, PetscInt lb, Pe
     const PetscInt  i0[3] = {d == 0 ? ic[0] : ih[0], d == 1 ? ic[1] : ih[1], d == 2 ? ic[2] : ih[2]};
      const PetscReal t[3] = {d == 0 ? tc[0] : th[0], d == 1 ? tc[1] : th[1], d == 2 ? tc[2] : th[2]};
      PetscReal v[2];
-    PffSamplerFaceAt_Private(s, lb, k0, nk, d, i0, t, lp, v);
+    PffSamplerFaceAt_Private(s, b, lb, k0, nk, d, i0, t, lp, v);
     for (PetscInt k = 0; k < nk; k++) val[k][d] = v[k];
   }
 }

@@ -1,6 +1,7 @@
 /* The block table of PffSampler (particlesimpl.h): G2P and advection sample face channels through it.
    Also the ghost shell of a block tile, which P2G sums into. */
 #include "particlesimpl.h"
+#include <omp.h>
 
 void PffTileShell_Private(const PffView *views, PetscInt n, PetscInt gw, float *tile, PetscBool add)
 {
@@ -40,69 +41,64 @@ PetscErrorCode PffSamplerCreate_Private(PffParticles p, PetscInt nch, const Pets
                "channel %s needs a halo of at least %" PetscInt_FMT " cells", name, PetscMax(gw, 1));
     s->ch[k] = ch[k];
   }
-  PetscCall(PetscMalloc1(PetscMax(p->nlocal, 1), &s->blocks));
-  /* tiles for the blocks without a wall or inactive neighbour: there the grid's general path is a plain
-     trilinear stencil over its views, which the tile holds value for value */
-  size_t          ntile = 0;
-  const PffView **tv;
-  PetscCall(PetscMalloc1(6 * PetscMax(p->nlocal, 1), &tv));
-  for (PetscInt lb = 0; lb < p->nlocal; lb++) {
-    PffBlockInfo info;
-    PetscCall(PffGridGetBlockInfo(p->grid, lb, &info));
-    if (!info.holes)
-      ntile += (size_t)(s->ncomp * nch) * (size_t)((info.n + 2 * gw) * (info.n + 2 * gw) * (info.n + 2 * gw));
-  }
-  PetscCall(PffParticlesGetFloatWork_Private(p, ntile + 1, &s->tiles));
-  ntile = 0;
+  PetscCall(PetscMalloc2(PetscMax(p->nlocal, 1), &s->blocks, 6 * PetscMax(p->nlocal, 1), &s->views));
+  /* tiles for the blocks without a wall or inactive neighbour (there the grid's general path is a plain
+     trilinear stencil over its views, which the tile holds value for value), built by the thread that
+     works on the block into its own buffer (PffSamplerBlockTiles_Private): scratch per thread, not per
+     block, and cache-hot when used */
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
     PffBlockInfo    info;
     PffSampleBlock *b = &s->blocks[lb];
     PetscCall(PffGridGetBlockInfo(p->grid, lb, &info));
     b->n     = info.n;
     b->level = info.level;
+    b->tiled = (PetscBool)!info.holes;
     for (int d = 0; d < 3; d++) b->ijk[d] = info.ijk[d];
     for (PetscInt k = 0; k < 2; k++)
       for (int d = 0; d < 3; d++) {
-        b->data[k][d]          = NULL;
-        b->tile[k][d]          = NULL;
-        tv[6 * lb + 3 * k + d] = NULL;
+        b->data[k][d]                = NULL;
+        b->tile[k][d]                = NULL;
+        s->views[6 * lb + 3 * k + d] = NULL;
       }
     for (PetscInt k = 0; k < nch; k++)
       for (int d = 0; d < s->ncomp; d++) {
         float *data;
         PetscCall(PffGridGetBlockData(p->grid, ch[k], lb, d, &data));
         b->data[k][d] = data;
-        if (info.holes) continue;
-        PetscCall(PffGridGetBlockViews(p->grid, ch[k], lb, d, &tv[6 * lb + 3 * k + d]));
-        b->tile[k][d] = s->tiles + ntile;
-        ntile += (size_t)((info.n + 2 * gw) * (info.n + 2 * gw) * (info.n + 2 * gw));
+        if (b->tiled) PetscCall(PffGridGetBlockViews(p->grid, ch[k], lb, d, &s->views[6 * lb + 3 * k + d]));
       }
   }
-  /* each block's tiles, in threads (no PETSc call inside): the own cells row by row from the block's
-     array, the ghost shell from the views */
-#pragma omp parallel for schedule(dynamic, 1)
-  for (PetscInt lb = 0; lb < p->nlocal; lb++) {
-    const PffSampleBlock *b = &s->blocks[lb];
-    const PetscInt        n = b->n, m = n + 2 * gw;
-    for (PetscInt q = 0; q < 6; q++) {
-      const PffView *views = tv[6 * lb + q];
-      float         *tile  = (float *)b->tile[q / 3][q % 3];
-      if (!views) continue;
+  const PetscInt m = p->n0 + 2 * gw;
+  s->tstride       = (size_t)(s->ncomp * nch) * (size_t)(m * m * m);
+  PetscCall(PffParticlesGetFloatWork_Private(p, s->tstride * (size_t)PetscMax(omp_get_max_threads(), 1), &s->tiles));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+void PffSamplerBlockTiles_Private(const PffSampler *s, PetscInt lb, PffSampleBlock *tb)
+{
+  const PetscInt gw = s->gw;
+
+  *tb = s->blocks[lb];
+  if (!tb->tiled) return;
+  const PetscInt n = tb->n, m = n + 2 * gw;
+  float         *base = s->tiles + s->tstride * (size_t)omp_get_thread_num();
+  for (PetscInt k = 0; k < s->nch; k++)
+    for (PetscInt d = 0; d < s->ncomp; d++) {
+      float *tile = base + (size_t)(k * s->ncomp + d) * (size_t)(m * m * m);
+      /* the own cells row by row from the block's array, the ghost shell from the views */
       for (PetscInt kk = 0; kk < n; kk++)
         for (PetscInt jj = 0; jj < n; jj++)
-          memcpy(&tile[gw + m * ((jj + gw) + m * (kk + gw))], &b->data[q / 3][q % 3][n * (jj + n * kk)],
+          memcpy(&tile[gw + m * ((jj + gw) + m * (kk + gw))], &tb->data[k][d][n * (jj + n * kk)],
                  sizeof(float) * (size_t)n);
-      PffTileShell_Private(views, n, gw, tile, PETSC_FALSE);
+      PffTileShell_Private(s->views[6 * lb + 3 * k + d], n, gw, tile, PETSC_FALSE);
+      tb->tile[k][d] = tile;
     }
-  }
-  PetscCall(PetscFree(tv));
-  PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 PetscErrorCode PffSamplerDestroy_Private(PffSampler *s)
 {
   PetscFunctionBeginUser;
-  PetscCall(PetscFree(s->blocks));
+  PetscCall(PetscFree2(s->blocks, s->views));
   s->tiles = NULL; /* the particles' float scratch */
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -25,7 +25,9 @@ PetscErrorCode PffParticlesSeed(PffParticles p, PffSeedFn fn, void *ctx)
     PetscCall(PffGridGetBlockInfo(p->grid, lb, &info));
     ncand += 8 * (PetscInt64)info.n * info.n * info.n;
   }
-  PetscCall(PffParticlesReserve_Private(p, p->n + (PetscInt)ncand));
+  /* an eighth more than the candidates: particles that migrate in later fill untouched pages, where a
+     growth would hold the old and the new store at once (+36 B per particle of peak memory) */
+  PetscCall(PffParticlesReserve_Private(p, p->n + (PetscInt)(ncand + ncand / 8)));
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(p->grid, lb, &info));
