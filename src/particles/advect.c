@@ -129,19 +129,17 @@ static void PffAdvectChunkComponent(PetscInt m, const float *restrict px, const 
                                     const int32_t *restrict koff, int32_t gw, int32_t n, float scale,
                                     float *restrict od)
 {
-  const int32_t mm = n + 2 * gw, st[8] = {0, 1, mm, mm + 1, mm * mm, mm * mm + 1, mm * mm + mm, mm * mm + mm + 1};
+  const int32_t mm = n + 2 * gw;
+  int32_t       st[8];
+  PffTileCorners_Private(mm, st);
   for (PetscInt j = 0; j < m; j++) {
     int32_t ix, iy, iz;
     float   x1, y1, z1;
     PffAdvectAxis(px[j] - off[0], gw, n, &ix, &x1);
     PffAdvectAxis(py[j] - off[1], gw, n, &iy, &y1);
     PffAdvectAxis(pz[j] - off[2], gw, n, &iz, &z1);
-    const float   x0 = 1 - x1, y0 = 1 - y1, z0 = 1 - z1;
     const int32_t o = (ix + gw) + mm * ((iy + gw) + mm * (iz + gw)) + koff[j];
-    od[j]           = scale * (z0 * (y0 * (x0 * tile[o + st[0]] + x1 * tile[o + st[1]]) +
-                           y1 * (x0 * tile[o + st[2]] + x1 * tile[o + st[3]])) +
-                     z1 * (y0 * (x0 * tile[o + st[4]] + x1 * tile[o + st[5]]) +
-                           y1 * (x0 * tile[o + st[6]] + x1 * tile[o + st[7]])));
+    od[j]           = scale * PffTrilinear_Private(tile, o, st, x1, y1, z1);
   }
 }
 
@@ -182,12 +180,13 @@ static void PffAdvectBlockChunks(PffParticles p, const PffSampler *s, const PffS
 {
   const PffSampleBlock *b  = tb;
   const PetscInt        i1 = p->start[lb + 1], kair = s->nch - 1;
-  const float           hl = (float)((PetscInt)1 << b->level), ihl = 1 / hl;
-  const float           lo[3] = {(float)(b->ijk[0] * p->n0), (float)(b->ijk[1] * p->n0), (float)(b->ijk[2] * p->n0)};
-  const float           scale = (float)(dt / (p->h0 * (PetscReal)hl)), cfl = (float)p->substepCfl;
-  const float           rlo = -1 + 1e-6f, rhi = (float)b->n + 1 - 1e-6f;
-  const int32_t         air = (int32_t)(b->tile[kair][0] - b->tile[0][0]); /* tiles are channel-major */
-  float                *x   = p->s.x;
+  const float           hl = (float)((PetscInt)1 << b->level);
+  float                 lo[3], ihl;
+  PffBlockCorner_Private(p->n0, b->ijk, b->level, lo, &ihl);
+  const float   scale = (float)(dt / (p->h0 * (PetscReal)hl)), cfl = (float)p->substepCfl;
+  const float   rlo = -1 + 1e-6f, rhi = (float)b->n + 1 - 1e-6f;
+  const int32_t air = (int32_t)(b->tile[kair][0] - b->tile[0][0]); /* tiles are channel-major */
+  float        *x   = p->s.x;
 
   for (PetscInt j0 = p->start[lb]; j0 < i1; j0 += PFF_CHUNK) {
     const PetscInt m = PetscMin(PFF_CHUNK, i1 - j0);

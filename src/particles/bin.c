@@ -123,12 +123,10 @@ PetscErrorCode PffParticlesSort_Private(PffParticles p)
   if (moved) {
     float *buf;
     PetscCall(PffParticlesGetFloatWork_Private(p, (size_t)n + 1, &buf));
-    for (size_t l = 0; l < 3; l++) {
-      PffBinScatterLane(p->s.x, 3 * sizeof(float), l, n, dst, buf);
-      PffBinScatterLane(p->s.v, 3 * sizeof(float), l, n, dst, buf);
-    }
-    for (size_t l = 0; l < 2; l++) PffBinScatterLane(p->s.id, sizeof(uint64_t), l, n, dst, buf);
-    PffBinScatterLane(p->s.word, sizeof(uint32_t), 0, n, dst, buf);
+#define PFF_PARTICLE_FIELD_SORT(name, type, k)                                                                         \
+  for (size_t l = 0; l < (k) * sizeof(type) / 4; l++) PffBinScatterLane(p->s.name, (k) * sizeof(type), l, n, dst, buf);
+    PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_SORT)
+#undef PFF_PARTICLE_FIELD_SORT
   }
   p->binned = PETSC_TRUE;
   PetscFunctionReturn(PETSC_SUCCESS);

@@ -20,9 +20,10 @@ PetscErrorCode PffParticlesInterpolateCell(PffParticles p, PetscInt ch, PffParti
     PffSamplerBlockTiles_Private(&s, lb, &tb);
     const PffSampleBlock *b  = &tb;
     const PetscInt        i1 = p->start[lb + 1], n = b->n, mm = n + 2;
-    const PetscInt        st[8] = {0, 1, mm, mm + 1, mm * mm, mm * mm + 1, mm * mm + mm, mm * mm + mm + 1};
-    const float           ih    = 1.0f / (float)((PetscInt)1 << b->level);
-    const float           lo[3] = {(float)(b->ijk[0] * p->n0), (float)(b->ijk[1] * p->n0), (float)(b->ijk[2] * p->n0)};
+    int32_t               st[8];
+    float                 lo[3], ih;
+    PffTileCorners_Private((int32_t)mm, st);
+    PffBlockCorner_Private(p->n0, b->ijk, b->level, lo, &ih);
     for (PetscInt j0 = p->start[lb]; j0 < i1; j0 += PFF_CHUNK) {
       const PetscInt m = PetscMin(PFF_CHUNK, i1 - j0);
       float          val[PFF_CHUNK];
@@ -33,10 +34,8 @@ PetscErrorCode PffParticlesInterpolateCell(PffParticles p, PetscInt ch, PffParti
         const int32_t *restrict cx = L.ih[0], *restrict cy = L.ih[1], *restrict cz = L.ih[2];
         const float *restrict tx = L.th[0], *restrict ty = L.th[1], *restrict tz = L.th[2], *restrict t = b->tile[0][0];
         for (PetscInt j = 0; j < m; j++) {
-          const int32_t o  = (cx[j] + 1) + (int32_t)mm * ((cy[j] + 1) + (int32_t)mm * (cz[j] + 1));
-          const float   x1 = tx[j], y1 = ty[j], z1 = tz[j], x0 = 1 - x1, y0 = 1 - y1, z0 = 1 - z1;
-          val[j] = z0 * (y0 * (x0 * t[o + st[0]] + x1 * t[o + st[1]]) + y1 * (x0 * t[o + st[2]] + x1 * t[o + st[3]])) +
-                   z1 * (y0 * (x0 * t[o + st[4]] + x1 * t[o + st[5]]) + y1 * (x0 * t[o + st[6]] + x1 * t[o + st[7]]));
+          const int32_t o = (cx[j] + 1) + (int32_t)mm * ((cy[j] + 1) + (int32_t)mm * (cz[j] + 1));
+          val[j]          = PffTrilinear_Private(t, o, st, tx[j], ty[j], tz[j]);
         }
       } else {
         for (PetscInt j = 0; j < m; j++) {

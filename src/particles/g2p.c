@@ -46,9 +46,10 @@ PetscErrorCode PffParticlesG2P(PffParticles p, PetscInt chU, PetscInt chDU, cons
     }
     /* every stencil of a binned particle lies in the tiles: chunks of particles, float weights, no branch */
     const PetscInt n = b->n, mm = n + 2;
-    const PetscInt st[8] = {0, 1, mm, mm + 1, mm * mm, mm * mm + 1, mm * mm + mm, mm * mm + mm + 1};
-    const float    ih    = 1.0f / (float)((PetscInt)1 << b->level);
-    const float    lo[3] = {(float)(b->ijk[0] * p->n0), (float)(b->ijk[1] * p->n0), (float)(b->ijk[2] * p->n0)};
+    int32_t        st[8];
+    float          lo[3], ih;
+    PffTileCorners_Private((int32_t)mm, st);
+    PffBlockCorner_Private(p->n0, b->ijk, b->level, lo, &ih);
     for (PetscInt j0 = i0; j0 < i1; j0 += PFF_CHUNK) {
       const PetscInt  m = PetscMin(PFF_CHUNK, i1 - j0);
       float           a[PFF_CHUNK];
@@ -63,15 +64,9 @@ PetscErrorCode PffParticlesG2P(PffParticles p, PetscInt chU, PetscInt chDU, cons
         const float *restrict tx = t[0], *restrict ty = t[1], *restrict tz = t[2];
         float ur[PFF_CHUNK], dr[PFF_CHUNK];
         for (PetscInt j = 0; j < m; j++) {
-          const int32_t o  = (cx[j] + 1) + (int32_t)mm * ((cy[j] + 1) + (int32_t)mm * (cz[j] + 1));
-          const float   x1 = tx[j], y1 = ty[j], z1 = tz[j], x0 = 1 - x1, y0 = 1 - y1, z0 = 1 - z1;
-          ur[j] =
-              z0 * (y0 * (x0 * tu[o + st[0]] + x1 * tu[o + st[1]]) + y1 * (x0 * tu[o + st[2]] + x1 * tu[o + st[3]])) +
-              z1 * (y0 * (x0 * tu[o + st[4]] + x1 * tu[o + st[5]]) + y1 * (x0 * tu[o + st[6]] + x1 * tu[o + st[7]]));
-          dr[j] = z0 * (y0 * (x0 * tdu[o + st[0]] + x1 * tdu[o + st[1]]) +
-                        y1 * (x0 * tdu[o + st[2]] + x1 * tdu[o + st[3]])) +
-                  z1 * (y0 * (x0 * tdu[o + st[4]] + x1 * tdu[o + st[5]]) +
-                        y1 * (x0 * tdu[o + st[6]] + x1 * tdu[o + st[7]]));
+          const int32_t o = (cx[j] + 1) + (int32_t)mm * ((cy[j] + 1) + (int32_t)mm * (cz[j] + 1));
+          ur[j]           = PffTrilinear_Private(tu, o, st, tx[j], ty[j], tz[j]);
+          dr[j]           = PffTrilinear_Private(tdu, o, st, tx[j], ty[j], tz[j]);
         }
         float *vd = &v[3 * j0 + d];
         for (PetscInt j = 0; j < m; j++) vd[3 * j] = a[j] * (vd[3 * j] + dr[j]) + (1 - a[j]) * ur[j];

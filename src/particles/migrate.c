@@ -1,9 +1,10 @@
 /* Migration (DESIGN.md Sec. 4 step 9, Sec. 6): every particle goes to the rank that owns the block
    containing it. Periodic axes are wrapped and walled axes clamped first (so nothing leaves the
    domain), then counts by destination are exchanged (MPI_Alltoall) and the particles themselves in
-   one MPI_Alltoallv of packed records. Kept particles stay in order, received ones are appended in
-   rank order, then everything is binned by the local blocks found here (no second locate). Nothing is created or lost:
-   a particle in an inactive block is an error, so the global count and mass per type are invariant. */
+   one MPI_Alltoallv of packed records (the store's fields back to back, PFF_PARTICLE_BYTES). Kept particles stay in
+   order, received ones are appended in rank order, then everything is binned by the local blocks found here (no second
+   locate). Nothing is created or lost: a particle in an inactive block is an error, so the global count and mass per
+   type are invariant. */
 #include "particlesimpl.h"
 
 PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
@@ -65,10 +66,10 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
       ns += scount[r];
       nr += rcount[r];
     }
-    PffPackedParticle *sbuf, *rbuf;
-    PetscCall(PetscMalloc2(ns, &sbuf, nr, &rbuf));
-    /* byte counts and displacements of the packed records */
-    const PetscMPIInt rec = (PetscMPIInt)sizeof(PffPackedParticle);
+    /* byte counts and displacements of the packed records (the store's fields back to back) */
+    const PetscMPIInt rec = (PetscMPIInt)PFF_PARTICLE_BYTES;
+    char             *sbuf, *rbuf;
+    PetscCall(PetscMalloc2((size_t)ns * (size_t)rec, &sbuf, (size_t)nr * (size_t)rec, &rbuf));
     sdispl[0] = rdispl[0] = 0;
     for (PetscMPIInt r = 0; r < p->size; r++) {
       fill[r] = sdispl[r]; /* next record to pack for rank r */
@@ -82,14 +83,7 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
     PetscInt m = 0;
     for (PetscInt i = 0; i < n; i++) {
       if (dest[i] < 0) {
-        PffPackedParticle *q = &sbuf[fill[-2 - dest[i]]++];
-        for (int d = 0; d < 3; d++) {
-          q->x[d] = p->s.x[3 * i + d];
-          q->v[d] = p->s.v[3 * i + d];
-        }
-        q->id   = p->s.id[i];
-        q->word = p->s.word[i];
-        q->pad  = 0;
+        PffParticlesPack_Private(&p->s, i, sbuf + (size_t)rec * (size_t)fill[-2 - dest[i]]++);
         continue;
       }
       if (m != i) PffParticlesMove_Private(p, m, i);
@@ -106,18 +100,12 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
     PetscCall(PffParticlesReserve_Private(p, m + (PetscInt)nr));
     PetscCall(PffParticlesGrowIntWork_Private(p, (size_t)(m + nr) + 1, m, &dest));
     for (PetscInt64 r = 0; r < nr; r++) {
-      const PffPackedParticle *q = &rbuf[r];
-      const PetscInt           j = p->n++;
-      for (int d = 0; d < 3; d++) {
-        p->s.x[3 * j + d] = q->x[d];
-        p->s.v[3 * j + d] = q->v[d];
-      }
-      p->s.id[j]   = q->id;
-      p->s.word[j] = q->word;
+      const PetscInt j = p->n++;
+      PffParticlesUnpack_Private(&p->s, j, rbuf + (size_t)rec * (size_t)r);
       /* the sender found it in a block of this rank */
       const PetscInt gid = PffParticlesLocate_Private(p, &p->s.x[3 * j], level);
       PetscCheck(gid >= 0 && owner[gid] == p->rank, PETSC_COMM_SELF, PETSC_ERR_PLIB,
-                 "particle %" PetscInt64_FMT " received by rank %d is not in one of its blocks", (PetscInt64)q->id,
+                 "particle %" PetscInt64_FMT " received by rank %d is not in one of its blocks", (PetscInt64)p->s.id[j],
                  (int)p->rank);
       dest[j] = (int32_t)local[gid];
     }

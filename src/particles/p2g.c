@@ -98,10 +98,11 @@ static void PffSplatBlock(const PffParticleSoA *s, PetscInt i0, PetscInt i1, con
                           float *const dp[3], float *const dv[3], const PetscReal density[], PetscInt n0, float *tile)
 {
   const PetscInt n = info->n, mm = n + 2, m3 = mm * mm * mm, nc = vv ? 3 : 2;
-  const PetscInt st[8]        = {0, 1, mm, mm + 1, mm * mm, mm * mm + 1, mm * mm + mm, mm * mm + mm + 1};
-  const float    ih           = 1.0f / (float)((PetscInt)1 << info->level),
-              norm            = 1.0f / (float)((PetscInt64)1 << (3 * info->level));
-  const float           lo[3] = {(float)(info->ijk[0] * n0), (float)(info->ijk[1] * n0), (float)(info->ijk[2] * n0)};
+  const float    norm = 1.0f / (float)((PetscInt64)1 << (3 * info->level));
+  int32_t        st[8];
+  float          lo[3], ih;
+  PffTileCorners_Private((int32_t)mm, st);
+  PffBlockCorner_Private(n0, info->ijk, info->level, lo, &ih);
   const float           rho[PFF_PARTICLE_NTYPES] = {(float)density[0], (float)density[1]};
   const PffView *const *vc[3]                    = {vm, vp, vv};
   float *const         *dc[3]                    = {dm, dp, dv};

@@ -58,10 +58,9 @@ PetscErrorCode PffParticlesSetFromOptions(PffParticles p)
 static PetscErrorCode PffParticleSoAFree(PffParticleSoA *s)
 {
   PetscFunctionBeginUser;
-  PetscCall(PetscFree(s->x));
-  PetscCall(PetscFree(s->v));
-  PetscCall(PetscFree(s->id));
-  PetscCall(PetscFree(s->word));
+#define PFF_PARTICLE_FIELD_FREE(name, type, k) PetscCall(PetscFree(s->name));
+  PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_FREE)
+#undef PFF_PARTICLE_FIELD_FREE
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -96,16 +95,11 @@ static PetscErrorCode PffParticleSoAGrow(PffParticleSoA *s, PetscInt n, PetscInt
   PffParticleSoA t;
 
   PetscFunctionBeginUser;
-  PetscCall(PetscMalloc1(3 * cap, &t.x));
-  PetscCall(PetscMalloc1(3 * cap, &t.v));
-  PetscCall(PetscMalloc1(cap, &t.id));
-  PetscCall(PetscMalloc1(cap, &t.word));
-  if (n > 0) {
-    PetscCall(PetscArraycpy(t.x, s->x, 3 * n));
-    PetscCall(PetscArraycpy(t.v, s->v, 3 * n));
-    PetscCall(PetscArraycpy(t.id, s->id, n));
-    PetscCall(PetscArraycpy(t.word, s->word, n));
-  }
+#define PFF_PARTICLE_FIELD_GROW(name, type, k)                                                                         \
+  PetscCall(PetscMalloc1((size_t)(k) * (size_t)cap, &t.name));                                                         \
+  if (n > 0) PetscCall(PetscArraycpy(t.name, s->name, (size_t)(k) * (size_t)n));
+  PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_GROW)
+#undef PFF_PARTICLE_FIELD_GROW
   PetscCall(PffParticleSoAFree(s));
   *s = t;
   PetscFunctionReturn(PETSC_SUCCESS);

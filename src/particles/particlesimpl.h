@@ -11,19 +11,22 @@
 /* Purposes of the counter-based RNG (the third key besides the seed and the particle id). */
 enum { PFF_RNG_SEED_JITTER = 1 };
 
-/* One particle packed for migration (40 B). */
-typedef struct {
-  float    x[3], v[3];
-  uint64_t id;
-  uint32_t word;
-  uint32_t pad;
-} PffPackedParticle;
+/* The particle fields, declared once: X(name, C type, values per particle). Growth, compaction, the
+   binning's lane sort and the migration record are generated from this list, so a new per-particle
+   field (a spray radius, a lifetime) is one line here; what a field means (Add, GetArrays, the files)
+   is written where it is used. Every field is a multiple of 4 bytes per particle (the sort moves 4-byte
+   lanes). x: position in grid units (world - origin) / h0; word: PffParticleWord(type, level, flags). */
+#define PFF_PARTICLE_FIELDS(X) X(x, float, 3) X(v, float, 3) X(id, uint64_t, 1) X(word, uint32_t, 1)
 
-/* The structure-of-arrays store (36 B per particle): n particles of capacity cap. */
+#define PFF_PARTICLE_FIELD_DECLARE(name, type, k) type *name;
+#define PFF_PARTICLE_FIELD_BYTES(name, type, k) +(k) * sizeof(type)
+
+/* Bytes per particle of the store (36), which is also the migration record. */
+#define PFF_PARTICLE_BYTES (0 PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_BYTES))
+
+/* The structure-of-arrays store: n particles of capacity cap. */
 typedef struct {
-  float    *x, *v; /* x in grid units (world - origin) / h0 */
-  uint64_t *id;
-  uint32_t *word; /* PffParticleWord(type, level, flags) */
+  PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_DECLARE)
 } PffParticleSoA;
 
 struct _n_PffParticles {
@@ -104,12 +107,29 @@ static inline PetscInt PffParticlesLocate_Private(PffParticles p, const float g[
 /* Moves particle src to slot dst (compaction after removals or sends). */
 static inline void PffParticlesMove_Private(PffParticles p, PetscInt dst, PetscInt src)
 {
-  for (int d = 0; d < 3; d++) {
-    p->s.x[3 * dst + d] = p->s.x[3 * src + d];
-    p->s.v[3 * dst + d] = p->s.v[3 * src + d];
-  }
-  p->s.id[dst]   = p->s.id[src];
-  p->s.word[dst] = p->s.word[src];
+#define PFF_PARTICLE_FIELD_MOVE(name, type, k)                                                                         \
+  for (int c = 0; c < (k); c++) p->s.name[(k)*dst + c] = p->s.name[(k)*src + c];
+  PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_MOVE)
+#undef PFF_PARTICLE_FIELD_MOVE
+}
+
+/* Packs particle i into (or unpacks it from) a migration record of PFF_PARTICLE_BYTES bytes. */
+static inline void PffParticlesPack_Private(const PffParticleSoA *s, PetscInt i, char *rec)
+{
+#define PFF_PARTICLE_FIELD_PACK(name, type, k)                                                                         \
+  memcpy(rec, &s->name[(k)*i], (k) * sizeof(type));                                                                    \
+  rec += (k) * sizeof(type);
+  PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_PACK)
+#undef PFF_PARTICLE_FIELD_PACK
+}
+
+static inline void PffParticlesUnpack_Private(PffParticleSoA *s, PetscInt i, const char *rec)
+{
+#define PFF_PARTICLE_FIELD_UNPACK(name, type, k)                                                                       \
+  memcpy(&s->name[(k)*i], rec, (k) * sizeof(type));                                                                    \
+  rec += (k) * sizeof(type);
+  PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_UNPACK)
+#undef PFF_PARTICLE_FIELD_UNPACK
 }
 
 PETSC_INTERN PetscErrorCode PffParticlesReserve_Private(PffParticles, PetscInt);
@@ -190,6 +210,28 @@ static inline void PffChunkLattice_Private(const float *x, PetscInt m, const flo
     PffChunkAxis_Private(x[3 * j + 1], lo[1], ih, (int32_t)n, &L->ic[1][j], &L->tc[1][j], &L->ih[1][j], &L->th[1][j]);
     PffChunkAxis_Private(x[3 * j + 2], lo[2], ih, (int32_t)n, &L->ic[2][j], &L->tc[2][j], &L->ih[2][j], &L->th[2][j]);
   }
+}
+
+/* Trilinear interpolation of the 2 x 2 x 2 values at t + o + st[q] (st: the corner offsets in a tile)
+   with fractions (x1, y1, z1), axis by axis; inlined into loops the compiler vectorises. */
+static inline float PffTrilinear_Private(const float *t, int32_t o, const int32_t st[8], float x1, float y1, float z1)
+{
+  const float x0 = 1 - x1, y0 = 1 - y1, z0 = 1 - z1;
+  return z0 * (y0 * (x0 * t[o + st[0]] + x1 * t[o + st[1]]) + y1 * (x0 * t[o + st[2]] + x1 * t[o + st[3]])) +
+         z1 * (y0 * (x0 * t[o + st[4]] + x1 * t[o + st[5]]) + y1 * (x0 * t[o + st[6]] + x1 * t[o + st[7]]));
+}
+
+/* Corner offsets of a 2 x 2 x 2 stencil in a tile of m^3 values. */
+static inline void PffTileCorners_Private(int32_t m, int32_t st[8])
+{
+  for (int q = 0; q < 8; q++) st[q] = (q & 1) + m * (((q >> 1) & 1) + m * ((q >> 2) & 1));
+}
+
+/* A block's lower corner in grid units (exact in float) and the inverse of its cell size. */
+static inline void PffBlockCorner_Private(PetscInt n0, const PetscInt ijk[3], PetscInt level, float lo[3], float *ih)
+{
+  for (int a = 0; a < 3; a++) lo[a] = (float)(ijk[a] * n0);
+  *ih = 1.0f / (float)((PetscInt)1 << level);
 }
 
 /* The lattice of face component d: per axis the normal lattice on axis d, the half one on the others. */
