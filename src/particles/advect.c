@@ -131,6 +131,7 @@ static void PffAdvectChunkComponent(PetscInt m, const float *restrict px, const 
 {
   const int32_t mm = n + 2 * gw;
   int32_t       st[8];
+  float         val[PFF_CHUNK]; /* a local target: the gathers cannot alias it */
   PffTileCorners_Private(mm, st);
   for (PetscInt j = 0; j < m; j++) {
     int32_t ix, iy, iz;
@@ -139,8 +140,9 @@ static void PffAdvectChunkComponent(PetscInt m, const float *restrict px, const 
     PffAdvectAxis(py[j] - off[1], gw, n, &iy, &y1);
     PffAdvectAxis(pz[j] - off[2], gw, n, &iz, &z1);
     const int32_t o = (ix + gw) + mm * ((iy + gw) + mm * (iz + gw)) + koff[j];
-    od[j]           = scale * PffTrilinear_Private(tile, o, st, x1, y1, z1);
+    val[j]          = PffTrilinear_Private(tile, o, st, x1, y1, z1);
   }
+  for (PetscInt j = 0; j < m; j++) od[j] = scale * val[j];
 }
 
 /* Velocity samples of a chunk at block-local points lp (cell units of the block, from its lower corner)

@@ -32,11 +32,13 @@ PetscErrorCode PffParticlesInterpolateCell(PffParticles p, PetscInt ch, PffParti
         PffChunkLattice L;
         PffChunkLattice_Private(&x[3 * j0], m, lo, ih, n, &L);
         const int32_t *restrict cx = L.ih[0], *restrict cy = L.ih[1], *restrict cz = L.ih[2];
-        const float *restrict tx = L.th[0], *restrict ty = L.th[1], *restrict tz = L.th[2], *restrict t = b->tile[0][0];
+        const float *restrict tx = L.th[0], *restrict ty = L.th[1], *restrict tz = L.th[2], *t = b->tile[0][0];
+        float w[PFF_CHUNK]; /* val's address goes to fn: gathers into it would not vectorise */
         for (PetscInt j = 0; j < m; j++) {
           const int32_t o = (cx[j] + 1) + (int32_t)mm * ((cy[j] + 1) + (int32_t)mm * (cz[j] + 1));
-          val[j]          = PffTrilinear_Private(t, o, st, tx[j], ty[j], tz[j]);
+          w[j]            = PffTrilinear_Private(t, o, st, tx[j], ty[j], tz[j]);
         }
+        memcpy(val, w, sizeof(float) * (size_t)m);
       } else {
         for (PetscInt j = 0; j < m; j++) {
           const PetscReal g[3] = {x[3 * (j0 + j)], x[3 * (j0 + j) + 1], x[3 * (j0 + j) + 2]};

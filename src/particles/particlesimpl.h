@@ -214,7 +214,8 @@ static inline void PffChunkLattice_Private(const float *x, PetscInt m, const flo
 
 /* Trilinear interpolation of the 2 x 2 x 2 values at t + o + st[q] (st: the corner offsets in a tile)
    with fractions (x1, y1, z1), axis by axis; inlined into loops the compiler vectorises. */
-static inline float PffTrilinear_Private(const float *t, int32_t o, const int32_t st[8], float x1, float y1, float z1)
+static inline float PffTrilinear_Private(const float *restrict t, int32_t o, const int32_t st[8], float x1, float y1,
+                                         float z1)
 {
   const float x0 = 1 - x1, y0 = 1 - y1, z0 = 1 - z1;
   return z0 * (y0 * (x0 * t[o + st[0]] + x1 * t[o + st[1]]) + y1 * (x0 * t[o + st[2]] + x1 * t[o + st[3]])) +
