@@ -282,8 +282,7 @@ PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const PetscInt chU[PFF_
 #pragma omp parallel for reduction(max : maxsub) reduction(+ : nclamp) schedule(dynamic, 1)
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
     PffSampleBlock tb;
-    if (p->start[lb] == p->start[lb + 1]) continue;
-    PffSamplerBlockTiles_Private(&sampler, lb, &tb);
+    if (!PffSamplerBlockTiles_Private(p, &sampler, lb, &tb)) continue;
     const PffSampleBlock *b = &tb;
     if (b->tile[0][0] && b->tile[kair][0]) {
       PffAdvectBlockChunks(p, &sampler, &tb, blocks, level, lb, dt, &maxsub, &nclamp);

@@ -16,8 +16,7 @@ PetscErrorCode PffParticlesInterpolateCell(PffParticles p, PetscInt ch, PffParti
 #pragma omp parallel for schedule(dynamic, 1)
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
     PffSampleBlock tb;
-    if (p->start[lb] == p->start[lb + 1]) continue;
-    PffSamplerBlockTiles_Private(&s, lb, &tb);
+    if (!PffSamplerBlockTiles_Private(p, &s, lb, &tb)) continue;
     const PffSampleBlock *b  = &tb;
     const PetscInt        i1 = p->start[lb + 1], n = b->n, mm = n + 2;
     int32_t               st[8];

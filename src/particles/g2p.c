@@ -28,8 +28,7 @@ PetscErrorCode PffParticlesG2P(PffParticles p, PetscInt chU, PetscInt chDU, cons
 #pragma omp parallel for schedule(dynamic, 1)
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
     PffSampleBlock tb;
-    if (p->start[lb] == p->start[lb + 1]) continue;
-    PffSamplerBlockTiles_Private(&s, lb, &tb);
+    if (!PffSamplerBlockTiles_Private(p, &s, lb, &tb)) continue;
     const PffSampleBlock *b  = &tb;
     const PetscInt        i0 = p->start[lb], i1 = p->start[lb + 1];
     if (!b->tile[0][0] || !b->tile[1][0]) { /* a block beside a wall or a hole: point by point */

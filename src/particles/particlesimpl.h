@@ -252,8 +252,9 @@ PETSC_INTERN PetscErrorCode PffSamplerCreate_Private(PffParticles, PetscInt nch,
                                                      PffSampler *);
 PETSC_INTERN PetscErrorCode PffSamplerDestroy_Private(PffSampler *);
 /* The calling thread's copy of block lb's table entry, with its tiles built in the thread's buffer when
-   the block is tiled (valid until the thread's next call). */
-PETSC_INTERN void PffSamplerBlockTiles_Private(const PffSampler *, PetscInt lb, PffSampleBlock *);
+   the block is tiled (valid until the thread's next call); PETSC_FALSE, and nothing built, when the
+   block holds no particle. */
+PETSC_INTERN PetscBool PffSamplerBlockTiles_Private(PffParticles, const PffSampler *, PetscInt lb, PffSampleBlock *);
 
 /* Position of grid point g (grid units) in cell units of local block lb's level, from its lower corner,
    as PffGridInterpolateFrom() computes it for the world point origin + h0 g: on a periodic axis the

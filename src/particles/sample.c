@@ -74,12 +74,13 @@ PetscErrorCode PffSamplerCreate_Private(PffParticles p, PetscInt nch, const Pets
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-void PffSamplerBlockTiles_Private(const PffSampler *s, PetscInt lb, PffSampleBlock *tb)
+PetscBool PffSamplerBlockTiles_Private(PffParticles p, const PffSampler *s, PetscInt lb, PffSampleBlock *tb)
 {
   const PetscInt gw = s->gw;
 
+  if (p->start[lb] == p->start[lb + 1]) return PETSC_FALSE;
   *tb = s->blocks[lb];
-  if (!tb->tiled) return;
+  if (!tb->tiled) return PETSC_TRUE;
   const PetscInt n = tb->n, m = n + 2 * gw;
   float         *base = s->tiles + s->tstride * (size_t)omp_get_thread_num();
   for (PetscInt k = 0; k < s->nch; k++)
@@ -93,6 +94,7 @@ void PffSamplerBlockTiles_Private(const PffSampler *s, PetscInt lb, PffSampleBlo
       PffTileShell_Private(s->views[6 * lb + 3 * k + d], n, gw, tile, PETSC_FALSE);
       tb->tile[k][d] = tile;
     }
+  return PETSC_TRUE;
 }
 
 PetscErrorCode PffSamplerDestroy_Private(PffSampler *s)
