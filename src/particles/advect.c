@@ -266,7 +266,12 @@ PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const PetscInt chU[PFF_
   PetscCall(PetscLogEventBegin(PFF_Advect, 0, 0, 0, 0));
   PetscCall(PffGridGetRaster(p->grid, nb, &level, NULL));
   PetscCall(PffSamplerCreate_Private(p, chU[0] == chU[1] ? 1 : 2, chU, 2, &sampler));
-  PetscCall(PetscMalloc1(PetscMax(p->nlocal, 1), &blocks));
+  {
+    const size_t bytes = sizeof(PffAdvectBlock) * (size_t)p->nlocal;
+    void        *ptr;
+    PetscCall(PffParticlesGetScratch_Private(p, PFF_SCRATCH_ADVECT, 1, &bytes, &ptr));
+    blocks = (PffAdvectBlock *)ptr;
+  }
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(p->grid, lb, &info));
@@ -294,7 +299,7 @@ PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const PetscInt chU[PFF_
       maxsub              = PetscMax(maxsub, nsub);
     }
   }
-  PetscCall(PetscFree(blocks));
+
   PetscCall(PffSamplerDestroy_Private(&sampler));
   if (nclamp) PetscCall(PetscInfo(NULL, "%" PetscInt_FMT " advection stages clamped to the halo reach\n", nclamp));
 

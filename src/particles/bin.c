@@ -93,7 +93,13 @@ PetscErrorCode PffParticlesSort_Private(PffParticles p)
      from offsets that put the chunks in order, so the result is the serial sort's */
   PetscInt      *start = p->start, *counts;
   const PetscInt nl = p->nlocal, nt = (PetscInt)PetscMax(omp_get_max_threads(), 1);
-  PetscCall(PetscCalloc1((size_t)nt * (size_t)(nl + 1), &counts));
+  {
+    const size_t bytes = sizeof(PetscInt) * (size_t)nt * (size_t)(nl + 1);
+    void        *ptr;
+    PetscCall(PffParticlesGetScratch_Private(p, PFF_SCRATCH_SORT, 1, &bytes, &ptr));
+    counts = (PetscInt *)ptr;
+    PetscCall(PetscArrayzero(counts, (size_t)nt * (size_t)(nl + 1)));
+  }
 #pragma omp parallel num_threads(nt) reduction(+ : moved)
   {
     const PetscInt th = omp_get_thread_num(), nth = omp_get_num_threads(), i0 = n * th / nth, i1 = n * (th + 1) / nth;
@@ -119,7 +125,7 @@ PetscErrorCode PffParticlesSort_Private(PffParticles p)
                moved += dst[i] != i;
     }
   }
-  PetscCall(PetscFree(counts));
+
   if (moved) {
     float *buf;
     PetscCall(PffParticlesGetFloatWork_Private(p, (size_t)n + 1, &buf));

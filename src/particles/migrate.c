@@ -56,8 +56,19 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
   if (p->size > 1) {
     PetscMPIInt *scount, *rcount, *sdispl, *rdispl;
     PetscInt    *fill;
-    PetscCall(PetscCalloc4(p->size, &scount, p->size, &rcount, p->size + 1, &sdispl, p->size + 1, &rdispl));
-    PetscCall(PetscMalloc1(p->size, &fill));
+    {
+      const size_t bytes[5] = {sizeof(PetscMPIInt) * (size_t)p->size, sizeof(PetscMPIInt) * (size_t)p->size,
+                               sizeof(PetscMPIInt) * (size_t)(p->size + 1), sizeof(PetscMPIInt) * (size_t)(p->size + 1),
+                               sizeof(PetscInt) * (size_t)p->size};
+      void        *ptrs[5];
+      PetscCall(PffParticlesGetScratch_Private(p, PFF_SCRATCH_MIGRATE, 5, bytes, ptrs));
+      scount = (PetscMPIInt *)ptrs[0];
+      rcount = (PetscMPIInt *)ptrs[1];
+      sdispl = (PetscMPIInt *)ptrs[2];
+      rdispl = (PetscMPIInt *)ptrs[3];
+      fill   = (PetscInt *)ptrs[4];
+      PetscCall(PetscArrayzero(scount, p->size));
+    }
     for (PetscInt i = 0; i < n; i++)
       if (dest[i] < 0) scount[-2 - dest[i]]++;
     PetscCallMPI(MPI_Alltoall(scount, 1, MPI_INT, rcount, 1, MPI_INT, p->comm));
@@ -69,7 +80,13 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
     /* byte counts and displacements of the packed records (the store's fields back to back) */
     const PetscMPIInt rec = (PetscMPIInt)PFF_PARTICLE_BYTES;
     char             *sbuf, *rbuf;
-    PetscCall(PetscMalloc2((size_t)ns * (size_t)rec, &sbuf, (size_t)nr * (size_t)rec, &rbuf));
+    {
+      const size_t bytes[2] = {(size_t)ns * (size_t)rec, (size_t)nr * (size_t)rec};
+      void        *ptrs[2];
+      PetscCall(PffParticlesGetScratch_Private(p, PFF_SCRATCH_MIGRATE_RECORDS, 2, bytes, ptrs));
+      sbuf = (char *)ptrs[0];
+      rbuf = (char *)ptrs[1];
+    }
     sdispl[0] = rdispl[0] = 0;
     for (PetscMPIInt r = 0; r < p->size; r++) {
       fill[r] = sdispl[r]; /* next record to pack for rank r */
@@ -109,9 +126,11 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
                  (int)p->rank);
       dest[j] = (int32_t)local[gid];
     }
-    PetscCall(PetscFree2(sbuf, rbuf));
-    PetscCall(PetscFree4(scount, rcount, sdispl, rdispl));
-    PetscCall(PetscFree(fill));
+    /* the records are kept for the next step, unless a mass migration (a restart) made them large */
+    if (p->nscratch[PFF_SCRATCH_MIGRATE_RECORDS] > 4 * (size_t)p->n + 65536) {
+      PetscCall(PetscFree(p->scratch[PFF_SCRATCH_MIGRATE_RECORDS]));
+      p->nscratch[PFF_SCRATCH_MIGRATE_RECORDS] = 0;
+    }
   }
   p->binned = PETSC_FALSE;
   PetscCall(PetscLogEventEnd(PFF_PartMigrate, 0, 0, 0, 0));

@@ -188,7 +188,19 @@ PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTI
   if (chVolume >= 0) PetscCall(PffCheckFaceChannel(p->grid, chVolume, "P2G volume"));
   const PetscInt nv = chVolume >= 0 ? 3 : 0, stride = 6 + nv;
   PetscCall(PetscLogEventBegin(PFF_P2G, 0, 0, 0, 0));
-  PetscCall(PetscMalloc4(nlocal, &info, stride * nlocal, &views, stride * nlocal, &data, nlocal, &order));
+  PetscInt *colour;
+  {
+    const size_t bytes[5] = {sizeof(PffBlockInfo) * (size_t)nlocal, sizeof(const PffView *) * (size_t)(stride * nlocal),
+                             sizeof(float *) * (size_t)(stride * nlocal), sizeof(PetscInt) * (size_t)nlocal,
+                             sizeof(PetscInt) * (size_t)nlocal};
+    void        *ptrs[5];
+    PetscCall(PffParticlesGetScratch_Private(p, PFF_SCRATCH_P2G, 5, bytes, ptrs));
+    info   = (PffBlockInfo *)ptrs[0];
+    views  = (const PffView **)ptrs[1];
+    data   = (float **)ptrs[2];
+    order  = (PetscInt *)ptrs[3];
+    colour = (PetscInt *)ptrs[4];
+  }
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PetscCall(PffGridGetBlockInfo(p->grid, lb, &info[lb]));
     for (PetscInt comp = 0; comp < 3; comp++) {
@@ -207,8 +219,7 @@ PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTI
   if (nv) PetscCall(PffZeroWithGhosts(p->grid, chVolume, nlocal, info));
 
   /* blocks sorted by colour (counting sort) */
-  PetscInt *colour;
-  PetscCall(PetscMalloc1(nlocal, &colour));
+
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PetscInt c = 0;
     for (int a = 0, m = 1; a < 3; a++, m *= 3) {
@@ -225,7 +236,6 @@ PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTI
     for (int c = 0; c < 27; c++) fill[c] = cstart[c];
     for (PetscInt lb = 0; lb < nlocal; lb++) order[fill[colour[lb]]++] = lb;
   }
-  PetscCall(PetscFree(colour));
 
   const PffParticleSoA *s     = &p->s;
   const PetscInt       *start = p->start;
@@ -241,7 +251,6 @@ PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTI
                     nv ? &data[stride * lb + 6] : NULL, density, p->n0, tiles + tsize * (size_t)omp_get_thread_num());
     }
   }
-  PetscCall(PetscFree4(info, views, data, order));
 
   PetscCall(PffGridHaloReverseBegin(p->grid, chMass));
   PetscCall(PffGridHaloReverseEnd(p->grid, chMass));

@@ -84,6 +84,7 @@ PetscErrorCode PffParticlesDestroy(PffParticles *part)
   PetscCall(PetscFree(p->local));
   PetscCall(PetscFree(p->i32work));
   PetscCall(PetscFree(p->fwork));
+  for (int k = 0; k < PFF_SCRATCH_N; k++) PetscCall(PetscFree(p->scratch[k]));
   PetscCall(PetscFree(p));
   *part = NULL;
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -127,6 +128,27 @@ PetscErrorCode PffParticlesGetIntWork_Private(PffParticles p, size_t n, int32_t 
     PetscCall(PetscMalloc1(p->ni32work, &p->i32work));
   }
   *w = p->i32work;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffParticlesGetScratch_Private(PffParticles p, PffScratchSlot slot, PetscInt n, const size_t bytes[],
+                                              void *ptrs[])
+{
+  size_t total = 64;
+
+  PetscFunctionBeginUser;
+  for (PetscInt i = 0; i < n; i++) total += (bytes[i] + 63) / 64 * 64;
+  if (total > p->nscratch[slot]) {
+    PetscCall(PetscFree(p->scratch[slot]));
+    p->nscratch[slot] = PetscMax(total, p->nscratch[slot] + p->nscratch[slot] / 2);
+    PetscCall(PetscMalloc(p->nscratch[slot], &p->scratch[slot]));
+  }
+  char *c = (char *)p->scratch[slot];
+  c += (64 - (uintptr_t)c % 64) % 64;
+  for (PetscInt i = 0; i < n; i++) {
+    ptrs[i] = c;
+    c += (bytes[i] + 63) / 64 * 64;
+  }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -29,6 +29,19 @@ typedef struct {
   PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_DECLARE)
 } PffParticleSoA;
 
+/* Scratch slots of the hot paths, kept between calls and grown by half when too small, so that P2G,
+   G2P, advection, migration and the sort allocate nothing once warm. One slot per user; the users of
+   a slot never run nested. */
+typedef enum {
+  PFF_SCRATCH_SAMPLER,
+  PFF_SCRATCH_ADVECT,
+  PFF_SCRATCH_SORT,
+  PFF_SCRATCH_P2G,
+  PFF_SCRATCH_MIGRATE,
+  PFF_SCRATCH_MIGRATE_RECORDS,
+  PFF_SCRATCH_N
+} PffScratchSlot;
+
 struct _n_PffParticles {
   PffGrid     grid; /* borrowed */
   MPI_Comm    comm; /* the grid's communicator, borrowed */
@@ -59,6 +72,8 @@ struct _n_PffParticles {
   size_t   ni32work;
   float   *fwork;
   size_t   nfwork;
+  void    *scratch[PFF_SCRATCH_N];
+  size_t   nscratch[PFF_SCRATCH_N];
 };
 
 /* splitmix64 finaliser: a counter-based hash, the same on every rank and thread. */
@@ -135,6 +150,10 @@ static inline void PffParticlesUnpack_Private(PffParticleSoA *s, PetscInt i, con
 PETSC_INTERN PetscErrorCode PffParticlesReserve_Private(PffParticles, PetscInt);
 /* An int32 scratch of at least n values, kept between calls like the float scratch below. */
 PETSC_INTERN PetscErrorCode PffParticlesGetIntWork_Private(PffParticles, size_t n, int32_t **);
+/* Slot `slot` carved into n arrays of bytes[i] bytes each (64-byte aligned), returned in ptrs[i];
+   contents undefined. */
+PETSC_INTERN PetscErrorCode PffParticlesGetScratch_Private(PffParticles, PffScratchSlot slot, PetscInt n,
+                                                           const size_t bytes[], void *ptrs[]);
 /* The same, keeping the first keep values. */
 PETSC_INTERN PetscErrorCode PffParticlesGrowIntWork_Private(PffParticles, size_t n, PetscInt keep, int32_t **);
 /* A float scratch of at least n values, kept between calls (grown by half): no allocation, and no

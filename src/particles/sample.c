@@ -41,7 +41,14 @@ PetscErrorCode PffSamplerCreate_Private(PffParticles p, PetscInt nch, const Pets
                "channel %s needs a halo of at least %" PetscInt_FMT " cells", name, PetscMax(gw, 1));
     s->ch[k] = ch[k];
   }
-  PetscCall(PetscMalloc2(PetscMax(p->nlocal, 1), &s->blocks, 6 * PetscMax(p->nlocal, 1), &s->views));
+  {
+    const size_t bytes[2] = {sizeof(PffSampleBlock) * (size_t)p->nlocal,
+                             sizeof(const PffView *) * 6 * (size_t)p->nlocal};
+    void        *ptrs[2];
+    PetscCall(PffParticlesGetScratch_Private(p, PFF_SCRATCH_SAMPLER, 2, bytes, ptrs));
+    s->blocks = (PffSampleBlock *)ptrs[0];
+    s->views  = (const PffView **)ptrs[1];
+  }
   /* tiles for the blocks without a wall or inactive neighbour (there the grid's general path is a plain
      trilinear stencil over its views, which the tile holds value for value), built by the thread that
      works on the block into its own buffer (PffSamplerBlockTiles_Private): scratch per thread, not per
@@ -100,7 +107,8 @@ PetscBool PffSamplerBlockTiles_Private(PffParticles p, const PffSampler *s, Pets
 PetscErrorCode PffSamplerDestroy_Private(PffSampler *s)
 {
   PetscFunctionBeginUser;
-  PetscCall(PetscFree2(s->blocks, s->views));
-  s->tiles = NULL; /* the particles' float scratch */
+  s->blocks = NULL; /* the particles' scratch */
+  s->views  = NULL;
+  s->tiles  = NULL; /* the particles' float scratch */
   PetscFunctionReturn(PETSC_SUCCESS);
 }
