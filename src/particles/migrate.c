@@ -6,6 +6,7 @@
    locate). Nothing is created or lost: a particle in an inactive block is an error, so the global count and mass per
    type are invariant. */
 #include "particlesimpl.h"
+#include <omp.h>
 
 PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
 {
@@ -19,7 +20,9 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
   PetscFunctionBeginUser;
   PetscCall(PetscLogEventBegin(PFF_PartMigrate, 0, 0, 0, 0));
   PetscCall(PffGridGetRaster(p->grid, nb, &level, &owner));
-  PetscCall(PffParticlesUpdateBlocks_Private(p));
+  const PetscBool wasBinned = p->binned;
+  PetscBool       changed;
+  PetscCall(PffParticlesUpdateBlocks_Private(p, &changed));
   PetscCall(PffParticlesGetIntWork_Private(p, (size_t)n + 1, &dest));
   const PetscInt *local = p->local;
   /* dest[i]: the local block of a particle that stays (the binning's input, so it locates nothing
@@ -45,6 +48,13 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
   loc[0] = sent;
   loc[1] = wrapped;
   loc[2] = clamped;
+  /* the particles still in the block of their (unchanged) bin: the sort moves them in place */
+  if (wasBinned && !changed && omp_get_max_threads() == 1) { /* only the one-thread sort uses them */
+#pragma omp parallel for schedule(dynamic, 16)
+    for (PetscInt lb = 0; lb < p->nlocal; lb++)
+      for (PetscInt i = p->start[lb]; i < p->start[lb + 1]; i++)
+        if (dest[i] == (int32_t)lb) dest[i] |= PFF_SORT_STAYS;
+  }
   if (nbad > 0) {
     PetscInt i = 0;
     while (dest[i] != -1) i++;

@@ -39,6 +39,7 @@ typedef enum {
   PFF_SCRATCH_P2G,
   PFF_SCRATCH_MIGRATE,
   PFF_SCRATCH_MIGRATE_RECORDS,
+  PFF_SCRATCH_SORT_MOVERS,
   PFF_SCRATCH_N
 } PffScratchSlot;
 
@@ -164,7 +165,10 @@ PETSC_INTERN void PffParticlesWrapClamp_Private(PffParticles, float g[3], PetscB
 PETSC_INTERN PetscErrorCode PffParticlesCheckBinned_Private(PffParticles, const char[]);
 /* The binning in two parts: the owned-block tables (p->local, p->lgid, p->nlocal), and the stable sort
    by the local block of each particle that the int32 scratch holds (Migrate knows them already). */
-PETSC_INTERN PetscErrorCode PffParticlesUpdateBlocks_Private(PffParticles);
+PETSC_INTERN PetscErrorCode PffParticlesUpdateBlocks_Private(PffParticles, PetscBool *changed);
+/* Flag in the sort's input: the particle is still in the block of the bin it sat in, so the stayers
+   keep their order and the sort can move them in place (bin.c). */
+#define PFF_SORT_STAYS ((int32_t)1 << 30)
 PETSC_INTERN PetscErrorCode PffParticlesSort_Private(PffParticles);
 
 /* Block-batched sampling of face channels (G2P and advection; sample.c). A table built once per call
