@@ -122,12 +122,7 @@ PetscErrorCode PffParticlesReserve_Private(PffParticles p, PetscInt m)
 PetscErrorCode PffParticlesGetIntWork_Private(PffParticles p, size_t n, int32_t **w)
 {
   PetscFunctionBeginUser;
-  if (n > p->ni32work) {
-    PetscCall(PetscFree(p->i32work));
-    p->ni32work = PetscMax(n, p->ni32work + p->ni32work / 2);
-    PetscCall(PetscMalloc1(p->ni32work, &p->i32work));
-  }
-  *w = p->i32work;
+  PetscCall(PffParticlesGrowIntWork_Private(p, n, 0, w));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
