@@ -161,7 +161,8 @@ typedef struct {
 /* Statistics since the last reset (collective: sums over ranks). */
 PETSC_EXTERN PetscErrorCode PffPressureMGGetStats(PffPressure ps, PffMGStats *stats);
 PETSC_EXTERN PetscErrorCode PffPressureMGResetStats(PffPressure ps);
-/* Level L's Galerkin operator and the prolongation from level L+1 (NULL on the coarsest); borrowed. */
+/* Level L's Galerkin operator and the prolongation from level L+1 (NULL on the coarsest); borrowed. On a
+   matrix-free level the operator is an AIJ copy assembled from the face coefficients at this call. */
 PETSC_EXTERN PetscErrorCode PffPressureMGGetLevel(PffPressure ps, PetscInt L, Mat *A, Mat *P);
 /* Applies level L's smoother to A_L x = b in place: sweeps > 0 fixed hybrid sweeps (or Jacobi), sweeps = 0
    the configured pre-smoother (adaptive when on). Collective. */

@@ -28,6 +28,7 @@
 #define PFF_MG_RESCALE_DEFAULT PETSC_TRUE
 #define PFF_MG_KCYCLE_DEFAULT 2
 #define PFF_MG_COARSE_MAX_DEFAULT 4096
+#define PFF_MG_OPERATOR_DEFAULT PFF_MG_OPERATOR_STENCIL
 
 static PetscErrorCode PffMGGetContext(PC pc, PffMG **mg)
 {
@@ -41,30 +42,31 @@ static PetscErrorCode PffMGGetContext(PC pc, PffMG **mg)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-#define PFF_MG_GRID_KEY "PffPressureGrid"
+#define PFF_MG_PRESSURE_KEY "PffPressure"
 
-/* The pressure module composes its grid with the PC once. PCSetType replaces the PC's implementation
-   but keeps composed objects, so pffmg finds the grid however it was chosen (options or PCSetType). */
-PetscErrorCode PffPressureMGComposeGrid_Private(PC pc, PffGrid grid)
+/* The pressure module composes itself with the PC once. PCSetType replaces the PC's implementation
+   but keeps composed objects, so pffmg finds the grid and the face coefficients however it was chosen
+   (options or PCSetType). */
+PetscErrorCode PffPressureMGComposePressure_Private(PC pc, PffPressure ps)
 {
   PetscContainer c;
 
   PetscFunctionBeginUser;
   PetscCall(PetscContainerCreate(PetscObjectComm((PetscObject)pc), &c));
-  PetscCall(PetscContainerSetPointer(c, grid));
-  PetscCall(PetscObjectCompose((PetscObject)pc, PFF_MG_GRID_KEY, (PetscObject)c));
+  PetscCall(PetscContainerSetPointer(c, ps));
+  PetscCall(PetscObjectCompose((PetscObject)pc, PFF_MG_PRESSURE_KEY, (PetscObject)c));
   PetscCall(PetscContainerDestroy(&c));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-static PetscErrorCode PffMGQueryGrid(PC pc, PffGrid *grid)
+static PetscErrorCode PffMGQueryPressure(PC pc, PffPressure *ps)
 {
   PetscObject c;
 
   PetscFunctionBeginUser;
-  *grid = NULL;
-  PetscCall(PetscObjectQuery((PetscObject)pc, PFF_MG_GRID_KEY, &c));
-  if (c) PetscCall(PetscContainerGetPointer((PetscContainer)c, (void **)grid));
+  *ps = NULL;
+  PetscCall(PetscObjectQuery((PetscObject)pc, PFF_MG_PRESSURE_KEY, &c));
+  if (c) PetscCall(PetscContainerGetPointer((PetscContainer)c, (void **)ps));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -171,7 +173,7 @@ static PetscErrorCode PffMGSetUp(PC pc)
   if (!mg->optionsRead) PetscCall(PffPressureMGSetFromOptions_Private(pc));
   PetscCall(PetscLogEventBegin(PFF_MGSetUp, 0, 0, 0, 0));
   PetscCall(PCGetOperators(pc, NULL, &A));
-  if (mg->built && mg->lev[0].A != NULL && mg->lev[0].A != A) PetscCall(PffMGDestroyLevels_Private(mg));
+  if (mg->built && mg->Apc != A) PetscCall(PffMGDestroyLevels_Private(mg));
   if (!mg->built) PetscCall(PffMGBuildLevels_Private(mg));
   PetscCall(PffMGUpdateOperators_Private(mg, A));
   for (PetscInt L = 1; L + 1 < mg->nlevels; L++)
@@ -192,12 +194,12 @@ static PetscErrorCode PffMGView(PC pc, PetscViewer viewer)
   if (!ascii) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PetscViewerASCIIPrintf(
       viewer,
-      "pffmg: %" PetscInt_FMT " levels, smoother %s, adaptive relaxation %s (%" PetscInt_FMT
+      "pffmg: %" PetscInt_FMT " levels (%s operators), smoother %s, adaptive relaxation %s (%" PetscInt_FMT
       " steps, theta = mean + %g sd), block sweeps %s (max %" PetscInt_FMT "), fixed sweeps %" PetscInt_FMT
       ", omega %g\n",
-      mg->nlevels, PffMGSmootherTypes[mg->opt.smoother], mg->opt.adaptive ? "on" : "off", mg->opt.adaptiveSteps,
-      (double)mg->opt.thetaSigmas, mg->opt.blockSweeps ? "adaptive" : "one", mg->opt.blockSweepsMax, mg->opt.sweeps,
-      (double)mg->opt.omega));
+      mg->nlevels, PffMGOperatorTypes[mg->opt.operatorType], PffMGSmootherTypes[mg->opt.smoother],
+      mg->opt.adaptive ? "on" : "off", mg->opt.adaptiveSteps, (double)mg->opt.thetaSigmas,
+      mg->opt.blockSweeps ? "adaptive" : "one", mg->opt.blockSweepsMax, mg->opt.sweeps, (double)mg->opt.omega));
   for (PetscInt L = 0; L < mg->nlevels; L++) {
     PetscInt N = 0;
     if (mg->lev[L].A) PetscCall(MatGetSize(mg->lev[L].A, &N, NULL));
@@ -247,6 +249,7 @@ static PetscErrorCode PCCreate_PffMG(PC pc)
   mg->opt.rescale        = PFF_MG_RESCALE_DEFAULT;
   mg->opt.kcycleIts      = PFF_MG_KCYCLE_DEFAULT;
   mg->opt.coarseMax      = PFF_MG_COARSE_MAX_DEFAULT;
+  mg->opt.operatorType   = PFF_MG_OPERATOR_DEFAULT;
   PetscCall(KSPCreate(mg->comm, &mg->coarse));
   PetscCall(PCGetOptionsPrefix(pc, &prefix));
   PetscCall(KSPSetOptionsPrefix(mg->coarse, prefix));
@@ -292,7 +295,8 @@ PetscErrorCode PffPressureMGSetFromOptions_Private(PC pc)
 
   PetscFunctionBeginUser;
   PetscCall(PffMGGetContext(pc, &mg));
-  PetscCall(PffMGQueryGrid(pc, &mg->grid));
+  PetscCall(PffMGQueryPressure(pc, &mg->ps));
+  mg->grid = mg->ps ? mg->ps->grid : NULL;
   PetscCheck(mg->grid != NULL, PetscObjectComm((PetscObject)pc), PETSC_ERR_ORDER,
              "pffmg needs the grid: use it through PffPressure (-pressure_pc_type pffmg)");
   PetscCall(PCGetOptionsPrefix(pc, &prefix));
@@ -300,6 +304,9 @@ PetscErrorCode PffPressureMGSetFromOptions_Private(PC pc)
   PetscCall(PffOptionsEnum(
       "-pffmg_smoother", "pffmg smoother: two-stage red-black hybrid Gauss-Seidel or weighted Jacobi", "PffPressureMG",
       PffMGSmootherTypes, (PetscEnum)mg->opt.smoother, (PetscEnum *)&mg->opt.smoother, NULL));
+  PetscCall(PffOptionsEnum(
+      "-pffmg_operator", "Block-level operators: matrix-free face coefficients (stencil) or AIJ Galerkin products",
+      "PffPressureMG", PffMGOperatorTypes, (PetscEnum)mg->opt.operatorType, (PetscEnum *)&mg->opt.operatorType, NULL));
   PetscCall(PffOptionsBool("-pffmg_adaptive", "Adaptive relaxation (Algorithm 2) instead of fixed sweeps",
                            "PffPressureMG", mg->opt.adaptive, &mg->opt.adaptive, NULL));
   PetscCall(PffOptionsBool("-pffmg_block_sweeps", "Repeat block-local sweeps until the update falls by 1/3",
@@ -381,7 +388,11 @@ PetscErrorCode PffPressureMGGetLevel(PffPressure ps, PetscInt L, Mat *A, Mat *P)
   PetscCall(PffPressureGetMG(ps, &mg));
   PetscCheck(L >= 0 && L < mg->nlevels, ps->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "pffmg: level %" PetscInt_FMT " does not exist (%" PetscInt_FMT " levels)", L, mg->nlevels);
-  if (A) *A = mg->lev[L].A;
+  if (A && mg->lev[L].mf) {
+    PetscCall(PffMGStencilAssemble_Private(mg, L, &mg->lev[L].st->Aview));
+    *A = mg->lev[L].st->Aview;
+  } else if (A)
+    *A = mg->lev[L].A;
   if (P) *P = mg->lev[L].P;
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -9,6 +9,35 @@
 typedef enum { PFF_MG_SMOOTHER_RBGS, PFF_MG_SMOOTHER_JACOBI } PffMGSmootherType;
 PETSC_INTERN const char *const PffMGSmootherTypes[];
 
+/* How the block levels store their operators: matrix-free face coefficients (mgstencil.c) or AIJ
+   Galerkin products (MatPtAP, the first implementation, kept for comparison). */
+typedef enum { PFF_MG_OPERATOR_STENCIL, PFF_MG_OPERATOR_AIJ } PffMGOperatorType;
+PETSC_INTERN const char *const PffMGOperatorTypes[];
+
+/* Storage precision of the matrix-free coefficients (the solve vectors stay double). */
+typedef float PffMGReal;
+#define MPIU_PFFMGREAL MPI_FLOAT
+
+/* The matrix-free operator of one block level (mgstencil.c), A = sum_f c_f g_f g_f^T + diag(dx):
+   each cell owns the coefficients of its three lower faces (cf), the faces inside a block are read
+   by raster strides, and the couplings through block sides (same level, coarse-fine) are a small
+   per-row list whose values are refreshed from cf at every set-up. The diagonal is the sum of the
+   row's face terms, computed where it is used, so every row sums to dx exactly. */
+typedef struct {
+  PffMGReal *cf;                /* [3 nrows] c of the lower d-face of each cell at cf[d nrows + row] (0: closed) */
+  PffMGReal *dx;                /* [nrows] diagonal-only terms: Dirichlet walls, the unit of a cell with no open face */
+  PetscInt  *rowptr;            /* [nrows + 1] side couplings of each row (the row itself included) */
+  PetscInt  *col;               /* local row, or nrows + ghost index */
+  PffMGReal *val;               /* matrix entry: fac * c of the face */
+  PetscInt  *ref;               /* the face: slot d nrows + row of cf, or 3 nrows + ghost slot */
+  PffMGReal *fac;               /* g_f[row] g_f[col] */
+  PetscInt   nghost, *ghostRow; /* ghost cells: global rows, increasing */
+  PetscInt   nslot;             /* ghost face coefficients (faces owned by another rank's cells) */
+  PffMGReal *cghost;            /* [nslot] */
+  PetscSF    sfSlot;            /* owned cf -> cghost */
+  Mat        Aview;             /* assembled copy for PffPressureMGGetLevel, or NULL */
+} PffMGStencil;
+
 /* Options (prefix pressure_pffmg_), defaults beside PffMGCreate in mg.c. */
 typedef struct {
   PffMGSmootherType smoother;
@@ -17,6 +46,7 @@ typedef struct {
   PetscInt          sweeps;        /* fixed pre- and post-sweeps when not adaptive */
   PetscInt          adaptiveSteps; /* N_iter,max of Algorithm 2 */
   PetscInt          blockSweepsMax;
+  PffMGOperatorType operatorType;
   PetscReal         omega;
   PetscReal         thetaSigmas; /* theta = mean + thetaSigmas * std of log10 of the block maxima */
   PetscInt          maxLevels;
@@ -29,11 +59,14 @@ typedef struct {
 /* One multigrid level. Rows are the owned cells: owned blocks in local (Morton) order, cells x
    fastest at the block's resolution at this level. */
 typedef struct {
-  PetscInt       L;
-  PetscBool      uniform;       /* below the block raster: units are uniform coarse cells, not blocks */
-  PetscInt       nblk;          /* units (blocks, or coarse cells on uniform levels) */
-  PetscInt      *coord;         /* [3 nblk] unit coordinates on uniform levels (block coordinates >> (L - Lr)) */
-  Mat            A;             /* level operator; level 0: the pressure module's, referenced */
+  PetscInt  L;
+  PetscBool uniform;            /* below the block raster: units are uniform coarse cells, not blocks */
+  PetscInt  nblk;               /* units (blocks, or coarse cells on uniform levels) */
+  PetscInt *coord;              /* [3 nblk] unit coordinates on uniform levels (block coordinates >> (L - Lr)) */
+  Mat       A;                  /* level operator: a MATSHELL on matrix-free levels; level 0 with AIJ operators: the
+                                   pressure module's, referenced */
+  PffMGStencil  *st;            /* face coefficients (every block level with stencil operators) */
+  PetscBool      mf;            /* relaxed and applied matrix-free (every block level but the last) */
   Mat            P;             /* prolongation from level L+1 (piecewise constant), NULL on the coarsest */
   KSP            kcycle;        /* K-cycle solver of this level's correction, or NULL */
   Vec            x, b, r;       /* work (x, b unused on level 0, which works on the PC's vectors) */
@@ -59,9 +92,12 @@ typedef struct {
 
 typedef struct {
   PffGrid      grid;
+  PffPressure  ps; /* the coefficients of level 0 (stencil operators) */
   MPI_Comm     comm;
   PffMGOptions opt;
   PetscInt     nlevels, nlocal;
+  PetscInt     nblockLevels; /* levels with blocks; the last of them is AIJ, the others matrix-free (stencil) */
+  Mat          Apc;          /* the operator the hierarchy was built for (the PC's Pmat), referenced */
   PffMGLevel  *lev;
   KSP          coarse;    /* coarsest-level solver, options prefix pressure_pffmg_coarse_ */
   MatNullSpace constants; /* the constants, null space of the singular coarse levels */
@@ -89,3 +125,10 @@ PETSC_INTERN PetscErrorCode PffMGUpdateOperators_Private(PffMG *, Mat);
 PETSC_INTERN PetscErrorCode PffMGDestroyLevels_Private(PffMG *);
 PETSC_INTERN PetscErrorCode PffMGSmooth_Private(PffMG *, PetscInt, Vec, Vec);
 PETSC_INTERN PetscErrorCode PffMGSmoothFixed_Private(PffMG *, PetscInt, Vec, Vec, PetscInt);
+PETSC_INTERN PetscErrorCode PffMGStencilBuild_Private(PffMG *, PetscInt);
+PETSC_INTERN PetscErrorCode PffMGStencilUpdate_Private(PffMG *, PetscInt);
+PETSC_INTERN PetscErrorCode PffMGStencilAssemble_Private(PffMG *, PetscInt, Mat *);
+PETSC_INTERN PetscErrorCode PffMGStencilCreateShell_Private(PffMG *, PetscInt);
+PETSC_INTERN PetscErrorCode PffMGStencilDestroy_Private(PffMGLevel *);
+PETSC_INTERN PetscReal PffMGStencilRelaxBlock_Private(const PffMGLevel *, PetscInt, const PetscScalar *, PetscScalar *,
+                                                      const PetscScalar *, PetscReal, PetscReal *);

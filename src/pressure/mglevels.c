@@ -457,6 +457,13 @@ PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
     PetscCall(VecDuplicate(mg->lev[L + 1].x, &mg->lev[L + 1].b));
   }
   if (mg->nlevels > 1) PetscCall(VecDuplicate(mg->lev[mg->nlevels - 1].x, &mg->lev[mg->nlevels - 1].r));
+  mg->nblockLevels = nblockLevels;
+  if (mg->opt.operatorType == PFF_MG_OPERATOR_STENCIL && nblockLevels > 1)
+    for (PetscInt L = 0; L < nblockLevels; L++) {
+      mg->lev[L].mf = (PetscBool)(L + 1 < nblockLevels);
+      PetscCall(PffMGStencilBuild_Private(mg, L));
+      if (mg->lev[L].mf) PetscCall(PffMGStencilCreateShell_Private(mg, L));
+    }
   for (PetscInt L = 0; L < mg->nlevels; L++) {
     PffMGLevel *lv = &mg->lev[L];
     PetscCall(PetscMalloc1(lv->nblk, &lv->remote));
@@ -474,33 +481,54 @@ PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
    step), the pin of the coarsest operator when A is singular, the coarse solver's factorisation. */
 PetscErrorCode PffMGUpdateOperators_Private(PffMG *mg, Mat A)
 {
-  MatNullSpace nsp;
+  MatNullSpace    nsp;
+  const PetscBool stencil = (PetscBool)(mg->lev[0].st != NULL);
 
   PetscFunctionBeginUser;
   PetscCall(MatGetNullSpace(A, &nsp));
   mg->singular = (PetscBool)(nsp != NULL);
-  if (mg->lev[0].A != A) {
+  if (mg->Apc != A) {
     PetscCall(PetscObjectReference((PetscObject)A));
-    PetscCall(MatDestroy(&mg->lev[0].A));
-    mg->lev[0].A = A;
-    PetscCall(VecScatterDestroy(&mg->lev[0].scatter));
-    PetscCall(VecDestroy(&mg->lev[0].ghost));
-    if (mg->lev[0].r == NULL) PetscCall(MatCreateVecs(A, NULL, &mg->lev[0].r));
-    PetscCall(BuildGhosts(mg, &mg->lev[0]));
+    PetscCall(MatDestroy(&mg->Apc));
+    mg->Apc = A;
   }
-  PetscCall(RefreshLevelArrays(mg, &mg->lev[0]));
-  ComputeInverseDiagonal(&mg->lev[0]);
-  for (PetscInt L = 1; L < mg->nlevels; L++) {
+  if (!stencil) {
+    if (mg->lev[0].A != A) {
+      PetscCall(PetscObjectReference((PetscObject)A));
+      PetscCall(MatDestroy(&mg->lev[0].A));
+      mg->lev[0].A = A;
+      PetscCall(VecScatterDestroy(&mg->lev[0].scatter));
+      PetscCall(VecDestroy(&mg->lev[0].ghost));
+      if (mg->lev[0].r == NULL) PetscCall(MatCreateVecs(A, NULL, &mg->lev[0].r));
+      PetscCall(BuildGhosts(mg, &mg->lev[0]));
+    }
+    PetscCall(RefreshLevelArrays(mg, &mg->lev[0]));
+    ComputeInverseDiagonal(&mg->lev[0]);
+  }
+  for (PetscInt L = 0; L < mg->nlevels; L++) {
     PffMGLevel *lv = &mg->lev[L];
-    if (lv->A == NULL) {
-      PetscCall(MatPtAP(mg->lev[L - 1].A, mg->lev[L - 1].P, MAT_INITIAL_MATRIX, 1.5, &lv->A));
-      PetscCall(BuildGhosts(mg, lv));
-      PetscCall(BuildMergedFlags(mg, L));
-    } else
-      PetscCall(MatPtAP(mg->lev[L - 1].A, mg->lev[L - 1].P, MAT_REUSE_MATRIX, 1.5, &lv->A));
-    PetscCall(RefreshLevelArrays(mg, lv));
-    if (mg->opt.rescale) PetscCall(RescaleCoarse(mg, L));
-    ComputeInverseDiagonal(lv);
+    if (lv->st) {
+      /* Algorithm 1 on the face coefficients; the last block level also as AIJ for the levels below */
+      PetscCall(PffMGStencilUpdate_Private(mg, L));
+      if (!lv->mf) {
+        const PetscBool first = (PetscBool)(lv->A == NULL);
+        PetscCall(PffMGStencilAssemble_Private(mg, L, &lv->A));
+        if (first) PetscCall(BuildGhosts(mg, lv));
+        PetscCall(RefreshLevelArrays(mg, lv));
+        ComputeInverseDiagonal(lv);
+      }
+    } else if (L > 0) {
+      if (lv->A == NULL) {
+        PetscCall(MatPtAP(mg->lev[L - 1].A, mg->lev[L - 1].P, MAT_INITIAL_MATRIX, 1.5, &lv->A));
+        PetscCall(BuildGhosts(mg, lv));
+        PetscCall(BuildMergedFlags(mg, L));
+      } else
+        PetscCall(MatPtAP(mg->lev[L - 1].A, mg->lev[L - 1].P, MAT_REUSE_MATRIX, 1.5, &lv->A));
+      PetscCall(RefreshLevelArrays(mg, lv));
+      if (mg->opt.rescale) PetscCall(RescaleCoarse(mg, L));
+      ComputeInverseDiagonal(lv);
+    }
+    if (L == 0) continue;
     /* the K-cycle's inner Krylov steps need the constants as null space of the singular levels, or
        they gather a constant component that stalls the outer FCG near 1e-11 (not A's own null-space
        object: with closed cells it is a vector of the fine level) */
@@ -554,8 +582,10 @@ PetscErrorCode PffMGDestroyLevels_Private(PffMG *mg)
     PetscCall(PetscFree(lv->remote));
     PetscCall(PetscFree2(lv->merged, lv->mergedGhost));
     PetscCall(PetscFree(lv->idiag));
+    PetscCall(PffMGStencilDestroy_Private(lv));
   }
   PetscCall(PetscFree(mg->lev));
+  PetscCall(MatDestroy(&mg->Apc));
   PetscCall(MatDestroy(&mg->Apinned));
   PetscCall(MatNullSpaceDestroy(&mg->constants));
   if (mg->built) {

@@ -63,6 +63,7 @@ static inline PetscReal RelaxRows(const PffMGLevel *lv, PetscInt q0, PetscInt q1
 static inline PetscReal RelaxBlock(const PffMGLevel *lv, PetscInt lb, const PetscScalar *b, PetscScalar *x,
                                    const PetscScalar *g, PetscReal omega, PetscReal *R)
 {
+  if (lv->mf) return PffMGStencilRelaxBlock_Private(lv, lb, b, x, g, omega, R);
   const PetscReal r0 = RelaxRows(lv, lv->start[lb], lv->split[lb], lv->start[lb], b, x, g, omega, R);
   const PetscReal r1 = RelaxRows(lv, lv->split[lb], lv->start[lb + 1], lv->start[lb], b, x, g, omega, R);
   return PetscMax(r0, r1);

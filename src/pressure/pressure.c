@@ -47,7 +47,7 @@ PetscErrorCode PffPressureCreate(PffGrid grid, PffPressure *ps)
   /* rtol then bounds the true residual V (D u + c_div) / dt, whatever the PC */
   PetscCall(KSPSetNormType(p->ksp, KSP_NORM_UNPRECONDITIONED));
   PetscCall(KSPGetPC(p->ksp, &pc));
-  PetscCall(PffPressureMGComposeGrid_Private(pc, grid));
+  PetscCall(PffPressureMGComposePressure_Private(pc, p));
   PetscCall(PCSetType(pc, PFF_PRESSURE_PC_TYPE_DEFAULT));
   *ps = p;
   PetscFunctionReturn(PETSC_SUCCESS);

@@ -97,4 +97,4 @@ PETSC_INTERN PetscErrorCode PffPressureMaxDivergenceVec_Private(PffPressure, Vec
 PETSC_INTERN PetscErrorCode PffPressureMGRegister_Private(void);
 PETSC_INTERN PetscErrorCode PffPressureMGIsActive_Private(PC, PetscBool *);
 PETSC_INTERN PetscErrorCode PffPressureMGSetFromOptions_Private(PC);
-PETSC_INTERN PetscErrorCode PffPressureMGComposeGrid_Private(PC, PffGrid);
+PETSC_INTERN PetscErrorCode PffPressureMGComposePressure_Private(PC, PffPressure);

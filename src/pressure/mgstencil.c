@@ -1,0 +1,700 @@
+/* pffmg matrix-free block levels (PF-FLIP Sec. 6.1-6.3, Algorithm 1).
+
+   The pressure operator is a face operator, A = sum_f c_f g_f g_f^T + diag(dx), g_f = e_upper -
+   sum_k w_k e_lower_k (w = 1, or 1/4 for the 4 fine cells under a coarse face), and dx the
+   diagonal-only terms (Dirichlet walls, the unit of a cell with every face closed). At every
+   multigrid level every cell owns the coefficients of its three lower faces, in float (cf). With
+   piecewise-constant aggregation the Galerkin product P^T A P is again such a face operator (a
+   level's faces never mix blocks in another way: under 2:1 grading a coarse-above-fine face only
+   joins two blocks that both keep their resolution), so the coarse coefficients follow from the fine
+   ones without forming any product (Algorithm 1):
+     - a block that keeps its resolution copies its faces;
+     - a block that merges 2x2x2 sums the 4 fine faces across each coarse face;
+     - the diagonal-only terms sum over the 8 fine cells;
+   and then the resolution-transition rescaling of mglevels.c: x 1/2 on faces between two merged
+   cells, 3/4 between a merged and a kept cell, 1/2 on the diagonal-only terms of merged cells. (As
+   entries of A_L this is exactly what RescaleCoarse does to the AIJ product.)
+
+   Application reads the faces inside a block by raster strides (the 7-point stencil with 3
+   coefficients per cell). The couplings through block sides -- same level, coarse-fine, on this rank
+   or another -- are a small list per row, built once per grid with the face each entry comes from,
+   and refreshed from cf at every set-up; the coefficients of faces owned by another rank's cells come
+   through a PetscSF, the values of other ranks' cells through a VecScatter. */
+#include "mgimpl.h"
+#include <petscsf.h>
+
+const char *const PffMGOperatorTypes[] = {"stencil", "aij", "PffMGOperatorType", "PFF_MG_OPERATOR_", NULL};
+
+/* The global numbering of one level: first row of every raster block, first row of every rank. */
+typedef struct {
+  PetscInt           n0, L, nb[3], nraster;
+  const PetscInt    *level;
+  const PetscMPIInt *owner;
+  PetscBool          periodic[3];
+  PetscInt          *first; /* [nraster] global first row (-1: inactive) */
+  PetscInt          *rs;    /* [size + 1] */
+  PetscMPIInt        size;
+} PffMGNumbering;
+
+static inline PetscInt CellsPerAxis(const PffMGNumbering *t, PetscInt gid)
+{
+  const PetscInt l = t->level[gid];
+  return t->n0 >> (l > t->L ? l : t->L);
+}
+
+static PetscErrorCode NumberingCreate(PffMG *mg, PetscInt L, PffMGNumbering *t)
+{
+  PetscInt        nactive, *off;
+  const PetscInt *gids;
+
+  PetscFunctionBeginUser;
+  t->L = L;
+  PetscCall(PffGridGetSizes(mg->grid, &t->n0, NULL, NULL, NULL, t->periodic));
+  PetscCall(PffGridGetRaster(mg->grid, t->nb, &t->level, &t->owner));
+  PetscCall(PffGridGetMortonOrder(mg->grid, &nactive, &gids));
+  PetscCallMPI(MPI_Comm_size(mg->comm, &t->size));
+  t->nraster = t->nb[0] * t->nb[1] * t->nb[2];
+  PetscCall(PetscMalloc1(t->nraster, &t->first));
+  PetscCall(PetscCalloc1(t->size + 1, &t->rs));
+  PetscCall(PetscCalloc1(t->size + 1, &off));
+  for (PetscInt g = 0; g < t->nraster; g++) t->first[g] = -1;
+  for (PetscInt q = 0; q < nactive; q++) {
+    const PetscInt n = CellsPerAxis(t, gids[q]);
+    t->rs[t->owner[gids[q]] + 1] += n * n * n;
+  }
+  for (PetscMPIInt r = 0; r < t->size; r++) t->rs[r + 1] += t->rs[r];
+  for (PetscMPIInt r = 0; r < t->size; r++) off[r] = t->rs[r];
+  /* each rank numbers its blocks in Morton order (the local order), so the global Morton order
+     visits every rank's blocks in its numbering order */
+  for (PetscInt q = 0; q < nactive; q++) {
+    const PetscInt g = gids[q], n = CellsPerAxis(t, g);
+    t->first[g] = off[t->owner[g]];
+    off[t->owner[g]] += n * n * n;
+  }
+  PetscCall(PetscFree(off));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode NumberingDestroy(PffMGNumbering *t)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PetscFree(t->first));
+  PetscCall(PetscFree(t->rs));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static inline PetscInt CellIndex(const PetscInt p[3], PetscInt n)
+{
+  return p[0] + n * (p[1] + n * p[2]);
+}
+
+/* One term of the side couplings while they are collected: row, and the column and face as handles,
+   a local index (>= 0) or -2 - (global cell | global face 3 cell + d) on another rank. */
+typedef struct {
+  PetscInt   row;
+  PetscInt64 col, ref; /* col = -1: a diagonal term */
+  PffMGReal  fac;
+} PffMGTerm;
+
+typedef struct {
+  PffMGTerm *t;
+  PetscInt   n, cap;
+} PffMGTerms;
+
+static PetscErrorCode TermsAdd(PffMGTerms *T, PetscInt row, PetscInt64 col, PetscInt64 ref, PffMGReal fac)
+{
+  PetscFunctionBeginUser;
+  if (T->n == T->cap) {
+    PffMGTerm *t;
+    T->cap = T->cap ? 2 * T->cap : 1024;
+    PetscCall(PetscMalloc1(T->cap, &t));
+    if (T->n) PetscCall(PetscArraycpy(t, T->t, T->n));
+    PetscCall(PetscFree(T->t));
+    T->t = t;
+  }
+  T->t[T->n++] = (PffMGTerm){row, col, ref, fac};
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Handle of cell p of raster block gid (local block lb, or -1) with n cells per axis. */
+static inline PetscInt64 CellHandle(const PffMGLevel *lv, const PffMGNumbering *t, PetscInt gid, PetscInt lb,
+                                    const PetscInt p[3], PetscInt n)
+{
+  const PetscInt c = CellIndex(p, n);
+  return lb >= 0 ? (PetscInt64)(lv->start[lb] + c) : -2 - (PetscInt64)(t->first[gid] + c);
+}
+
+/* Handle of the lower d-face of cell p of block gid. */
+static inline PetscInt64 FaceHandle(const PffMGLevel *lv, const PffMGNumbering *t, PetscInt gid, PetscInt lb,
+                                    const PetscInt p[3], PetscInt n, PetscInt d)
+{
+  const PetscInt c = CellIndex(p, n);
+  return lb >= 0 ? (PetscInt64)d * lv->nrows + lv->start[lb] + c : -2 - (3 * (PetscInt64)(t->first[gid] + c) + d);
+}
+
+/* The couplings of the cells of local block lb through its side s (axis d = s / 2, upper if s odd).
+   A lower side carries faces of this block's cells; an upper side faces of the neighbour's cells
+   (their lower faces). n, m: cells per axis here and in the neighbour (m = n, n / 2 or 2 n). */
+static PetscErrorCode CollectSide(PffMG *mg, const PffMGLevel *lv, const PffMGNumbering *t, PetscInt lb,
+                                  const PffBlockInfo *info, PetscInt s, PffMGTerms *T)
+{
+  const PetscInt d = s / 2, a1 = (d + 1) % 3, a2 = (d + 2) % 3, upper = s % 2;
+  PetscInt       dir[3] = {0, 0, 0}, gN, lN = -1, n, m;
+
+  PetscFunctionBeginUser;
+  dir[d] = upper ? 1 : -1;
+  gN     = PffRasterNeighbour(t->nb, t->periodic, info->ijk, dir);
+  if (gN < 0 || t->level[gN] < 0) PetscFunctionReturn(PETSC_SUCCESS); /* wall or inactive: closed */
+  PetscCall(PffGridGetLocalIndex(mg->grid, gN, &lN));
+  n = lv->n[lb];
+  m = CellsPerAxis(t, gN);
+  PetscCheck(m == n || 2 * m == n || m == 2 * n, PETSC_COMM_SELF, PETSC_ERR_PLIB, "pffmg: blocks are not 2:1 graded");
+  for (PetscInt v = 0; v < n; v++)
+    for (PetscInt u = 0; u < n; u++) {
+      PetscInt p[3], q[3];
+      p[d]               = upper ? n - 1 : 0;
+      p[a1]              = u;
+      p[a2]              = v;
+      const PetscInt row = lv->start[lb] + CellIndex(p, n);
+      if (!upper) {
+        const PetscInt64 ref = (PetscInt64)d * lv->nrows + row; /* this cell's own lower face */
+        q[d]                 = m - 1;
+        PetscCall(TermsAdd(T, row, -1, ref, 1));
+        if (m == 2 * n) /* coarse above 4 fine cells: w = 1/4 each */
+          for (PetscInt k = 0; k < 4; k++) {
+            q[a1] = 2 * u + k % 2;
+            q[a2] = 2 * v + k / 2;
+            PetscCall(TermsAdd(T, row, CellHandle(lv, t, gN, lN, q, m), ref, -0.25f));
+          }
+        else {
+          q[a1] = m == n ? u : u / 2;
+          q[a2] = m == n ? v : v / 2;
+          PetscCall(TermsAdd(T, row, CellHandle(lv, t, gN, lN, q, m), ref, -1));
+        }
+      } else if (m == n || m == 2 * n) { /* 1 or 4 faces of the neighbour's cells, each with this cell below */
+        const PetscInt r = m / n;
+        q[d]             = 0;
+        for (PetscInt k = 0; k < r * r; k++) {
+          q[a1]                = r * u + k % r;
+          q[a2]                = r * v + k / r;
+          const PetscInt64 ref = FaceHandle(lv, t, gN, lN, q, m, d);
+          PetscCall(TermsAdd(T, row, -1, ref, 1));
+          PetscCall(TermsAdd(T, row, CellHandle(lv, t, gN, lN, q, m), ref, -1));
+        }
+      } else { /* the neighbour is coarser: its cell's face has 4 lower cells here, this one among them */
+        q[d]                 = 0;
+        q[a1]                = u / 2;
+        q[a2]                = v / 2;
+        const PetscInt64 ref = FaceHandle(lv, t, gN, lN, q, m, d);
+        PetscCall(TermsAdd(T, row, -1, ref, 1.0f / 16));
+        PetscCall(TermsAdd(T, row, CellHandle(lv, t, gN, lN, q, m), ref, -0.25f));
+        for (PetscInt k = 0; k < 4; k++) {
+          PetscInt f[3];
+          f[d]  = n - 1;
+          f[a1] = 2 * (u / 2) + k % 2;
+          f[a2] = 2 * (v / 2) + k / 2;
+          if (f[a1] == u && f[a2] == v) continue;
+          PetscCall(TermsAdd(T, row, lv->start[lb] + CellIndex(f, n), ref, 1.0f / 16));
+        }
+      }
+    }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscInt FindInt64(PetscInt64 key, PetscInt n, const PetscInt64 *a)
+{
+  PetscInt lo = 0, hi = n - 1;
+  while (lo < hi) {
+    const PetscInt mid = (lo + hi) / 2;
+    if (a[mid] < key)
+      lo = mid + 1;
+    else
+      hi = mid;
+  }
+  return n > 0 && a[lo] == key ? lo : -1;
+}
+
+/* Distinct remote handles of one kind (cells or faces), increasing by global number. */
+static PetscErrorCode RemoteHandles(const PffMGTerms *T, PetscBool faces, PetscInt *n, PetscInt64 **g)
+{
+  PetscInt cnt = 0;
+
+  PetscFunctionBeginUser;
+  for (PetscInt e = 0; e < T->n; e++)
+    if ((faces ? T->t[e].ref : T->t[e].col) <= -2) cnt++;
+  PetscCall(PetscMalloc1(cnt, g));
+  cnt = 0;
+  for (PetscInt e = 0; e < T->n; e++) {
+    const PetscInt64 h = faces ? T->t[e].ref : T->t[e].col;
+    if (h <= -2) (*g)[cnt++] = -2 - h;
+  }
+  PetscCall(PetscSortInt64(cnt, *g));
+  *n = 0;
+  for (PetscInt q = 0; q < cnt; q++)
+    if (*n == 0 || (*g)[q] != (*g)[*n - 1]) (*g)[(*n)++] = (*g)[q];
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscMPIInt RankOfRow(const PffMGNumbering *t, PetscInt64 row)
+{
+  PetscMPIInt lo = 0, hi = t->size - 1;
+  while (lo < hi) { /* the last rank r with rs[r] <= row */
+    const PetscMPIInt mid = (lo + hi + 1) / 2;
+    if (t->rs[mid] <= row)
+      lo = mid;
+    else
+      hi = mid - 1;
+  }
+  return lo;
+}
+
+/* Structure of level L, once per grid: the side couplings as CSR with their faces, the ghost cells
+   and the SF of the ghost face coefficients. */
+PetscErrorCode PffMGStencilBuild_Private(PffMG *mg, PetscInt L)
+{
+  PffMGLevel    *lv = &mg->lev[L];
+  PffMGStencil  *st;
+  PffMGNumbering t;
+  PffMGTerms     T = {NULL, 0, 0};
+  PetscInt64    *gcell, *gface;
+  PetscInt      *cursor;
+  PetscMPIInt    rank;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_rank(mg->comm, &rank));
+  PetscCall(NumberingCreate(mg, L, &t));
+  PetscCall(PetscNew(&st));
+  lv->st = st;
+  for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(mg->grid, lb, &info));
+    PetscCheck(t.first[info.gid] - t.rs[rank] == lv->start[lb], PETSC_COMM_SELF, PETSC_ERR_PLIB,
+               "pffmg: the level numbering does not follow the Morton order");
+    for (PetscInt s = 0; s < 6; s++) PetscCall(CollectSide(mg, lv, &t, lb, &info, s, &T));
+  }
+
+  /* ghosts: cells by global row, faces by global face 3 row + d, both increasing */
+  PetscCall(RemoteHandles(&T, PETSC_FALSE, &st->nghost, &gcell));
+  PetscCall(RemoteHandles(&T, PETSC_TRUE, &st->nslot, &gface));
+  PetscCall(PetscMalloc1(st->nghost, &st->ghostRow));
+  for (PetscInt q = 0; q < st->nghost; q++) st->ghostRow[q] = (PetscInt)gcell[q];
+  {
+    PetscSFNode *remote;
+    PetscCall(PetscMalloc1(st->nslot, &remote));
+    for (PetscInt q = 0; q < st->nslot; q++) {
+      const PetscInt64  row = gface[q] / 3, d = gface[q] % 3;
+      const PetscMPIInt r = RankOfRow(&t, row);
+      remote[q].rank      = r;
+      remote[q].index     = (PetscInt)(d * (t.rs[r + 1] - t.rs[r]) + (row - t.rs[r]));
+    }
+    PetscCall(PetscSFCreate(mg->comm, &st->sfSlot));
+    PetscCall(
+        PetscSFSetGraph(st->sfSlot, 3 * lv->nrows, st->nslot, NULL, PETSC_COPY_VALUES, remote, PETSC_OWN_POINTER));
+    PetscCall(PetscSFSetUp(st->sfSlot));
+  }
+
+  /* CSR of the couplings, rows in order, the terms of a row in collection order; a diagonal term is
+     an entry of the row itself */
+  PetscCall(PetscCalloc1(lv->nrows + 1, &st->rowptr));
+  PetscCall(PetscMalloc4(T.n, &st->col, T.n, &st->val, T.n, &st->ref, T.n, &st->fac));
+  PetscCall(PetscMalloc1(lv->nrows, &cursor));
+  for (PetscInt e = 0; e < T.n; e++) st->rowptr[T.t[e].row + 1]++;
+  for (PetscInt r = 0; r < lv->nrows; r++) {
+    st->rowptr[r + 1] += st->rowptr[r];
+    cursor[r] = st->rowptr[r];
+  }
+  for (PetscInt e = 0; e < T.n; e++) {
+    const PffMGTerm *m = &T.t[e];
+    const PetscInt   k = cursor[m->row]++;
+    st->ref[k]         = m->ref >= 0 ? (PetscInt)m->ref : 3 * lv->nrows + FindInt64(-2 - m->ref, st->nslot, gface);
+    st->col[k]         = m->col == -1  ? m->row
+                         : m->col >= 0 ? (PetscInt)m->col
+                                       : lv->nrows + FindInt64(-2 - m->col, st->nghost, gcell);
+    st->fac[k]         = m->fac;
+  }
+  PetscCall(PetscFree(cursor));
+  PetscCall(PetscFree(T.t));
+  PetscCall(PetscFree(gcell));
+  PetscCall(PetscFree(gface));
+  PetscCall(NumberingDestroy(&t));
+
+  PetscCall(PetscMalloc3(3 * lv->nrows, &st->cf, lv->nrows, &st->dx, st->nslot, &st->cghost));
+  if (lv->idiag == NULL) PetscCall(PetscMalloc1(lv->nrows, &lv->idiag));
+  if (lv->mf) {
+    IS is;
+    PetscCall(ISCreateGeneral(PETSC_COMM_SELF, st->nghost, st->ghostRow, PETSC_USE_POINTER, &is));
+    PetscCall(VecCreateSeq(PETSC_COMM_SELF, st->nghost, &lv->ghost));
+    PetscCall(VecScatterCreate(lv->r, is, lv->ghost, NULL, &lv->scatter));
+    PetscCall(ISDestroy(&is));
+    lv->nghost = st->nghost;
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffMGStencilDestroy_Private(PffMGLevel *lv)
+{
+  PffMGStencil *st = lv->st;
+
+  PetscFunctionBeginUser;
+  if (!st) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PetscFree(st->rowptr));
+  PetscCall(PetscFree4(st->col, st->val, st->ref, st->fac));
+  PetscCall(PetscFree(st->ghostRow));
+  PetscCall(PetscFree3(st->cf, st->dx, st->cghost));
+  PetscCall(PetscSFDestroy(&st->sfSlot));
+  PetscCall(MatDestroy(&st->Aview));
+  PetscCall(PetscFree(lv->st));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Level 0: the pressure module's face coefficients and Dirichlet terms, in float. */
+static PetscErrorCode CoefficientsFine(PffMG *mg)
+{
+  PffMGLevel        *lv = &mg->lev[0];
+  PffMGStencil      *st = lv->st;
+  PffPressure        ps = mg->ps;
+  const PetscScalar *coef, *dd = NULL;
+  const PetscBool    dir = PffPressureHasDirichlet_Private(ps);
+
+  PetscFunctionBeginUser;
+  PetscCheck(ps->ncells == lv->nrows, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+             "pffmg: level 0 does not match the pressure cells");
+  PetscCall(VecGetArrayRead(ps->coef, &coef));
+  if (dir) PetscCall(VecGetArrayRead(ps->dirdiag, &dd));
+  for (PetscInt r = 0; r < lv->nrows; r++) {
+    for (PetscInt d = 0; d < 3; d++) st->cf[d * lv->nrows + r] = (PffMGReal)PetscRealPart(coef[3 * r + d]);
+    st->dx[r] = dd ? (PffMGReal)PetscRealPart(dd[r]) : 0;
+  }
+  if (dir) PetscCall(VecRestoreArrayRead(ps->dirdiag, &dd));
+  PetscCall(VecRestoreArrayRead(ps->coef, &coef));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Algorithm 1: the coefficients of level L from those of level L - 1 (see the top of the file). */
+static PetscErrorCode CoefficientsCoarse(PffMG *mg, PetscInt L)
+{
+  const PffMGLevel  *f = &mg->lev[L - 1], *c = &mg->lev[L];
+  const PffMGReal   *cff = f->st->cf, *dxf = f->st->dx;
+  PffMGReal         *cfc = c->st->cf, *dxc = c->st->dx;
+  PetscInt           nb[3];
+  const PetscInt    *level;
+  const PetscMPIInt *owner;
+  PetscBool          periodic[3];
+  const PetscBool    rs = mg->opt.rescale;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetRaster(mg->grid, nb, &level, &owner));
+  PetscCall(PffGridGetSizes(mg->grid, NULL, NULL, NULL, NULL, periodic));
+  for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
+    PffBlockInfo    info;
+    const PetscInt  nf = f->n[lb], nc = c->n[lb], of = f->start[lb], oc = c->start[lb];
+    const PetscBool merged = (PetscBool)(nc < nf);
+    PffMGReal       sside[3];
+    PetscCall(PffGridGetBlockInfo(mg->grid, lb, &info));
+    for (PetscInt d = 0; d < 3; d++) {
+      PetscInt dir[3]    = {0, 0, 0};
+      dir[d]             = -1;
+      const PetscInt  g  = PffRasterNeighbour(nb, periodic, info.ijk, dir);
+      const PetscBool mN = (PetscBool)(g >= 0 && level[g] >= 0 && level[g] < L);
+      sside[d]           = !rs ? 1 : (merged && mN ? 0.5f : (merged || mN ? 0.75f : 1));
+    }
+    if (!merged) {
+      for (PetscInt k = 0; k < nc; k++)
+        for (PetscInt j = 0; j < nc; j++)
+          for (PetscInt i = 0; i < nc; i++) {
+            const PetscInt p[3] = {i, j, k}, q = i + nc * (j + nc * k);
+            for (PetscInt d = 0; d < 3; d++)
+              cfc[d * c->nrows + oc + q] = cff[d * f->nrows + of + q] * (p[d] == 0 ? sside[d] : 1);
+            dxc[oc + q] = dxf[of + q];
+          }
+      continue;
+    }
+    for (PetscInt k = 0; k < nc; k++)
+      for (PetscInt j = 0; j < nc; j++)
+        for (PetscInt i = 0; i < nc; i++) {
+          const PetscInt P[3] = {i, j, k}, q = i + nc * (j + nc * k);
+          PffMGReal      sdx = 0;
+          for (PetscInt e = 0; e < 8; e++)
+            sdx += dxf[of + (2 * i + e % 2) + nf * ((2 * j + (e / 2) % 2) + nf * (2 * k + e / 4))];
+          dxc[oc + q] = (rs ? 0.5f : 1) * sdx;
+          for (PetscInt d = 0; d < 3; d++) {
+            const PetscInt a1 = (d + 1) % 3, a2 = (d + 2) % 3;
+            PffMGReal      sum = 0;
+            for (PetscInt e = 0; e < 4; e++) {
+              PetscInt x[3];
+              x[d]  = 2 * P[d];
+              x[a1] = 2 * P[a1] + e % 2;
+              x[a2] = 2 * P[a2] + e / 2;
+              sum += cff[d * f->nrows + of + x[0] + nf * (x[1] + nf * x[2])];
+            }
+            cfc[d * c->nrows + oc + q] = sum * (P[d] == 0 ? sside[d] : (rs ? 0.5f : 1));
+          }
+        }
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The diagonal of a row: its faces inside the block, its side terms, its diagonal-only term. */
+static inline PetscReal Diagonal(const PffMGLevel *lv, const PffMGStencil *st, PetscInt r, PetscInt i, PetscInt j,
+                                 PetscInt k, PetscInt n)
+{
+  const PetscInt   nr = lv->nrows, n2 = n * n;
+  const PffMGReal *cx = st->cf, *cy = cx + nr, *cz = cy + nr;
+  PetscReal        d = st->dx[r];
+
+  if (i > 0) d += cx[r];
+  if (i < n - 1) d += cx[r + 1];
+  if (j > 0) d += cy[r];
+  if (j < n - 1) d += cy[r + n];
+  if (k > 0) d += cz[r];
+  if (k < n - 1) d += cz[r + n2];
+  for (PetscInt e = st->rowptr[r]; e < st->rowptr[r + 1]; e++)
+    if (st->col[e] == r) d += st->val[e];
+  return d;
+}
+
+/* Coefficients, side-coupling values and inverse diagonal of level L, at every set-up (levels in order). */
+PetscErrorCode PffMGStencilUpdate_Private(PffMG *mg, PetscInt L)
+{
+  PffMGLevel    *lv   = &mg->lev[L];
+  PffMGStencil  *st   = lv->st;
+  const PetscInt nr   = lv->nrows;
+  PetscInt       zero = 0;
+
+  PetscFunctionBeginUser;
+  if (L == 0)
+    PetscCall(CoefficientsFine(mg));
+  else
+    PetscCall(CoefficientsCoarse(mg, L));
+  PetscCall(PetscSFBcastBegin(st->sfSlot, MPIU_PFFMGREAL, st->cf, st->cghost, MPI_REPLACE));
+  PetscCall(PetscSFBcastEnd(st->sfSlot, MPIU_PFFMGREAL, st->cf, st->cghost, MPI_REPLACE));
+  for (PetscInt e = 0; e < st->rowptr[nr]; e++) {
+    const PetscInt r = st->ref[e];
+    st->val[e]       = st->fac[e] * (r < 3 * nr ? st->cf[r] : st->cghost[r - 3 * nr]);
+  }
+  for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
+    const PetscInt n = lv->n[lb], o = lv->start[lb];
+    for (PetscInt k = 0; k < n; k++)
+      for (PetscInt j = 0; j < n; j++)
+        for (PetscInt i = 0; i < n; i++) {
+          const PetscInt r = o + i + n * (j + n * k);
+          PetscReal      d = Diagonal(lv, st, r, i, j, k, n);
+          if (L == 0 && d == 0) { /* no open face and no Dirichlet term */
+            st->dx[r] = 1;
+            d         = 1;
+          }
+          if (!(d > 0)) zero++;
+          lv->idiag[r] = d > 0 ? 1.0 / d : 0.0;
+        }
+  }
+  PetscCheck(zero == 0, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+             "pffmg: level %" PetscInt_FMT " has %" PetscInt_FMT " rows without a positive diagonal", L, zero);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* (A x)_r minus the diagonal part for a cell on the side of its block (or of a small block): the faces
+   inside the block that exist, and the side couplings. */
+static inline PetscScalar OffBoundary(const PffMGLevel *lv, const PffMGStencil *st, PetscInt r, PetscInt i, PetscInt j,
+                                      PetscInt k, PetscInt n, const PetscScalar *x, const PetscScalar *g)
+{
+  const PetscInt   nr = lv->nrows, n2 = n * n;
+  const PffMGReal *cx = st->cf, *cy = cx + nr, *cz = cy + nr;
+  PetscScalar      off = 0;
+
+  if (i > 0) off -= cx[r] * x[r - 1];
+  if (i < n - 1) off -= cx[r + 1] * x[r + 1];
+  if (j > 0) off -= cy[r] * x[r - n];
+  if (j < n - 1) off -= cy[r + n] * x[r + n];
+  if (k > 0) off -= cz[r] * x[r - n2];
+  if (k < n - 1) off -= cz[r + n2] * x[r + n2];
+  for (PetscInt e = st->rowptr[r]; e < st->rowptr[r + 1]; e++) {
+    const PetscInt c = st->col[e];
+    if (c != r) off += st->val[e] * (c < nr ? x[c] : g[c - nr]);
+  }
+  return off;
+}
+
+/* (A x)_r for a cell on the side of its block. */
+static inline PetscScalar RowBoundary(const PffMGLevel *lv, const PffMGStencil *st, PetscInt r, PetscInt i, PetscInt j,
+                                      PetscInt k, PetscInt n, const PetscScalar *x, const PetscScalar *g)
+{
+  return Diagonal(lv, st, r, i, j, k, n) * x[r] + OffBoundary(lv, st, r, i, j, k, n, x, g);
+}
+
+/* Relaxes cell r on the side of its block; returns |omega (b - A x)_r| and stores it in R. */
+static inline PetscReal RelaxBoundary(const PffMGLevel *lv, const PffMGStencil *st, PetscInt r, PetscInt i, PetscInt j,
+                                      PetscInt k, PetscInt n, const PetscScalar *b, PetscScalar *x,
+                                      const PetscScalar *g, PetscReal omega, PetscReal *R, PetscInt r0)
+{
+  const PetscReal   d   = Diagonal(lv, st, r, i, j, k, n);
+  const PetscScalar s   = b[r] - d * x[r] - OffBoundary(lv, st, r, i, j, k, n, x, g);
+  const PetscReal   eff = PetscAbsScalar(omega * s);
+  x[r] += omega * s / d;
+  if (R) R[r - r0] = eff;
+  return eff;
+}
+
+/* One in-place red-black sweep over the cells of local block lb (cells (i + j + k) even, then odd);
+   the cells inside the block take the 7-point stencil by strides, the others the general path. R (or
+   NULL) receives |omega (b - A x)| on the cells of the block's sides, which is all FaceMax reads. */
+PetscReal PffMGStencilRelaxBlock_Private(const PffMGLevel *lv, PetscInt lb, const PetscScalar *b, PetscScalar *x,
+                                         const PetscScalar *g, PetscReal omega, PetscReal *R)
+{
+  const PffMGStencil *st = lv->st;
+  const PetscInt      n = lv->n[lb], n2 = n * n, r0 = lv->start[lb], nr = lv->nrows;
+  const PffMGReal    *cx = st->cf, *cy = cx + nr, *cz = cy + nr, *dx = st->dx;
+  PetscReal           rmax = 0;
+
+  for (PetscInt c = 0; c < 2; c++)
+    for (PetscInt k = 0; k < n; k++)
+      for (PetscInt j = 0; j < n; j++) {
+        const PetscInt base = r0 + n * (j + n * k), i0 = (j + k + c) & 1;
+        if (j == 0 || j == n - 1 || k == 0 || k == n - 1 || n < 3) {
+          for (PetscInt i = i0; i < n; i += 2) {
+            const PetscReal e = RelaxBoundary(lv, st, base + i, i, j, k, n, b, x, g, omega, R, r0);
+            rmax              = rmax > e ? rmax : e;
+          }
+          continue;
+        }
+        if (i0 == 0) {
+          const PetscReal e = RelaxBoundary(lv, st, base, 0, j, k, n, b, x, g, omega, R, r0);
+          rmax              = rmax > e ? rmax : e;
+        }
+        PetscReal m = 0;
+        for (PetscInt i = i0 == 0 ? 2 : 1; i < n - 1; i += 2) {
+          const PetscInt    r  = base + i;
+          const PetscReal   c0 = cx[r], c1 = cx[r + 1], c2 = cy[r], c3 = cy[r + n], c4 = cz[r], c5 = cz[r + n2];
+          const PetscReal   d = c0 + c1 + c2 + c3 + c4 + c5 + dx[r];
+          const PetscScalar s = b[r] - d * x[r] + c0 * x[r - 1] + c1 * x[r + 1] + c2 * x[r - n] + c3 * x[r + n] +
+                                c4 * x[r - n2] + c5 * x[r + n2];
+          const PetscReal e = PetscAbsScalar(omega * s);
+          x[r] += omega * s / d;
+          m = m > e ? m : e;
+        }
+        rmax = rmax > m ? rmax : m;
+        if (((n - 1 - i0) & 1) == 0) {
+          const PetscReal e = RelaxBoundary(lv, st, base + n - 1, n - 1, j, k, n, b, x, g, omega, R, r0);
+          rmax              = rmax > e ? rmax : e;
+        }
+      }
+  return rmax;
+}
+
+/* y = A x on a matrix-free level. */
+static PetscErrorCode StencilMult(Mat A, Vec xv, Vec yv)
+{
+  PffMGLevel         *lv;
+  const PffMGStencil *st;
+  const PetscScalar  *x, *g = NULL;
+  PetscScalar        *y;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatShellGetContext(A, &lv));
+  st = lv->st;
+  if (lv->scatter) {
+    PetscCall(VecScatterBegin(lv->scatter, xv, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(VecScatterEnd(lv->scatter, xv, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(VecGetArrayRead(lv->ghost, &g));
+  }
+  PetscCall(VecGetArrayRead(xv, &x));
+  PetscCall(VecGetArrayWrite(yv, &y));
+#pragma omp parallel for schedule(static) if (lv->nblk >= 8)
+  for (PetscInt lb = 0; lb < lv->nblk; lb++) {
+    const PetscInt   n = lv->n[lb], n2 = n * n, r0 = lv->start[lb], nr = lv->nrows;
+    const PffMGReal *cx = st->cf, *cy = cx + nr, *cz = cy + nr, *dx = st->dx;
+    for (PetscInt k = 0; k < n; k++)
+      for (PetscInt j = 0; j < n; j++) {
+        const PetscInt base = r0 + n * (j + n * k);
+        if (j == 0 || j == n - 1 || k == 0 || k == n - 1 || n < 3) {
+          for (PetscInt i = 0; i < n; i++) y[base + i] = RowBoundary(lv, st, base + i, i, j, k, n, x, g);
+          continue;
+        }
+        y[base] = RowBoundary(lv, st, base, 0, j, k, n, x, g);
+        for (PetscInt r = base + 1; r < base + n - 1; r++) {
+          const PetscScalar xr = x[r];
+          y[r]                 = cx[r] * (xr - x[r - 1]) + cx[r + 1] * (xr - x[r + 1]) + cy[r] * (xr - x[r - n]) +
+                 cy[r + n] * (xr - x[r + n]) + cz[r] * (xr - x[r - n2]) + cz[r + n2] * (xr - x[r + n2]) + dx[r] * xr;
+        }
+        y[base + n - 1] = RowBoundary(lv, st, base + n - 1, n - 1, j, k, n, x, g);
+      }
+  }
+  PetscCall(VecRestoreArrayWrite(yv, &y));
+  PetscCall(VecRestoreArrayRead(xv, &x));
+  if (g) PetscCall(VecRestoreArrayRead(lv->ghost, &g));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode StencilGetDiagonal(Mat A, Vec dv)
+{
+  PffMGLevel  *lv;
+  PetscScalar *d;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatShellGetContext(A, &lv));
+  PetscCall(VecGetArrayWrite(dv, &d));
+  for (PetscInt r = 0; r < lv->nrows; r++) d[r] = lv->idiag[r] > 0 ? 1.0 / lv->idiag[r] : 0.0;
+  PetscCall(VecRestoreArrayWrite(dv, &d));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The MATSHELL of a matrix-free level (its operator for the residual and the K-cycle). */
+PetscErrorCode PffMGStencilCreateShell_Private(PffMG *mg, PetscInt L)
+{
+  PffMGLevel *lv = &mg->lev[L];
+
+  PetscFunctionBeginUser;
+  PetscCall(MatCreateShell(mg->comm, lv->nrows, lv->nrows, PETSC_DETERMINE, PETSC_DETERMINE, lv, &lv->A));
+  PetscCall(MatShellSetOperation(lv->A, MATOP_MULT, (void (*)(void))StencilMult));
+  PetscCall(MatShellSetOperation(lv->A, MATOP_MULT_TRANSPOSE, (void (*)(void))StencilMult));
+  PetscCall(MatShellSetOperation(lv->A, MATOP_GET_DIAGONAL, (void (*)(void))StencilGetDiagonal));
+  PetscCall(MatSetOption(lv->A, MAT_SYMMETRIC, PETSC_TRUE));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The level as an AIJ matrix: created on the first call (*A NULL), refilled in place after. For the
+   last block level (the coarse levels below it are AIJ Galerkin products) and for inspection. */
+PetscErrorCode PffMGStencilAssemble_Private(PffMG *mg, PetscInt L, Mat *A)
+{
+  PffMGLevel         *lv = &mg->lev[L];
+  const PffMGStencil *st = lv->st;
+  const PetscInt      nr = lv->nrows;
+
+  PetscFunctionBeginUser;
+  if (*A == NULL) {
+    PetscInt *dnz, *onz;
+    PetscCall(PetscCalloc2(nr, &dnz, nr, &onz));
+    for (PetscInt r = 0; r < nr; r++) {
+      dnz[r] = 7;
+      for (PetscInt e = st->rowptr[r]; e < st->rowptr[r + 1]; e++) {
+        if (st->col[e] < nr)
+          dnz[r]++;
+        else
+          onz[r]++;
+      }
+      dnz[r] = PetscMin(dnz[r], nr);
+    }
+    PetscCall(MatCreateAIJ(mg->comm, nr, nr, PETSC_DETERMINE, PETSC_DETERMINE, 0, dnz, 0, onz, A));
+    PetscCall(PetscFree2(dnz, onz));
+  } else
+    PetscCall(MatZeroEntries(*A));
+  for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
+    const PetscInt n = lv->n[lb], o = lv->start[lb], s[3] = {1, n, n * n};
+    for (PetscInt k = 0; k < n; k++)
+      for (PetscInt j = 0; j < n; j++)
+        for (PetscInt i = 0; i < n; i++) {
+          const PetscInt p[3] = {i, j, k}, r = o + i + n * (j + n * k), grow = lv->rstart + r;
+          PetscCall(MatSetValue(*A, grow, grow, Diagonal(lv, st, r, i, j, k, n), ADD_VALUES));
+          for (PetscInt d = 0; d < 3; d++) {
+            if (p[d] > 0) PetscCall(MatSetValue(*A, grow, grow - s[d], -st->cf[d * nr + r], ADD_VALUES));
+            if (p[d] < n - 1) PetscCall(MatSetValue(*A, grow, grow + s[d], -st->cf[d * nr + r + s[d]], ADD_VALUES));
+          }
+          for (PetscInt e = st->rowptr[r]; e < st->rowptr[r + 1]; e++) {
+            const PetscInt c = st->col[e], gc = c < nr ? lv->rstart + c : st->ghostRow[c - nr];
+            if (c != r) PetscCall(MatSetValue(*A, grow, gc, st->val[e], ADD_VALUES));
+          }
+        }
+  }
+  PetscCall(MatAssemblyBegin(*A, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(*A, MAT_FINAL_ASSEMBLY));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
