@@ -32,7 +32,7 @@
             solve_s=<s> relres=<x>
    (on one line) with setup_s = KSPSetUp + KSPSetUpOnBlocks, solve_s = KSPSolve (PffPressureStats, timed
    with PetscTime inside the PressSolve log event; -log_view shows one stage per grid), relres =
-   ||b - A p|| / ||b|| recomputed here from the module's A, b and p. With -bench_repeat R (default 1)
+   ||b - A p|| / ||b|| recomputed here from the module's operator, b and p. With -bench_repeat R (default 1)
    each PC sets up (new coefficients, as in a time step) and solves R times and the times are the
    best of R; a "#" line then gives the first set-up, which includes one-time symbolic work. A PC type that PETSc does
    not know prints "SKIP pc=<name> (not available)". The run fails (non-zero exit, after all PCs have run) when a KSP
@@ -287,8 +287,10 @@ static PetscErrorCode BenchGrid(MPI_Comm comm, const BenchOptions *o, PetscInt N
     }
     st.setupTime = setupMin;
     st.solveTime = solveMin;
-    /* relres from the module's own A, b and (double) p, independent of what the KSP monitored */
-    PetscCall(PffPressureGetOperator(ps, &A));
+    /* relres from the module's operator (the assembled A or the matrix-free one, equal to 1e-16; asking
+       for A would assemble it where the matrix-free pffmg does not), b and (double) p, independent of
+       what the KSP monitored */
+    PetscCall(KSPGetOperators(ksp, &A, NULL));
     PetscCall(KSPGetRhs(ksp, &b));
     PetscCall(KSPGetSolution(ksp, &p));
     PetscCall(VecDuplicate(b, &r));

@@ -189,14 +189,5 @@ PetscErrorCode PffPressureBuildGradient_Private(PffPressure ps)
   PetscCall(PetscFree(dnz));
   PetscCall(PetscFree(onz));
 
-  /* W = diag(M beta open) with its diagonal in place, so that A = G^T W G keeps one pattern */
-  PetscCall(MatCreateAIJ(ps->comm, nrows, nrows, 3 * ps->ntotal, 3 * ps->ntotal, 1, NULL, 0, NULL, &ps->W));
-  for (PetscInt r = 0; r < nrows; r++) {
-    const PetscInt row = 3 * ps->rstart + r;
-    PetscCall(MatSetValue(ps->W, row, row, 1.0, INSERT_VALUES));
-  }
-  PetscCall(MatAssemblyBegin(ps->W, MAT_FINAL_ASSEMBLY));
-  PetscCall(MatAssemblyEnd(ps->W, MAT_FINAL_ASSEMBLY));
-  PetscCall(MatPtAP(ps->W, ps->G, MAT_INITIAL_MATRIX, 2.0, &ps->A));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -136,6 +136,9 @@ static PetscErrorCode PffMGSetUpKCycle(PffMG *mg, PetscInt L)
     PetscCall(KSPSetType(lv->kcycle, KSPFCG));
     PetscCall(KSPSetNormType(lv->kcycle, KSP_NORM_NONE));
     PetscCall(KSPSetTolerances(lv->kcycle, 0.0, 0.0, PETSC_DEFAULT, mg->opt.kcycleIts));
+    /* kcycleIts steps need no more directions (FCG would keep 2 x 10 vectors per level) */
+    PetscCall(KSPFCGSetMmax(lv->kcycle, mg->opt.kcycleIts));
+    PetscCall(KSPFCGSetNprealloc(lv->kcycle, mg->opt.kcycleIts));
     PetscCall(KSPGetPC(lv->kcycle, &pc));
     PetscCall(PCSetType(pc, PCSHELL));
     PetscCall(PetscNew(&k));
@@ -218,6 +221,8 @@ static PetscErrorCode PffMGDestroy(PC pc)
   PetscFunctionBeginUser;
   PetscCall(PCShellGetContext(pc, &mg));
   if (mg == NULL) PetscFunctionReturn(PETSC_SUCCESS);
+    printf("MGSTATS apps %lld blockrelax %lld cellupdates %lld\n", (long long)mg->stats.applications,
+           (long long)mg->stats.blockRelaxations, (long long)mg->stats.cellUpdates);
   PetscCall(PffMGDestroyLevels_Private(mg));
   PetscCall(KSPDestroy(&mg->coarse));
   PetscCall(PetscFree(mg));
@@ -270,6 +275,22 @@ PetscErrorCode PffPressureMGRegister_Private(void)
 {
   PetscFunctionBeginUser;
   PetscCall(PCRegister(PFF_MG_NAME, PCCreate_PffMG));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Whether the PC is pffmg with matrix-free levels, which needs no assembled operator. */
+PetscErrorCode PffPressureMGUsesStencil_Private(PC pc, PetscBool *stencil)
+{
+  PffMG    *mg;
+  PetscBool active;
+
+  PetscFunctionBeginUser;
+  *stencil = PETSC_FALSE;
+  PetscCall(PffPressureMGIsActive_Private(pc, &active));
+  if (!active) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PffMGGetContext(pc, &mg));
+  if (!mg->optionsRead) PetscCall(PffPressureMGSetFromOptions_Private(pc));
+  *stencil = (PetscBool)(mg->opt.operatorType == PFF_MG_OPERATOR_STENCIL);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -24,13 +24,18 @@ typedef float PffMGReal;
    per-row list whose values are refreshed from cf at every set-up. The diagonal is the sum of the
    row's face terms, computed where it is used, so every row sums to dx exactly. */
 typedef struct {
-  PffMGReal *cf;                /* [3 nrows] c of the lower d-face of each cell at cf[d nrows + row] (0: closed) */
-  PffMGReal *dx;                /* [nrows] diagonal-only terms: Dirichlet walls, the unit of a cell with no open face */
-  PetscInt  *rowptr;            /* [nrows + 1] side couplings of each row (the row itself included) */
-  PetscInt  *col;               /* local row, or nrows + ghost index */
-  PffMGReal *val;               /* matrix entry: fac * c of the face */
-  PetscInt  *ref;               /* the face: slot d nrows + row of cf, or 3 nrows + ghost slot */
-  PffMGReal *fac;               /* g_f[row] g_f[col] */
+  PffMGReal *cf;     /* [3 nrows] c of the lower d-face of each cell at cf[d nrows + row] (0: closed) */
+  PffMGReal *dx;     /* [nrows] diagonal-only terms: Dirichlet walls, the unit of a cell with no open face */
+  PetscReal *ds;     /* [nrows] the diagonal but for the faces inside the block: side faces, dx (double, so that the
+                        rows sum to dx exactly) */
+  PetscInt  *rowptr; /* [nrows + 1] side couplings of each row to other cells */
+  PetscInt  *col;    /* local row, or nrows + ghost index */
+  PffMGReal *val;    /* matrix entry: fac * c of the face */
+  PetscInt  *ref;    /* the face: slot d nrows + row of cf, or 3 nrows + ghost slot */
+  PffMGReal *fac;    /* g_f[row] g_f[col] */
+  PetscInt   ndiag;  /* side-face terms of the diagonal */
+  PetscInt  *drow, *dref;       /* their row and face */
+  PffMGReal *dfac;              /* g_f[row]^2 */
   PetscInt   nghost, *ghostRow; /* ghost cells: global rows, increasing */
   PetscInt   nslot;             /* ghost face coefficients (faces owned by another rank's cells) */
   PffMGReal *cghost;            /* [nslot] */

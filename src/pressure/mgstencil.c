@@ -293,24 +293,37 @@ PetscErrorCode PffMGStencilBuild_Private(PffMG *mg, PetscInt L)
     PetscCall(PetscSFSetUp(st->sfSlot));
   }
 
-  /* CSR of the couplings, rows in order, the terms of a row in collection order; a diagonal term is
-     an entry of the row itself */
+  /* CSR of the couplings to other cells, rows in order, the terms of a row in collection order; the
+     diagonal terms in a list of their own */
   PetscCall(PetscCalloc1(lv->nrows + 1, &st->rowptr));
-  PetscCall(PetscMalloc4(T.n, &st->col, T.n, &st->val, T.n, &st->ref, T.n, &st->fac));
+  for (PetscInt e = 0; e < T.n; e++) {
+    if (T.t[e].col == -1)
+      st->ndiag++;
+    else
+      st->rowptr[T.t[e].row + 1]++;
+  }
+  PetscCall(PetscMalloc4(T.n - st->ndiag, &st->col, T.n - st->ndiag, &st->val, T.n - st->ndiag, &st->ref,
+                         T.n - st->ndiag, &st->fac));
+  PetscCall(PetscMalloc3(st->ndiag, &st->drow, st->ndiag, &st->dref, st->ndiag, &st->dfac));
   PetscCall(PetscMalloc1(lv->nrows, &cursor));
-  for (PetscInt e = 0; e < T.n; e++) st->rowptr[T.t[e].row + 1]++;
   for (PetscInt r = 0; r < lv->nrows; r++) {
     st->rowptr[r + 1] += st->rowptr[r];
     cursor[r] = st->rowptr[r];
   }
-  for (PetscInt e = 0; e < T.n; e++) {
-    const PffMGTerm *m = &T.t[e];
-    const PetscInt   k = cursor[m->row]++;
-    st->ref[k]         = m->ref >= 0 ? (PetscInt)m->ref : 3 * lv->nrows + FindInt64(-2 - m->ref, st->nslot, gface);
-    st->col[k]         = m->col == -1  ? m->row
-                         : m->col >= 0 ? (PetscInt)m->col
-                                       : lv->nrows + FindInt64(-2 - m->col, st->nghost, gcell);
-    st->fac[k]         = m->fac;
+  for (PetscInt e = 0, nd = 0; e < T.n; e++) {
+    const PffMGTerm *m   = &T.t[e];
+    const PetscInt   ref = m->ref >= 0 ? (PetscInt)m->ref : 3 * lv->nrows + FindInt64(-2 - m->ref, st->nslot, gface);
+    if (m->col == -1) {
+      st->drow[nd] = m->row;
+      st->dref[nd] = ref;
+      st->dfac[nd] = m->fac;
+      nd++;
+      continue;
+    }
+    const PetscInt k = cursor[m->row]++;
+    st->ref[k]       = ref;
+    st->col[k]       = m->col >= 0 ? (PetscInt)m->col : lv->nrows + FindInt64(-2 - m->col, st->nghost, gcell);
+    st->fac[k]       = m->fac;
   }
   PetscCall(PetscFree(cursor));
   PetscCall(PetscFree(T.t));
@@ -318,7 +331,7 @@ PetscErrorCode PffMGStencilBuild_Private(PffMG *mg, PetscInt L)
   PetscCall(PetscFree(gface));
   PetscCall(NumberingDestroy(&t));
 
-  PetscCall(PetscMalloc3(3 * lv->nrows, &st->cf, lv->nrows, &st->dx, st->nslot, &st->cghost));
+  PetscCall(PetscMalloc4(3 * lv->nrows, &st->cf, lv->nrows, &st->dx, lv->nrows, &st->ds, st->nslot, &st->cghost));
   if (lv->idiag == NULL) PetscCall(PetscMalloc1(lv->nrows, &lv->idiag));
   if (lv->mf) {
     IS is;
@@ -339,8 +352,9 @@ PetscErrorCode PffMGStencilDestroy_Private(PffMGLevel *lv)
   if (!st) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PetscFree(st->rowptr));
   PetscCall(PetscFree4(st->col, st->val, st->ref, st->fac));
+  PetscCall(PetscFree3(st->drow, st->dref, st->dfac));
   PetscCall(PetscFree(st->ghostRow));
-  PetscCall(PetscFree3(st->cf, st->dx, st->cghost));
+  PetscCall(PetscFree4(st->cf, st->dx, st->ds, st->cghost));
   PetscCall(PetscSFDestroy(&st->sfSlot));
   PetscCall(MatDestroy(&st->Aview));
   PetscCall(PetscFree(lv->st));
@@ -434,23 +448,60 @@ static PetscErrorCode CoefficientsCoarse(PffMG *mg, PetscInt L)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* The diagonal of a row: its faces inside the block, its side terms, its diagonal-only term. */
-static inline PetscReal Diagonal(const PffMGLevel *lv, const PffMGStencil *st, PetscInt r, PetscInt i, PetscInt j,
-                                 PetscInt k, PetscInt n)
+/* Face coefficients of the in-block neighbours of the cells of one row (j, k) of a block: the strides
+   to the y and z neighbours, 0 with a zero weight where the neighbour is outside the block (the
+   coupling is then a side term), so that every row runs the same loop. */
+typedef struct {
+  PetscInt  sym, syp, szm, szp;
+  PetscReal mym, myp, mzm, mzp;
+} PffMGRowMask;
+
+static inline PffMGRowMask RowMask(PetscInt j, PetscInt k, PetscInt n)
 {
-  const PetscInt   nr = lv->nrows, n2 = n * n;
+  PffMGRowMask m;
+  m.sym = j > 0 ? n : 0;
+  m.syp = j < n - 1 ? n : 0;
+  m.szm = k > 0 ? n * n : 0;
+  m.szp = k < n - 1 ? n * n : 0;
+  m.mym = j > 0;
+  m.myp = j < n - 1;
+  m.mzm = k > 0;
+  m.mzp = k < n - 1;
+  return m;
+}
+
+/* The in-block part of the diagonal of cell r; the rest (side faces, diagonal-only terms) is ds[r]. */
+static inline PetscReal DiagonalInBlock(const PffMGStencil *st, PetscInt nr, PetscInt r, PetscInt i, PetscInt j,
+                                        PetscInt k, PetscInt n)
+{
   const PffMGReal *cx = st->cf, *cy = cx + nr, *cz = cy + nr;
-  PetscReal        d = st->dx[r];
+  PetscReal        d = 0;
 
   if (i > 0) d += cx[r];
   if (i < n - 1) d += cx[r + 1];
   if (j > 0) d += cy[r];
   if (j < n - 1) d += cy[r + n];
   if (k > 0) d += cz[r];
-  if (k < n - 1) d += cz[r + n2];
-  for (PetscInt e = st->rowptr[r]; e < st->rowptr[r + 1]; e++)
-    if (st->col[e] == r) d += st->val[e];
+  if (k < n - 1) d += cz[r + n * n];
   return d;
+}
+
+static inline PetscReal Diagonal(const PffMGStencil *st, PetscInt nr, PetscInt r, PetscInt i, PetscInt j, PetscInt k,
+                                 PetscInt n)
+{
+  return DiagonalInBlock(st, nr, r, i, j, k, n) + st->ds[r];
+}
+
+/* Sum of the side couplings of row r (no diagonal): val x_col. */
+static inline PetscScalar SideSum(const PffMGStencil *st, PetscInt nr, PetscInt r, const PetscScalar *x,
+                                  const PetscScalar *g)
+{
+  PetscScalar s = 0;
+  for (PetscInt e = st->rowptr[r]; e < st->rowptr[r + 1]; e++) {
+    const PetscInt c = st->col[e];
+    s += st->val[e] * (c < nr ? x[c] : g[c - nr]);
+  }
+  return s;
 }
 
 /* Coefficients, side-coupling values and inverse diagonal of level L, at every set-up (levels in order). */
@@ -472,17 +523,21 @@ PetscErrorCode PffMGStencilUpdate_Private(PffMG *mg, PetscInt L)
     const PetscInt r = st->ref[e];
     st->val[e]       = st->fac[e] * (r < 3 * nr ? st->cf[r] : st->cghost[r - 3 * nr]);
   }
+  for (PetscInt r = 0; r < nr; r++) st->ds[r] = 0;
+  for (PetscInt e = 0; e < st->ndiag; e++) {
+    const PetscInt r = st->dref[e];
+    st->ds[st->drow[e]] += (PetscReal)st->dfac[e] * (r < 3 * nr ? st->cf[r] : st->cghost[r - 3 * nr]);
+  }
   for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
     const PetscInt n = lv->n[lb], o = lv->start[lb];
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt j = 0; j < n; j++)
         for (PetscInt i = 0; i < n; i++) {
           const PetscInt r = o + i + n * (j + n * k);
-          PetscReal      d = Diagonal(lv, st, r, i, j, k, n);
-          if (L == 0 && d == 0) { /* no open face and no Dirichlet term */
-            st->dx[r] = 1;
-            d         = 1;
-          }
+          if (L == 0 && DiagonalInBlock(st, nr, r, i, j, k, n) + st->ds[r] + st->dx[r] == 0)
+            st->dx[r] = 1; /* no open face and no Dirichlet term */
+          st->ds[r] += st->dx[r];
+          const PetscReal d = Diagonal(st, nr, r, i, j, k, n);
           if (!(d > 0)) zero++;
           lv->idiag[r] = d > 0 ? 1.0 / d : 0.0;
         }
@@ -492,13 +547,12 @@ PetscErrorCode PffMGStencilUpdate_Private(PffMG *mg, PetscInt L)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* (A x)_r minus the diagonal part for a cell on the side of its block (or of a small block): the faces
-   inside the block that exist, and the side couplings. */
-static inline PetscScalar OffBoundary(const PffMGLevel *lv, const PffMGStencil *st, PetscInt r, PetscInt i, PetscInt j,
-                                      PetscInt k, PetscInt n, const PetscScalar *x, const PetscScalar *g)
+/* (A x)_r for a cell at either x end of its row (the general path, 2 cells a row). */
+static inline PetscScalar RowEnd(const PffMGStencil *st, PetscInt nr, PetscInt r, PetscInt i, PetscInt j, PetscInt k,
+                                 PetscInt n, const PetscScalar *x, const PetscScalar *g)
 {
-  const PetscInt   nr = lv->nrows, n2 = n * n;
   const PffMGReal *cx = st->cf, *cy = cx + nr, *cz = cy + nr;
+  const PetscInt   n2  = n * n;
   PetscScalar      off = 0;
 
   if (i > 0) off -= cx[r] * x[r - 1];
@@ -507,94 +561,90 @@ static inline PetscScalar OffBoundary(const PffMGLevel *lv, const PffMGStencil *
   if (j < n - 1) off -= cy[r + n] * x[r + n];
   if (k > 0) off -= cz[r] * x[r - n2];
   if (k < n - 1) off -= cz[r + n2] * x[r + n2];
-  for (PetscInt e = st->rowptr[r]; e < st->rowptr[r + 1]; e++) {
-    const PetscInt c = st->col[e];
-    if (c != r) off += st->val[e] * (c < nr ? x[c] : g[c - nr]);
-  }
-  return off;
+  return Diagonal(st, nr, r, i, j, k, n) * x[r] + off + SideSum(st, nr, r, x, g);
 }
 
-/* (A x)_r for a cell on the side of its block. */
-static inline PetscScalar RowBoundary(const PffMGLevel *lv, const PffMGStencil *st, PetscInt r, PetscInt i, PetscInt j,
-                                      PetscInt k, PetscInt n, const PetscScalar *x, const PetscScalar *g)
+/* Relaxes the cell at one x end of its row; returns |omega (b - A x)_r| and stores it in R. */
+static inline PetscReal RelaxEnd(const PffMGLevel *lv, const PffMGStencil *st, PetscInt r, PetscInt i, PetscInt j,
+                                 PetscInt k, PetscInt n, const PetscScalar *b, PetscScalar *x, const PetscScalar *g,
+                                 PetscReal omega, PetscReal *R, PetscInt r0)
 {
-  return Diagonal(lv, st, r, i, j, k, n) * x[r] + OffBoundary(lv, st, r, i, j, k, n, x, g);
-}
-
-/* Relaxes cell r on the side of its block; returns |omega (b - A x)_r| and stores it in R. */
-static inline PetscReal RelaxBoundary(const PffMGLevel *lv, const PffMGStencil *st, PetscInt r, PetscInt i, PetscInt j,
-                                      PetscInt k, PetscInt n, const PetscScalar *b, PetscScalar *x,
-                                      const PetscScalar *g, PetscReal omega, PetscReal *R, PetscInt r0)
-{
-  const PetscReal   d   = Diagonal(lv, st, r, i, j, k, n);
-  const PetscScalar s   = b[r] - d * x[r] - OffBoundary(lv, st, r, i, j, k, n, x, g);
+  const PetscScalar s   = b[r] - RowEnd(st, lv->nrows, r, i, j, k, n, x, g);
   const PetscReal   eff = PetscAbsScalar(omega * s);
-  x[r] += omega * s / d;
+  x[r] += omega * s * lv->idiag[r];
   if (R) R[r - r0] = eff;
   return eff;
 }
 
-/* Relaxes cnt cells of one colour inside a block, r = r1, r1 + 2, ...: the new values are computed from
-   the other colour into a buffer, then stored, so the first loop only reads x and vectorises (strided
-   loads). Returns the largest |omega (b - A x)|. cnt <= PFF_GRID_BLOCK_SIZE_MAX / 2. */
-static inline PetscReal RelaxRowInterior(const PffMGReal *restrict cx, const PffMGReal *restrict cy,
-                                         const PffMGReal *restrict cz, const PffMGReal *restrict dx,
-                                         const PetscScalar *restrict b, PetscScalar *x, PetscInt r1, PetscInt cnt,
-                                         PetscInt n, PetscReal omega)
+/* Relaxes the cells of one colour between the two ends of a row (cells r0 + 1 .. r0 + n - 2, the colour's
+   first at r0 + i1, i1 = 1 or 2): the candidate values of every cell of the row are computed from x into a
+   buffer, then those of the colour are stored. The first loop only reads x, runs over contiguous cells
+   and vectorises (a loop over one colour has 7 cells for n = 16, too few for an 8-wide vector); it
+   computes twice the cells for no extra memory traffic. sc (or NULL: an inner row, none) holds the
+   side sums by cell. Rrow (or NULL) receives |omega (b - A x)| of the colour's cells. Returns their
+   maximum. n <= PFF_GRID_BLOCK_SIZE_MAX. */
+static inline PetscReal RelaxRow(const PffMGStencil *st, PetscInt nr, const PetscScalar *restrict b, PetscScalar *x,
+                                 PetscInt r0, PetscInt i1, PetscInt n, PffMGRowMask m, const PetscScalar *restrict sc,
+                                 PetscReal omega, PetscReal *Rrow)
 {
-  const PetscInt n2              = n * n;
+  const PffMGReal *restrict cx = st->cf, *restrict cy = cx + nr, *restrict cz = cy + nr;
+  const PetscReal *restrict ds   = st->ds;
   const PetscScalar *restrict xr = x;
-  PetscScalar nx[PFF_GRID_BLOCK_SIZE_MAX / 2];
-  PetscReal   ev[PFF_GRID_BLOCK_SIZE_MAX / 2], m = 0;
+  PetscScalar nx[PFF_GRID_BLOCK_SIZE_MAX];
+  PetscReal   ev[PFF_GRID_BLOCK_SIZE_MAX], emax = 0;
 
-  for (PetscInt q = 0; q < cnt; q++) {
-    const PetscInt    r  = r1 + 2 * q;
-    const PetscReal   c0 = cx[r], c1 = cx[r + 1], c2 = cy[r], c3 = cy[r + n], c4 = cz[r], c5 = cz[r + n2];
-    const PetscReal   d = c0 + c1 + c2 + c3 + c4 + c5 + dx[r];
-    const PetscScalar s = b[r] - d * xr[r] + c0 * xr[r - 1] + c1 * xr[r + 1] + c2 * xr[r - n] + c3 * xr[r + n] +
-                          c4 * xr[r - n2] + c5 * xr[r + n2];
-    ev[q] = PetscAbsReal(omega * s);
-    nx[q] = xr[r] + omega * s / d;
+  for (PetscInt i = 1; i < n - 1; i++) {
+    const PetscInt  r  = r0 + i;
+    const PetscReal c0 = cx[r], c1 = cx[r + 1], c2 = m.mym * cy[r], c3 = m.myp * cy[r + m.syp];
+    const PetscReal c4 = m.mzm * cz[r], c5 = m.mzp * cz[r + m.szp];
+    const PetscReal d = c0 + c1 + c2 + c3 + c4 + c5 + ds[r];
+    PetscScalar     s = b[r] - d * xr[r] + c0 * xr[r - 1] + c1 * xr[r + 1] + c2 * xr[r - m.sym] + c3 * xr[r + m.syp] +
+                    c4 * xr[r - m.szm] + c5 * xr[r + m.szp];
+    if (sc) s -= sc[i];
+    ev[i] = PetscAbsReal(omega * s);
+    nx[i] = xr[r] + omega * s / d;
   }
-  for (PetscInt q = 0; q < cnt; q++) { /* a double max does not vectorise: kept out of the stencil loop */
-    x[r1 + 2 * q] = nx[q];
-    m             = m > ev[q] ? m : ev[q];
+  for (PetscInt i = i1; i < n - 1; i += 2) { /* a double max does not vectorise: kept out of the stencil loop */
+    x[r0 + i] = nx[i];
+    emax      = emax > ev[i] ? emax : ev[i];
+    if (Rrow) Rrow[i] = ev[i];
   }
-  return m;
+  return emax;
 }
 
-/* One in-place red-black sweep over the cells of local block lb (cells (i + j + k) even, then odd);
-   the cells inside the block take the 7-point stencil by strides, the others the general path. R (or
-   NULL) receives |omega (b - A x)| on the cells of the block's sides, which is all FaceMax reads. */
+/* One in-place red-black sweep over the cells of local block lb (cells (i + j + k) even, then odd).
+   Every row runs the masked 7-point loop between its two ends; the rows on the block's sides first
+   gather their side sums (the neighbour blocks are frozen during the sweep; the few couplings between
+   fine cells under one coarse face take the values at the start of the row). R (or NULL) receives
+   |omega (b - A x)| on the cells of the block's sides, which is all FaceMax reads. */
 PetscReal PffMGStencilRelaxBlock_Private(const PffMGLevel *lv, PetscInt lb, const PetscScalar *b, PetscScalar *x,
                                          const PetscScalar *g, PetscReal omega, PetscReal *R)
 {
   const PffMGStencil *st = lv->st;
   const PetscInt      n = lv->n[lb], r0 = lv->start[lb], nr = lv->nrows;
-  const PffMGReal    *cx = st->cf, *cy = cx + nr, *cz = cy + nr, *dx = st->dx;
+  PetscScalar         sc[PFF_GRID_BLOCK_SIZE_MAX];
   PetscReal           rmax = 0;
 
   for (PetscInt c = 0; c < 2; c++)
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt j = 0; j < n; j++) {
-        const PetscInt base = r0 + n * (j + n * k), i0 = (j + k + c) & 1;
-        if (j == 0 || j == n - 1 || k == 0 || k == n - 1 || n < 3) {
-          for (PetscInt i = i0; i < n; i += 2) {
-            const PetscReal e = RelaxBoundary(lv, st, base + i, i, j, k, n, b, x, g, omega, R, r0);
-            rmax              = rmax > e ? rmax : e;
-          }
-          continue;
-        }
+        const PetscInt     base = r0 + n * (j + n * k), i0 = (j + k + c) & 1, i1 = 2 - i0;
+        const PetscBool    side = (PetscBool)(j == 0 || j == n - 1 || k == 0 || k == n - 1);
+        const PffMGRowMask m    = RowMask(j, k, n);
+        PetscReal          e;
         if (i0 == 0) {
-          const PetscReal e = RelaxBoundary(lv, st, base, 0, j, k, n, b, x, g, omega, R, r0);
-          rmax              = rmax > e ? rmax : e;
+          e    = RelaxEnd(lv, st, base, 0, j, k, n, b, x, g, omega, R, r0);
+          rmax = rmax > e ? rmax : e;
         }
-        const PetscInt  i1 = 2 - i0; /* the first interior cell of this colour */
-        const PetscReal m  = RelaxRowInterior(cx, cy, cz, dx, b, x, base + i1, (n - i1) / 2, n, omega);
-        rmax               = rmax > m ? rmax : m;
-        if (((n - 1 - i0) & 1) == 0) {
-          const PetscReal e = RelaxBoundary(lv, st, base + n - 1, n - 1, j, k, n, b, x, g, omega, R, r0);
-          rmax              = rmax > e ? rmax : e;
+        if (side) {
+          for (PetscInt i = 1; i < n - 1; i++) sc[i] = (i & 1) == (i1 & 1) ? SideSum(st, nr, base + i, x, g) : 0;
+          e = RelaxRow(st, nr, b, x, base, i1, n, m, sc, omega, R ? R + (base - r0) : NULL);
+        } else
+          e = RelaxRow(st, nr, b, x, base, i1, n, m, NULL, omega, NULL);
+        rmax = rmax > e ? rmax : e;
+        if (n > 1 && ((n - 1 - i0) & 1) == 0) {
+          e    = RelaxEnd(lv, st, base + n - 1, n - 1, j, k, n, b, x, g, omega, R, r0);
+          rmax = rmax > e ? rmax : e;
         }
       }
   return rmax;
@@ -620,22 +670,25 @@ static PetscErrorCode StencilMult(Mat A, Vec xv, Vec yv)
   PetscCall(VecGetArrayWrite(yv, &y));
 #pragma omp parallel for schedule(static) if (lv->nblk >= 8)
   for (PetscInt lb = 0; lb < lv->nblk; lb++) {
-    const PetscInt n = lv->n[lb], n2 = n * n, r0 = lv->start[lb], nr = lv->nrows;
-    const PffMGReal *restrict cx = st->cf, *restrict cy = cx + nr, *restrict cz = cy + nr, *restrict dx = st->dx;
+    const PetscInt nr = lv->nrows, n = lv->n[lb], r0 = lv->start[lb];
+    const PffMGReal *restrict cx = st->cf, *restrict cy = cx + nr, *restrict cz = cy + nr;
+    const PetscReal *restrict ds = st->ds;
+    PetscScalar *restrict yr     = y;
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt j = 0; j < n; j++) {
-        const PetscInt base = r0 + n * (j + n * k);
-        if (j == 0 || j == n - 1 || k == 0 || k == n - 1 || n < 3) {
-          for (PetscInt i = 0; i < n; i++) y[base + i] = RowBoundary(lv, st, base + i, i, j, k, n, x, g);
-          continue;
-        }
-        y[base] = RowBoundary(lv, st, base, 0, j, k, n, x, g);
+        const PetscInt     base = r0 + n * (j + n * k);
+        const PffMGRowMask m    = RowMask(j, k, n);
+        yr[base]                = RowEnd(st, nr, base, 0, j, k, n, x, g);
         for (PetscInt r = base + 1; r < base + n - 1; r++) {
-          const PetscScalar xr = x[r];
-          y[r]                 = cx[r] * (xr - x[r - 1]) + cx[r + 1] * (xr - x[r + 1]) + cy[r] * (xr - x[r - n]) +
-                 cy[r + n] * (xr - x[r + n]) + cz[r] * (xr - x[r - n2]) + cz[r + n2] * (xr - x[r + n2]) + dx[r] * xr;
+          const PetscScalar xc = x[r];
+          const PetscReal   c2 = m.mym * cy[r], c3 = m.myp * cy[r + m.syp], c4 = m.mzm * cz[r],
+                          c5 = m.mzp * cz[r + m.szp];
+          yr[r]              = cx[r] * (xc - x[r - 1]) + cx[r + 1] * (xc - x[r + 1]) + c2 * (xc - x[r - m.sym]) +
+                  c3 * (xc - x[r + m.syp]) + c4 * (xc - x[r - m.szm]) + c5 * (xc - x[r + m.szp]) + ds[r] * xc;
         }
-        y[base + n - 1] = RowBoundary(lv, st, base + n - 1, n - 1, j, k, n, x, g);
+        if (j == 0 || j == n - 1 || k == 0 || k == n - 1)
+          for (PetscInt r = base + 1; r < base + n - 1; r++) yr[r] += SideSum(st, nr, r, x, g);
+        if (n > 1) yr[base + n - 1] = RowEnd(st, nr, base + n - 1, n - 1, j, k, n, x, g);
       }
   }
   PetscCall(VecRestoreArrayWrite(yv, &y));
@@ -703,14 +756,14 @@ PetscErrorCode PffMGStencilAssemble_Private(PffMG *mg, PetscInt L, Mat *A)
       for (PetscInt j = 0; j < n; j++)
         for (PetscInt i = 0; i < n; i++) {
           const PetscInt p[3] = {i, j, k}, r = o + i + n * (j + n * k), grow = lv->rstart + r;
-          PetscCall(MatSetValue(*A, grow, grow, Diagonal(lv, st, r, i, j, k, n), ADD_VALUES));
+          PetscCall(MatSetValue(*A, grow, grow, Diagonal(st, nr, r, i, j, k, n), ADD_VALUES));
           for (PetscInt d = 0; d < 3; d++) {
             if (p[d] > 0) PetscCall(MatSetValue(*A, grow, grow - s[d], -st->cf[d * nr + r], ADD_VALUES));
             if (p[d] < n - 1) PetscCall(MatSetValue(*A, grow, grow + s[d], -st->cf[d * nr + r + s[d]], ADD_VALUES));
           }
           for (PetscInt e = st->rowptr[r]; e < st->rowptr[r + 1]; e++) {
             const PetscInt c = st->col[e], gc = c < nr ? lv->rstart + c : st->ghostRow[c - nr];
-            if (c != r) PetscCall(MatSetValue(*A, grow, gc, st->val[e], ADD_VALUES));
+            PetscCall(MatSetValue(*A, grow, gc, st->val[e], ADD_VALUES));
           }
         }
   }

@@ -138,7 +138,7 @@ static PetscErrorCode PffPressureDirichletTerms(PffPressure ps, const PetscScala
    unit diagonal, so every preconditioner sees a definite block there. The null space is attached
    afresh on every assembly: none when a Dirichlet wall exists (A is definite on the cells connected
    to it), otherwise the constants, or the indicator of the non-empty rows when isolated cells exist. */
-static PetscErrorCode PffPressureNullSpace(PffPressure ps)
+PetscErrorCode PffPressureNullSpace_Private(PffPressure ps)
 {
   PetscScalar *d, *z;
   PetscInt     n, nisolated = 0;
@@ -163,7 +163,7 @@ static PetscErrorCode PffPressureNullSpace(PffPressure ps)
     PetscCall(VecDuplicate(ind, &one));
     PetscCall(VecSet(one, 1.0));
     PetscCall(VecAXPY(one, -1.0, ind)); /* 1 on the empty rows */
-    PetscCall(MatDiagonalSet(ps->A, one, ADD_VALUES));
+    if (ps->A) PetscCall(MatDiagonalSet(ps->A, one, ADD_VALUES));
     PetscCall(VecAXPY(ps->diag, 1.0, one));
     PetscCall(VecDestroy(&one));
   }
@@ -176,7 +176,7 @@ static PetscErrorCode PffPressureNullSpace(PffPressure ps)
     PetscCall(MatNullSpaceCreate(ps->comm, PETSC_FALSE, 1, &ind, &ps->nullsp));
   } else
     PetscCall(MatNullSpaceCreate(ps->comm, PETSC_TRUE, 0, NULL, &ps->nullsp));
-  PetscCall(MatSetNullSpace(ps->A, ps->nullsp));
+  if (ps->A) PetscCall(MatSetNullSpace(ps->A, ps->nullsp));
   PetscCall(VecDestroy(&ind));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -229,6 +229,37 @@ PetscErrorCode PffPressureAssemble_Private(PffPressure ps, PetscInt chBeta, Pets
       "%g (%s)",
       (double)badBeta, bad >= 0 ? "this rank" : "another rank");
 
+  if (ps->A) PetscCall(PffPressureAssembleOperator_Private(ps));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The assembled A and, for the ptap assembly, W = diag(M beta open) with its diagonal in place, so
+   that A = G^T W G keeps one pattern. Created only when something needs entries: an AIJ Amat, a PC
+   other than the matrix-free pffmg, or PffPressureGetOperator. */
+PetscErrorCode PffPressureCreateOperator_Private(PffPressure ps)
+{
+  const PetscInt nrows = 3 * ps->ncells;
+
+  PetscFunctionBeginUser;
+  if (ps->A) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(MatCreateAIJ(ps->comm, nrows, nrows, 3 * ps->ntotal, 3 * ps->ntotal, 1, NULL, 0, NULL, &ps->W));
+  for (PetscInt r = 0; r < nrows; r++) {
+    const PetscInt row = 3 * ps->rstart + r;
+    PetscCall(MatSetValue(ps->W, row, row, 1.0, INSERT_VALUES));
+  }
+  PetscCall(MatAssemblyBegin(ps->W, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(ps->W, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatPtAP(ps->W, ps->G, MAT_INITIAL_MATRIX, 2.0, &ps->A));
+  PetscCall(MatSetOption(ps->A, MAT_NEW_NONZERO_LOCATION_ERR, PETSC_TRUE));
+  PetscCall(MatSetOption(ps->A, MAT_SYMMETRIC, PETSC_TRUE));
+  PetscCall(MatSetOption(ps->A, MAT_SYMMETRY_ETERNAL, PETSC_TRUE));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* A from the current face weights w and Dirichlet terms, its diagonal and null space. */
+PetscErrorCode PffPressureAssembleOperator_Private(PffPressure ps)
+{
+  PetscFunctionBeginUser;
   if (ps->assembly == PFF_PRESSURE_ASSEMBLY_PTAP) {
     PetscCall(MatDiagonalSet(ps->W, ps->w, INSERT_VALUES));
     PetscCall(MatPtAP(ps->W, ps->G, MAT_REUSE_MATRIX, 2.0, &ps->A));
@@ -236,6 +267,6 @@ PetscErrorCode PffPressureAssemble_Private(PffPressure ps, PetscInt chBeta, Pets
     PetscCall(AssembleDirect(ps));
   if (PffPressureHasDirichlet_Private(ps)) PetscCall(MatDiagonalSet(ps->A, ps->dirdiag, ADD_VALUES));
   PetscCall(MatGetDiagonal(ps->A, ps->diag));
-  PetscCall(PffPressureNullSpace(ps));
+  PetscCall(PffPressureNullSpace_Private(ps));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -69,7 +69,8 @@ PetscErrorCode PffPressureSetFromOptions(PffPressure ps)
 {
   char     *names[7] = {NULL};
   PetscInt  nnames   = 7;
-  PetscBool set, walls[6] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
+  PetscBool set, opset = PETSC_FALSE,
+                 walls[6] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
 
   PetscFunctionBeginUser;
   PetscOptionsBegin(ps->comm, NULL, "Pressure projection", "PffPressure");
@@ -82,10 +83,12 @@ PetscErrorCode PffPressureSetFromOptions(PffPressure ps)
       "-pressure_on_failure", "When a solve does not converge: stop the run with its reason, or warn and go on",
       "PffPressureCheckSolve", PffPressureFailureTypes, (PetscEnum)ps->onFailure, (PetscEnum *)&ps->onFailure, NULL));
   PetscCall(PffOptionsEnum("-pressure_operator",
-                           "Operator the Krylov method applies: assembled AIJ or matrix-free shell (the PC uses AIJ)",
+                           "Operator the Krylov method applies: assembled AIJ or matrix-free shell (default: shell "
+                           "under the matrix-free pffmg, aij with any other PC)",
                            "PffPressureSetOperatorType", PffPressureOperatorTypes, (PetscEnum)ps->operatorType,
-                           (PetscEnum *)&ps->operatorType, NULL));
+                           (PetscEnum *)&ps->operatorType, &opset));
   PetscOptionsEnd();
+  if (opset) ps->operatorTypeSet = PETSC_TRUE;
   /* parsed after the options block, so that a bad name leaves the options object closed */
   if (set) {
     PetscInt bad = -1;
@@ -181,10 +184,8 @@ PetscErrorCode PffPressureSetUp(PffPressure ps)
   PetscCall(VecRestoreArrayWrite(ps->mface, &m));
   PetscCall(VecRestoreArrayWrite(ps->vol, &vol));
 
-  PetscCall(MatSetOption(ps->A, MAT_NEW_NONZERO_LOCATION_ERR, PETSC_TRUE));
-  PetscCall(MatSetOption(ps->A, MAT_SYMMETRIC, PETSC_TRUE));
-  PetscCall(MatSetOption(ps->A, MAT_SYMMETRY_ETERNAL, PETSC_TRUE));
-  if (ps->operatorType == PFF_PRESSURE_OPERATOR_SHELL) PetscCall(PffPressureShellCreate_Private(ps, &ps->S));
+  if (ps->operatorTypeSet && ps->operatorType == PFF_PRESSURE_OPERATOR_SHELL)
+    PetscCall(PffPressureShellCreate_Private(ps, &ps->S));
   ps->setup = PETSC_TRUE;
   PetscCall(PetscLogEventEnd(PFF_PressSetUp, 0, 0, 0, 0));
   PetscCall(PetscInfo(NULL,
@@ -242,15 +243,33 @@ static PetscErrorCode PffPressureCheckSetUp(PffPressure ps, PetscBool coefficien
 
 PetscErrorCode PffPressureSetCoefficients(PffPressure ps, PetscInt chBeta, PetscInt chOpen)
 {
+  PC        pc;
+  PetscBool stencilPC, needA;
+
   PetscFunctionBeginUser;
   PetscCall(PffPressureCheckSetUp(ps, PETSC_FALSE));
   PetscCall(PetscLogEventBegin(PFF_PressAssemble, 0, 0, 0, 0));
+  /* The matrix-free pffmg needs no entries: then the Krylov method applies the shell too (unless the
+     user chose aij), and A is assembled only if something asks for it (PffPressureGetOperator) */
+  PetscCall(KSPGetPC(ps->ksp, &pc));
+  PetscCall(PffPressureMGUsesStencil_Private(pc, &stencilPC));
+  if (!ps->operatorTypeSet) ps->operatorType = stencilPC ? PFF_PRESSURE_OPERATOR_SHELL : PFF_PRESSURE_OPERATOR_AIJ;
+  needA = (PetscBool)(ps->operatorType == PFF_PRESSURE_OPERATOR_AIJ || !stencilPC);
+  if (needA) PetscCall(PffPressureCreateOperator_Private(ps));
   PetscCall(PffPressureAssemble_Private(ps, chBeta, chOpen));
-  if (ps->operatorType == PFF_PRESSURE_OPERATOR_SHELL && ps->S == NULL)
+  if ((ps->operatorType == PFF_PRESSURE_OPERATOR_SHELL || !ps->A) && ps->S == NULL)
     PetscCall(PffPressureShellCreate_Private(ps, &ps->S));
   if (ps->S != NULL) PetscCall(PffPressureShellUpdate_Private(ps, ps->S));
-  /* the PC always gets the assembled A (pffmg and PETSc's PCs need entries) */
-  PetscCall(KSPSetOperators(ps->ksp, ps->operatorType == PFF_PRESSURE_OPERATOR_SHELL ? ps->S : ps->A, ps->A));
+  if (!ps->A) { /* diagonal and null space from the faces */
+    PetscCall(PffPressureShellFaceDiagonal_Private(ps->S, ps->diag));
+    PetscCall(VecAXPY(ps->diag, 1.0, ps->dirdiag));
+    PetscCall(PffPressureNullSpace_Private(ps));
+    PetscCall(MatSetNullSpace(ps->S, ps->nullsp));
+  }
+  {
+    Mat Amat = ps->operatorType == PFF_PRESSURE_OPERATOR_SHELL ? ps->S : ps->A;
+    PetscCall(KSPSetOperators(ps->ksp, Amat, stencilPC ? Amat : ps->A));
+  }
   ps->coefficientsSet = PETSC_TRUE;
   PetscCall(PetscLogEventEnd(PFF_PressAssemble, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -365,6 +384,10 @@ PetscErrorCode PffPressureGetOperator(PffPressure ps, Mat *A)
 {
   PetscFunctionBeginUser;
   PetscCall(PffPressureCheckSetUp(ps, PETSC_TRUE));
+  if (ps->A == NULL) { /* assembled on demand, then kept current by every SetCoefficients */
+    PetscCall(PffPressureCreateOperator_Private(ps));
+    PetscCall(PffPressureAssembleOperator_Private(ps));
+  }
   *A = ps->A;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -412,7 +435,8 @@ PetscErrorCode PffPressureSetOperatorType(PffPressure ps, PffPressureOperatorTyp
   PetscCheck(ps != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL object");
   PetscCheck(type == PFF_PRESSURE_OPERATOR_AIJ || type == PFF_PRESSURE_OPERATOR_SHELL, ps->comm,
              PETSC_ERR_ARG_OUTOFRANGE, "pressure: unknown operator type %d", (int)type);
-  ps->operatorType = type;
+  ps->operatorType    = type;
+  ps->operatorTypeSet = PETSC_TRUE;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -40,7 +40,7 @@ struct _n_PffPressure {
 
   Mat          G;      /* gradient: 3 ncells x ncells rows, (G p)_f = (p_upper - sum w_c p_c) / d_f */
   Mat          W;      /* diag(M_f beta_f open_f) on the face rows, for MatPtAP */
-  Mat          A;      /* G^T W G */
+  Mat          A;      /* G^T W G, NULL until something needs entries (PffPressureCreateOperator_Private) */
   Mat          S;      /* the matrix-free A (shell.c), NULL until an operator of type shell is needed */
   MatNullSpace nullsp; /* constants (or the connected cells), NULL when a Dirichlet wall makes A definite */
   KSP          ksp;
@@ -52,8 +52,9 @@ struct _n_PffPressure {
   Vec uf, wf, mface, beta, open, coef, w; /* face Vecs: velocity, work, M_f, beta_f, open_f, coefficient, W */
 
   PffPressureAssemblyType assembly;
-  PffPressureOperatorType operatorType; /* the KSP's Amat; the Pmat is always A */
-  PffPressureFailureType  onFailure;    /* -pressure_on_failure */
+  PffPressureOperatorType operatorType;    /* the KSP's Amat */
+  PetscBool               operatorTypeSet; /* chosen by the user; otherwise shell under the matrix-free pffmg */
+  PffPressureFailureType  onFailure;       /* -pressure_on_failure */
   PetscBool               subPCDefaultApplied;
 };
 
@@ -89,6 +90,11 @@ static inline PetscInt PffPressureGradientRow(PffPressure ps, PetscInt r, PetscI
 PETSC_INTERN PetscErrorCode PffPressureBuildFaces_Private(PffPressure);
 PETSC_INTERN PetscErrorCode PffPressureBuildGradient_Private(PffPressure);
 PETSC_INTERN PetscErrorCode PffPressureAssemble_Private(PffPressure, PetscInt, PetscInt);
+PETSC_INTERN PetscErrorCode PffPressureCreateOperator_Private(PffPressure);
+PETSC_INTERN PetscErrorCode PffPressureAssembleOperator_Private(PffPressure);
+PETSC_INTERN PetscErrorCode PffPressureNullSpace_Private(PffPressure);
+PETSC_INTERN PetscErrorCode PffPressureShellFaceDiagonal_Private(Mat, Vec);
+PETSC_INTERN PetscErrorCode PffPressureMGUsesStencil_Private(PC, PetscBool *);
 PETSC_INTERN PetscErrorCode PffPressureShellCreate_Private(PffPressure, Mat *);
 PETSC_INTERN PetscErrorCode PffPressureShellUpdate_Private(PffPressure, Mat);
 PETSC_INTERN PetscErrorCode PffPressureChannelToVec_Private(PffPressure, PetscInt, PffChannelKind, Vec);

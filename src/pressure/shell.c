@@ -182,6 +182,21 @@ static PetscErrorCode MatGetDiagonal_PffShell(Mat S, Vec d)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* The diagonal of the face terms alone, without the Dirichlet terms and units of the diagonal-only list. */
+PetscErrorCode PffPressureShellFaceDiagonal_Private(Mat S, Vec d)
+{
+  PffShell    *s;
+  PetscScalar *a;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatShellGetContext(S, &s));
+  PetscCall(VecCopy(s->diag, d));
+  PetscCall(VecGetArray(d, &a));
+  for (PetscInt q = 0; q < s->ndiag; q++) a[s->diagCell[q]] -= s->diagVal[q];
+  PetscCall(VecRestoreArray(d, &a));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 static PetscErrorCode MatView_PffShell(Mat S, PetscViewer viewer)
 {
   PffShell *s;

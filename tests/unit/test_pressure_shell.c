@@ -254,10 +254,14 @@ static PetscErrorCode TestProjection(PetscInt g, PCType pctype, PetscBool dirich
     PetscCall(PffPressureSetUp(ps));
     PetscCall(PffPressureSetCoefficients(ps, pb.betaCh, pb.openCh));
     PetscCall(KSPGetOperators(ksp, &Amat, &Pmat));
-    PetscCall(PffPressureGetOperator(ps, &A));
     PetscCall(PetscObjectTypeCompare((PetscObject)Amat, MATSHELL, &isshell));
-    PetscCheck(Pmat == A && isshell == (k == 1 ? PETSC_TRUE : PETSC_FALSE), PETSC_COMM_WORLD, PETSC_ERR_PLIB,
-               "-pressure_operator %s: wrong KSP operators", k == 0 ? "aij" : "shell");
+    /* the matrix-free pffmg (pctype NULL) preconditions from the Amat itself; other PCs from the assembled A,
+       which PffPressureGetOperator assembles on demand */
+    PetscCheck(isshell == (k == 1 ? PETSC_TRUE : PETSC_FALSE) && (pctype != NULL || Pmat == Amat), PETSC_COMM_WORLD,
+               PETSC_ERR_PLIB, "-pressure_operator %s: wrong KSP operators", k == 0 ? "aij" : "shell");
+    PetscCall(PffPressureGetOperator(ps, &A));
+    PetscCheck(pctype == NULL || Pmat == A, PETSC_COMM_WORLD, PETSC_ERR_PLIB,
+               "-pressure_operator %s: the PC does not get the assembled A", k == 0 ? "aij" : "shell");
     PetscCall(PffPressureProject(ps, pb.uCh, 0.01, -1, pb.pCh, &st));
     PetscCheck(st.reason > 0, PETSC_COMM_WORLD, PETSC_ERR_NOT_CONVERGED, "projection (%s) did not converge: %s",
                k == 0 ? "aij" : "shell", KSPConvergedReasons[st.reason]);
@@ -375,6 +379,44 @@ static PetscErrorCode Bench(PetscInt N, PetscInt nrep)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Without -pressure_operator: the matrix-free pffmg gets the shell as Amat and Pmat (no assembled A), any other
+   PC the assembled A as both. */
+static PetscErrorCode TestDefaultOperators(void)
+{
+  Problem pb;
+
+  PetscFunctionBeginUser;
+  PetscCall(ProblemCreate(PETSC_COMM_WORLD, 2, 0.0, &pb));
+  for (PetscInt k = 0; k < 2; k++) {
+    PffPressure             ps;
+    KSP                     ksp;
+    PC                      pc;
+    Mat                     Amat, Pmat;
+    PetscBool               isshell;
+    PffPressureOperatorType type;
+    PetscCall(PffPressureCreate(pb.t.grid, &ps));
+    PetscCall(PffPressureSetFromOptions(ps));
+    PetscCall(PffPressureGetKSP(ps, &ksp));
+    if (k == 1) {
+      PetscCall(KSPGetPC(ksp, &pc));
+      PetscCall(PCSetType(pc, PCJACOBI));
+    }
+    PetscCall(PffPressureSetUp(ps));
+    PetscCall(PffPressureSetCoefficients(ps, pb.betaCh, pb.openCh));
+    PetscCall(KSPGetOperators(ksp, &Amat, &Pmat));
+    PetscCall(PetscObjectTypeCompare((PetscObject)Amat, MATSHELL, &isshell));
+    PetscCall(PffPressureGetOperatorType(ps, &type));
+    PetscCheck(Pmat == Amat && isshell == (k == 0) && (type == PFF_PRESSURE_OPERATOR_SHELL) == (k == 0),
+               PETSC_COMM_WORLD, PETSC_ERR_PLIB, "default operators with %s: Amat %s, Pmat %s Amat",
+               k == 0 ? "pffmg" : "jacobi", isshell ? "shell" : "aij", Pmat == Amat ? "=" : "!=");
+    PetscCall(PetscPrintf(PETSC_COMM_WORLD, "default operators with %-6s: Amat = Pmat = %s\n",
+                          k == 0 ? "pffmg" : "jacobi", isshell ? "the shell (no assembled A)" : "the assembled A"));
+    PetscCall(PffPressureDestroy(&ps));
+  }
+  PetscCall(PffGridDestroy(&pb.t.grid));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 int main(int argc, char **argv)
 {
   PetscInt bench = 0, nrep = 10;
@@ -393,6 +435,7 @@ int main(int argc, char **argv)
     PetscCall(TestProjection(2, NULL, PETSC_FALSE));
     PetscCall(TestProjection(3, PCJACOBI, PETSC_FALSE));
     PetscCall(TestProjection(2, NULL, PETSC_TRUE));
+    PetscCall(TestDefaultOperators());
   }
   PetscCall(PetscFinalize());
   return 0;
