@@ -30,8 +30,15 @@
    What it prints, per grid one "#" line (cells per level), then per PC exactly one line
      RESULT pc=<name> grid=<uniform|adaptive> n=<N> ratio=<r> ranks=<r> threads=<t> its=<i> setup_s=<s>
             solve_s=<s> relres=<x>
-   (on one line) with setup_s = KSPSetUp + KSPSetUpOnBlocks, solve_s = KSPSolve (PffPressureStats, timed
-   with PetscTime inside the PressSolve log event; -log_view shows one stage per grid), relres =
+   (on one line), then
+     MEMORY pc=<name> ... peak_rss_MB_max_rank=<MB> pressure_B_per_cell=<B> iteration_s=<s>
+   (the process's peak resident size, the resident bytes the pressure module and solver added per owned
+   cell, the solve time per iteration), and for pffmg
+     SWEEP pc=pffmg n=<N> level=0 ns_per_cell=<t> bytes_per_cell=44 copy_GBs=<bw> bound_ns_per_cell=<t> ratio=<r>
+   (one fixed red-black sweep of the finest level against its memory traffic at the streaming copy
+   bandwidth measured in the same run), with setup_s = KSPSetUp + KSPSetUpOnBlocks, solve_s = KSPSolve
+   (PffPressureStats, timed with PetscTime inside the PressSolve log event; -log_view shows one stage per grid), relres
+   =
    ||b - A p|| / ||b|| recomputed here from the module's operator, b and p. With -bench_repeat R (default 1)
    each PC sets up (new coefficients, as in a time step) and solves R times and the times are the
    best of R; a "#" line then gives the first set-up, which includes one-time symbolic work. A PC type that PETSc does
@@ -39,6 +46,8 @@
    did not converge or relres > 1.05 rtol, and when an option was not used (misspelt). */
 #include <pff.h>
 #include <omp.h>
+#include <string.h>
+#include <sys/resource.h>
 
 #define BENCH_MAX_N 8
 #define BENCH_MAX_PCS 16
@@ -214,6 +223,77 @@ static PetscErrorCode PCTypeAvailable(MPI_Comm comm, const char *name, PetscBool
 }
 
 /* One grid, every PC; *nfail counts runs that did not converge to rtol. */
+/* Streaming copy bandwidth of this rank (read + write bytes per second), the bound of a memory-bound
+   kernel; all ranks copy at once, as they sweep at once. */
+static PetscErrorCode CopyBandwidth(MPI_Comm comm, PetscReal *gbs)
+{
+  const size_t   n = (size_t)1 << 24; /* 128 MiB per array, far beyond the caches */
+  double        *a, *b;
+  PetscLogDouble best = PETSC_MAX_REAL;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc2(n, &a, n, &b));
+  for (size_t i = 0; i < n; i++) a[i] = (double)i;
+  for (PetscInt rep = 0; rep < 5; rep++) {
+    PetscLogDouble t0, t1;
+    PetscCallMPI(MPI_Barrier(comm));
+    PetscCall(PetscTime(&t0));
+    memcpy(b, a, n * sizeof(double));
+    PetscCall(PetscTime(&t1));
+    best = PetscMin(best, t1 - t0);
+  }
+  *gbs = 2.0 * n * sizeof(double) / best / 1e9;
+  PetscCall(PetscFree2(a, b));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* pffmg only: the time of one fixed red-black sweep of the finest level per cell, against the time
+   its memory traffic takes at the copy bandwidth. A sweep reads b (8 B), cf (12 B), ds (8 B) and
+   reads and writes x (16 B) per cell: 44 B. */
+#define BENCH_SWEEP_BYTES 44.0
+static PetscErrorCode SweepRate(MPI_Comm comm, PffPressure ps, KSP ksp, PetscInt N)
+{
+  Mat            A;
+  Vec            x, b;
+  PetscRandom    rnd;
+  PetscLogDouble best = PETSC_MAX_REAL;
+  PetscReal      gbs;
+  PetscInt       nloc;
+  const PetscInt sweeps = 10;
+
+  PetscFunctionBeginUser;
+  PetscCall(KSPGetOperators(ksp, &A, NULL));
+  PetscCall(MatCreateVecs(A, &x, &b));
+  PetscCall(VecGetLocalSize(x, &nloc));
+  PetscCall(PetscRandomCreate(comm, &rnd));
+  PetscCall(VecSetRandom(x, rnd));
+  PetscCall(VecSet(b, 0.0));
+  PetscCall(PffPressureMGSmooth(ps, 0, b, x, 1)); /* warm-up */
+  for (PetscInt rep = 0; rep < 3; rep++) {
+    PetscLogDouble t0, t1;
+    PetscCallMPI(MPI_Barrier(comm));
+    PetscCall(PetscTime(&t0));
+    PetscCall(PffPressureMGSmooth(ps, 0, b, x, sweeps));
+    PetscCall(PetscTime(&t1));
+    best = PetscMin(best, t1 - t0);
+  }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &best, 1, MPI_DOUBLE, MPI_MAX, comm));
+  PetscCall(CopyBandwidth(comm, &gbs));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &gbs, 1, MPIU_REAL, MPI_MIN, comm));
+  {
+    const PetscReal ns = best / sweeps / (PetscReal)nloc * 1e9, bound = BENCH_SWEEP_BYTES / gbs;
+    PetscCall(PetscPrintf(comm,
+                          "SWEEP pc=pffmg n=%" PetscInt_FMT
+                          " level=0 ns_per_cell=%.2f bytes_per_cell=%.0f copy_GBs=%.1f "
+                          "bound_ns_per_cell=%.2f ratio=%.2f\n",
+                          N, (double)ns, BENCH_SWEEP_BYTES, (double)gbs, (double)bound, (double)(ns / bound)));
+  }
+  PetscCall(PetscRandomDestroy(&rnd));
+  PetscCall(VecDestroy(&x));
+  PetscCall(VecDestroy(&b));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 static PetscErrorCode BenchGrid(MPI_Comm comm, const BenchOptions *o, PetscInt N, PetscInt g, PetscLogStage stage,
                                 PetscInt *nfail)
 {
@@ -256,10 +336,13 @@ static PetscErrorCode BenchGrid(MPI_Comm comm, const BenchOptions *o, PetscInt N
     Mat              A;
     Vec              b, p, r;
     PetscReal        bnorm, rnorm, relres;
-    PetscBool        avail = PETSC_FALSE;
+    PetscBool        avail = PETSC_FALSE, ispffmg;
     char             ratio[32];
+    PetscLogDouble   rss0, rss1;
+    PetscInt         nloc;
 
     /* PffPressureCreate first: the pressure module may register its own PC types there */
+    PetscCall(PetscMemoryGetCurrentUsage(&rss0));
     PetscCall(PffPressureCreate(grid, &ps));
     PetscCall(PCTypeAvailable(comm, o->pcs[k], &avail));
     if (!avail) {
@@ -287,6 +370,7 @@ static PetscErrorCode BenchGrid(MPI_Comm comm, const BenchOptions *o, PetscInt N
     }
     st.setupTime = setupMin;
     st.solveTime = solveMin;
+    PetscCall(PetscMemoryGetCurrentUsage(&rss1));
     /* relres from the module's operator (the assembled A or the matrix-free one, equal to 1e-16; asking
        for A would assemble it where the matrix-free pffmg does not), b and (double) p, independent of
        what the KSP monitored */
@@ -311,6 +395,25 @@ static PetscErrorCode BenchGrid(MPI_Comm comm, const BenchOptions *o, PetscInt N
       PetscCall(PetscPrintf(
           comm, "# pc=%s first set-up (with the symbolic part) %.3f s; times above: best of %" PetscInt_FMT "\n",
           o->pcs[k], (double)setupFirst, o->repeat));
+    {
+      /* memory: the peak resident size of the process, and what the pressure module and its solver
+         added (resident size after the solves minus before the module), per owned cell; max over ranks */
+      PetscLogDouble peak, m[2];
+      struct rusage  ru;
+      PetscCall(VecGetLocalSize(p, &nloc));
+      getrusage(RUSAGE_SELF, &ru);
+      peak = (PetscLogDouble)ru.ru_maxrss * 1024.0;
+      m[0] = peak;
+      m[1] = (rss1 - rss0) / (PetscLogDouble)PetscMax(nloc, 1);
+      PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, m, 2, MPI_DOUBLE, MPI_MAX, comm));
+      PetscCall(PetscPrintf(
+          comm,
+          "MEMORY pc=%s grid=%s n=%" PetscInt_FMT " peak_rss_MB_max_rank=%.0f pressure_B_per_cell=%.0f "
+          "iteration_s=%.4f\n",
+          o->pcs[k], GridNames[g], N, m[0] / 1048576.0, m[1], (double)(st.its > 0 ? st.solveTime / st.its : 0)));
+    }
+    PetscCall(PetscStrcmp(o->pcs[k], "pffmg", &ispffmg));
+    if (ispffmg) PetscCall(SweepRate(comm, ps, ksp, N));
     if (st.reason <= 0 || !(relres <= BENCH_RTOL_SLACK * o->rtol)) {
       PetscCall(PetscPrintf(comm, "# FAILED pc=%s grid=%s n=%" PetscInt_FMT ": %s, relres %.2e > %.2e\n", o->pcs[k],
                             GridNames[g], N, KSPConvergedReasons[st.reason], (double)relres,

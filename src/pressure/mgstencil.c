@@ -576,16 +576,45 @@ static inline PetscReal RelaxEnd(const PffMGLevel *lv, const PffMGStencil *st, P
   return eff;
 }
 
-/* Relaxes the cells of one colour between the two ends of a row (cells r0 + 1 .. r0 + n - 2, the colour's
-   first at r0 + i1, i1 = 1 or 2): the candidate values of every cell of the row are computed from x into a
-   buffer, then those of the colour are stored. The first loop only reads x, runs over contiguous cells
-   and vectorises (a loop over one colour has 7 cells for n = 16, too few for an 8-wide vector); it
-   computes twice the cells for no extra memory traffic. sc (or NULL: an inner row, none) holds the
-   side sums by cell. Rrow (or NULL) receives |omega (b - A x)| of the colour's cells. Returns their
-   maximum. n <= PFF_GRID_BLOCK_SIZE_MAX. */
+/* Weights of the x-faces of the cells of a row: 0 where the neighbour is outside the block (its
+   coupling is a side term), so that the whole row runs one loop. */
+typedef struct {
+  PetscReal lo[PFF_GRID_BLOCK_SIZE_MAX], hi[PFF_GRID_BLOCK_SIZE_MAX];
+} PffMGRowEnds;
+
+static inline void RowEnds(PetscInt n, PffMGRowEnds *e)
+{
+  for (PetscInt i = 0; i < n; i++) {
+    e->lo[i] = i > 0;
+    e->hi[i] = i < n - 1;
+  }
+}
+
+/* Side sums of the cells of row base that have side couplings: both ends, and every cell on a row of
+   the block's sides. */
+static inline void RowSideSums(const PffMGStencil *st, PetscInt nr, PetscInt base, PetscInt n, PetscBool side,
+                               const PetscScalar *x, const PetscScalar *g, PetscScalar *sc)
+{
+  if (side)
+    for (PetscInt i = 0; i < n; i++) sc[i] = SideSum(st, nr, base + i, x, g);
+  else {
+    for (PetscInt i = 1; i < n - 1; i++) sc[i] = 0;
+    sc[0]     = SideSum(st, nr, base, x, g);
+    sc[n - 1] = SideSum(st, nr, base + n - 1, x, g);
+  }
+}
+
+/* Relaxes the cells of colour c of the row starting at r0 (n cells, (i + j + k) % 2 == c for i =
+   i0, i0 + 2, ...): the candidate values of every cell are computed from x into a buffer, then those
+   of the colour are stored. The first loop only reads x, runs over contiguous cells and vectorises (a
+   loop over one colour has 8 cells for n = 16, too few for an 8-wide vector); it computes twice the
+   cells for no extra memory traffic. The x-neighbours outside the block are read (the cells around the
+   row in memory, never outside the array: the first and last rows go through RelaxRowEnds) and
+   weighted 0; sc holds the side sums. R (or NULL) receives |omega (b - A x)| of the colour's cells.
+   Returns their maximum. */
 static inline PetscReal RelaxRow(const PffMGStencil *st, PetscInt nr, const PetscScalar *restrict b, PetscScalar *x,
-                                 PetscInt r0, PetscInt i1, PetscInt n, PffMGRowMask m, const PetscScalar *restrict sc,
-                                 PetscReal omega, PetscReal *Rrow)
+                                 PetscInt r0, PetscInt i0, PetscInt n, PffMGRowMask m, const PffMGRowEnds *restrict e,
+                                 const PetscScalar *restrict sc, PetscReal omega, PetscReal *R)
 {
   const PffMGReal *restrict cx = st->cf, *restrict cy = cx + nr, *restrict cz = cy + nr;
   const PetscReal *restrict ds   = st->ds;
@@ -593,59 +622,74 @@ static inline PetscReal RelaxRow(const PffMGStencil *st, PetscInt nr, const Pets
   PetscScalar nx[PFF_GRID_BLOCK_SIZE_MAX];
   PetscReal   ev[PFF_GRID_BLOCK_SIZE_MAX], emax = 0;
 
-  for (PetscInt i = 1; i < n - 1; i++) {
-    const PetscInt  r  = r0 + i;
-    const PetscReal c0 = cx[r], c1 = cx[r + 1], c2 = m.mym * cy[r], c3 = m.myp * cy[r + m.syp];
-    const PetscReal c4 = m.mzm * cz[r], c5 = m.mzp * cz[r + m.szp];
-    const PetscReal d = c0 + c1 + c2 + c3 + c4 + c5 + ds[r];
-    PetscScalar     s = b[r] - d * xr[r] + c0 * xr[r - 1] + c1 * xr[r + 1] + c2 * xr[r - m.sym] + c3 * xr[r + m.syp] +
-                    c4 * xr[r - m.szm] + c5 * xr[r + m.szp];
-    if (sc) s -= sc[i];
+  for (PetscInt i = 0; i < n; i++) {
+    const PetscInt    r  = r0 + i;
+    const PetscReal   c0 = e->lo[i] * cx[r], c1 = e->hi[i] * cx[r + 1], c2 = m.mym * cy[r], c3 = m.myp * cy[r + m.syp];
+    const PetscReal   c4 = m.mzm * cz[r], c5 = m.mzp * cz[r + m.szp];
+    const PetscReal   d = c0 + c1 + c2 + c3 + c4 + c5 + ds[r];
+    const PetscScalar s = b[r] - sc[i] - d * xr[r] + c0 * xr[r - 1] + c1 * xr[r + 1] + c2 * xr[r - m.sym] +
+                          c3 * xr[r + m.syp] + c4 * xr[r - m.szm] + c5 * xr[r + m.szp];
     ev[i] = PetscAbsReal(omega * s);
     nx[i] = xr[r] + omega * s / d;
   }
-  for (PetscInt i = i1; i < n - 1; i += 2) { /* a double max does not vectorise: kept out of the stencil loop */
+  for (PetscInt i = i0; i < n; i += 2) { /* a double max does not vectorise: kept out of the stencil loop */
     x[r0 + i] = nx[i];
     emax      = emax > ev[i] ? emax : ev[i];
-    if (Rrow) Rrow[i] = ev[i];
+    if (R) R[i] = ev[i];
   }
   return emax;
 }
 
+/* The same for the first and the last row of the rank's cells, whose ends must not read past x: the
+   two ends by the general path. */
+static inline PetscReal RelaxRowEnds(const PffMGLevel *lv, const PffMGStencil *st, PetscInt base, PetscInt i0,
+                                     PetscInt j, PetscInt k, PetscInt n, const PetscScalar *b, PetscScalar *x,
+                                     const PetscScalar *g, PetscReal omega, PetscReal *R, PetscInt r0)
+{
+  PetscReal rmax = 0;
+  for (PetscInt i = i0; i < n; i += 2) {
+    const PetscReal e = RelaxEnd(lv, st, base + i, i, j, k, n, b, x, g, omega, R, r0);
+    rmax              = rmax > e ? rmax : e;
+  }
+  return rmax;
+}
+
 /* One in-place red-black sweep over the cells of local block lb (cells (i + j + k) even, then odd).
-   Every row runs the masked 7-point loop between its two ends; the rows on the block's sides first
-   gather their side sums (the neighbour blocks are frozen during the sweep; the few couplings between
-   fine cells under one coarse face take the values at the start of the row). R (or NULL) receives
-   |omega (b - A x)| on the cells of the block's sides, which is all FaceMax reads. */
+   Every row runs the masked 7-point loop after gathering its side sums (the neighbour blocks are
+   frozen during the sweep; the few couplings between fine cells under one coarse face take the values
+   at the start of the row). R (or NULL) receives |omega (b - A x)| per cell of the block; FaceMax reads
+   the cells of its sides. */
 PetscReal PffMGStencilRelaxBlock_Private(const PffMGLevel *lv, PetscInt lb, const PetscScalar *b, PetscScalar *x,
                                          const PetscScalar *g, PetscReal omega, PetscReal *R)
 {
   const PffMGStencil *st = lv->st;
   const PetscInt      n = lv->n[lb], r0 = lv->start[lb], nr = lv->nrows;
-  PetscScalar         sc[PFF_GRID_BLOCK_SIZE_MAX];
+  PetscScalar         sci[PFF_GRID_BLOCK_SIZE_MAX], scs[PFF_GRID_BLOCK_SIZE_MAX];
+  PffMGRowEnds        ends;
   PetscReal           rmax = 0;
 
+  RowEnds(n, &ends);
+  for (PetscInt i = 0; i < n; i++) sci[i] = 0; /* an inner row has side couplings at its ends only */
   for (PetscInt c = 0; c < 2; c++)
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt j = 0; j < n; j++) {
-        const PetscInt     base = r0 + n * (j + n * k), i0 = (j + k + c) & 1, i1 = 2 - i0;
-        const PetscBool    side = (PetscBool)(j == 0 || j == n - 1 || k == 0 || k == n - 1);
-        const PffMGRowMask m    = RowMask(j, k, n);
-        PetscReal          e;
-        if (i0 == 0) {
-          e    = RelaxEnd(lv, st, base, 0, j, k, n, b, x, g, omega, R, r0);
-          rmax = rmax > e ? rmax : e;
+        const PetscInt base = r0 + n * (j + n * k), i0 = (j + k + c) & 1;
+        PetscReal      e;
+        if (base == 0 || base + n == nr || n < 3)
+          e = RelaxRowEnds(lv, st, base, i0, j, k, n, b, x, g, omega, R, r0);
+        else {
+          /* side sums of the cells of this colour only: the others are computed and dropped */
+          PetscScalar *sc = sci;
+          if (j == 0 || j == n - 1 || k == 0 || k == n - 1) {
+            sc = scs;
+            for (PetscInt i = 0; i < n; i++) sc[i] = ((i ^ i0) & 1) ? 0 : SideSum(st, nr, base + i, x, g);
+          } else {
+            sc[0]     = i0 == 0 ? SideSum(st, nr, base, x, g) : 0;
+            sc[n - 1] = ((n - 1 - i0) & 1) ? 0 : SideSum(st, nr, base + n - 1, x, g);
+          }
+          e = RelaxRow(st, nr, b, x, base, i0, n, RowMask(j, k, n), &ends, sc, omega, R ? R + (base - r0) : NULL);
         }
-        if (side) {
-          for (PetscInt i = 1; i < n - 1; i++) sc[i] = (i & 1) == (i1 & 1) ? SideSum(st, nr, base + i, x, g) : 0;
-          e = RelaxRow(st, nr, b, x, base, i1, n, m, sc, omega, R ? R + (base - r0) : NULL);
-        } else
-          e = RelaxRow(st, nr, b, x, base, i1, n, m, NULL, omega, NULL);
         rmax = rmax > e ? rmax : e;
-        if (n > 1 && ((n - 1 - i0) & 1) == 0) {
-          e    = RelaxEnd(lv, st, base + n - 1, n - 1, j, k, n, b, x, g, omega, R, r0);
-          rmax = rmax > e ? rmax : e;
-        }
       }
   return rmax;
 }
@@ -674,21 +718,26 @@ static PetscErrorCode StencilMult(Mat A, Vec xv, Vec yv)
     const PffMGReal *restrict cx = st->cf, *restrict cy = cx + nr, *restrict cz = cy + nr;
     const PetscReal *restrict ds = st->ds;
     PetscScalar *restrict yr     = y;
+    PetscScalar  sc[PFF_GRID_BLOCK_SIZE_MAX];
+    PffMGRowEnds e;
+    RowEnds(n, &e);
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt j = 0; j < n; j++) {
         const PetscInt     base = r0 + n * (j + n * k);
         const PffMGRowMask m    = RowMask(j, k, n);
-        yr[base]                = RowEnd(st, nr, base, 0, j, k, n, x, g);
-        for (PetscInt r = base + 1; r < base + n - 1; r++) {
-          const PetscScalar xc = x[r];
-          const PetscReal   c2 = m.mym * cy[r], c3 = m.myp * cy[r + m.syp], c4 = m.mzm * cz[r],
-                          c5 = m.mzp * cz[r + m.szp];
-          yr[r]              = cx[r] * (xc - x[r - 1]) + cx[r + 1] * (xc - x[r + 1]) + c2 * (xc - x[r - m.sym]) +
-                  c3 * (xc - x[r + m.syp]) + c4 * (xc - x[r - m.szm]) + c5 * (xc - x[r + m.szp]) + ds[r] * xc;
+        if (base == 0 || base + n == nr || n < 3) {
+          for (PetscInt i = 0; i < n; i++) yr[base + i] = RowEnd(st, nr, base + i, i, j, k, n, x, g);
+          continue;
         }
-        if (j == 0 || j == n - 1 || k == 0 || k == n - 1)
-          for (PetscInt r = base + 1; r < base + n - 1; r++) yr[r] += SideSum(st, nr, r, x, g);
-        if (n > 1) yr[base + n - 1] = RowEnd(st, nr, base + n - 1, n - 1, j, k, n, x, g);
+        RowSideSums(st, nr, base, n, (PetscBool)(j == 0 || j == n - 1 || k == 0 || k == n - 1), x, g, sc);
+        for (PetscInt i = 0; i < n; i++) {
+          const PetscInt    r  = base + i;
+          const PetscScalar xc = x[r];
+          const PetscReal   c0 = e.lo[i] * cx[r], c1 = e.hi[i] * cx[r + 1], c2 = m.mym * cy[r],
+                          c3 = m.myp * cy[r + m.syp], c4 = m.mzm * cz[r], c5 = m.mzp * cz[r + m.szp];
+          yr[r] = c0 * (xc - x[r - 1]) + c1 * (xc - x[r + 1]) + c2 * (xc - x[r - m.sym]) + c3 * (xc - x[r + m.syp]) +
+                  c4 * (xc - x[r - m.szm]) + c5 * (xc - x[r + m.szp]) + ds[r] * xc + sc[i];
+        }
       }
   }
   PetscCall(VecRestoreArrayWrite(yv, &y));
