@@ -221,8 +221,6 @@ static PetscErrorCode PffMGDestroy(PC pc)
   PetscFunctionBeginUser;
   PetscCall(PCShellGetContext(pc, &mg));
   if (mg == NULL) PetscFunctionReturn(PETSC_SUCCESS);
-    printf("MGSTATS apps %lld blockrelax %lld cellupdates %lld\n", (long long)mg->stats.applications,
-           (long long)mg->stats.blockRelaxations, (long long)mg->stats.cellUpdates);
   PetscCall(PffMGDestroyLevels_Private(mg));
   PetscCall(KSPDestroy(&mg->coarse));
   PetscCall(PetscFree(mg));
