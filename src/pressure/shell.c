@@ -385,6 +385,10 @@ PetscErrorCode PffPressureShellUpdate_Private(PffPressure ps, Mat S)
   PetscCall(VecRestoreArrayRead(ps->dirdiag, &dd));
   PetscCall(VecRestoreArray(s->diag, &d));
   s->updated = PETSC_TRUE;
+  /* new values: a PC built from this operator (the matrix-free pffmg) must set up again, and PETSc
+     decides that from the Mat's state, which a shell's new context does not change; the assembly does */
+  PetscCall(MatAssemblyBegin(S, MAT_FINAL_ASSEMBLY));
+  PetscCall(MatAssemblyEnd(S, MAT_FINAL_ASSEMBLY));
   PetscCall(MatSetNullSpace(S, ps->nullsp));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

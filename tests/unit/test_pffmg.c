@@ -261,6 +261,65 @@ static PetscErrorCode TestStencilMatchesAIJ(PetscBool graded)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* KSP its of FCG + the module's PC on b = A r (r random, fixed seed) from x = 0. */
+static PetscErrorCode SolveRandom(PffPressure ps, PetscInt *its)
+{
+  KSP         ksp;
+  Mat         A;
+  Vec         r, b, x;
+  PetscRandom rnd;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffPressureGetKSP(ps, &ksp));
+  PetscCall(KSPGetOperators(ksp, &A, NULL));
+  PetscCall(MatCreateVecs(A, &r, &b));
+  PetscCall(VecDuplicate(r, &x));
+  PetscCall(PetscRandomCreate(PETSC_COMM_WORLD, &rnd));
+  PetscCall(PetscRandomSetSeed(rnd, 5));
+  PetscCall(PetscRandomSeed(rnd));
+  PetscCall(VecSetRandom(r, rnd));
+  PetscCall(MatMult(A, r, b));
+  PetscCall(VecSet(x, 0.0));
+  PetscCall(KSPSolve(ksp, b, x));
+  PetscCall(KSPGetIterationNumber(ksp, its));
+  PetscCall(PetscRandomDestroy(&rnd));
+  PetscCall(VecDestroy(&r));
+  PetscCall(VecDestroy(&b));
+  PetscCall(VecDestroy(&x));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* New coefficients (a time step): pffmg sets up again. A module that solved with density ratio 1e3 and
+   then gets ratio 1e5 takes the iterations of a fresh module at 1e5, not those of a PC left at 1e3. */
+static PetscErrorCode TestNewCoefficients(void)
+{
+  PffTestCtx  t;
+  Bubbly      c;
+  PffPressure ps, fresh;
+  PetscInt    its0, its1, its2;
+
+  PetscFunctionBeginUser;
+  PetscCall(CreateCase(PETSC_COMM_WORLD, 32, 8, PETSC_TRUE, 1e3, &t, &c));
+  PetscCall(CreatePressure(&t, &c, 1e-8, &ps));
+  PetscCall(SolveRandom(ps, &its0));
+  c.ratio = 1e5;
+  PetscCall(PffGridFillChannel(t.grid, c.betaCh, BetaFn, &c));
+  PetscCall(PffPressureSetCoefficients(ps, c.betaCh, c.openCh));
+  PetscCall(SolveRandom(ps, &its1));
+  PetscCall(CreatePressure(&t, &c, 1e-8, &fresh));
+  PetscCall(SolveRandom(fresh, &its2));
+  PetscCheck(PetscAbs(its1 - its2) <= 1, PETSC_COMM_WORLD, PETSC_ERR_PLIB,
+             "new coefficients: %" PetscInt_FMT " iterations, a fresh module %" PetscInt_FMT, its1, its2);
+  PetscCall(PetscPrintf(PETSC_COMM_WORLD,
+                        "new coefficients: ratio 1e3 (%" PetscInt_FMT " its) then 1e5: %" PetscInt_FMT
+                        " iterations, a fresh module %" PetscInt_FMT "\n",
+                        its0, its1, its2));
+  PetscCall(PffPressureDestroy(&ps));
+  PetscCall(PffPressureDestroy(&fresh));
+  PetscCall(PffGridDestroy(&t.grid));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /* e^T A e of a random e falls under fixed sweeps and under adaptive relaxation on every level but the coarsest. */
 static PetscErrorCode TestSmoother(PetscBool graded)
 {
@@ -412,6 +471,7 @@ int main(int argc, char **argv)
   PetscCall(TestSolve(PETSC_TRUE, PETSC_FALSE));
   PetscCall(TestSolve(PETSC_TRUE, PETSC_TRUE));
   PetscCall(TestAdaptive());
+  PetscCall(TestNewCoefficients());
   PetscCall(PetscFinalize());
   return 0;
 }
