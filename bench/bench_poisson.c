@@ -36,7 +36,11 @@
    iteration), and for pffmg
      SWEEP pc=pffmg n=<N> level=0 ns_per_cell=<t> bytes_per_cell=44 copy_GBs=<bw> bound_ns_per_cell=<t> ratio=<r>
    (one fixed red-black sweep of the finest level against its memory traffic at the streaming copy
-   bandwidth measured in the same run), with setup_s = KSPSetUp + KSPSetUpOnBlocks, solve_s = KSPSolve
+   bandwidth measured in the same run) and
+     ITERATION pc=pffmg n=<N> cell_updates=<u> per_finest_cell=<u/cells> iteration_s=<s> bound_s=<s> ratio=<r>
+   (the smoother's cell updates, all levels, per FCG iteration of the last solve, and the time of an iteration
+   against u x 44 B at the copy bandwidth of all ranks; a lower bound, without residuals, transfers and Krylov
+   vectors), with setup_s = KSPSetUp + KSPSetUpOnBlocks, solve_s = KSPSolve
    (PffPressureStats, timed with PetscTime inside the PressSolve log event; -log_view shows one stage per grid), relres
    =
    ||b - A p|| / ||b|| recomputed here from the module's operator, b and p. With -bench_repeat R (default 1)
@@ -251,8 +255,9 @@ static PetscErrorCode CopyBandwidth(MPI_Comm comm, PetscReal *gbs)
    its memory traffic takes at the copy bandwidth. A sweep reads b (8 B), cf (12 B), ds (8 B) and
    reads and writes x (16 B) per cell: 44 B. */
 #define BENCH_SWEEP_BYTES 44.0
-static PetscErrorCode SweepRate(MPI_Comm comm, PffPressure ps, KSP ksp, PetscInt N)
+static PetscErrorCode SweepRate(MPI_Comm comm, PffPressure ps, KSP ksp, PetscInt N, const PffPressureStats *pst)
 {
+  PffMGStats     mst;
   Mat            A;
   Vec            x, b;
   PetscRandom    rnd;
@@ -262,6 +267,7 @@ static PetscErrorCode SweepRate(MPI_Comm comm, PffPressure ps, KSP ksp, PetscInt
   const PetscInt sweeps = 10;
 
   PetscFunctionBeginUser;
+  PetscCall(PffPressureMGGetStats(ps, &mst)); /* of the last solve, before the sweeps below add theirs */
   PetscCall(KSPGetOperators(ksp, &A, NULL));
   PetscCall(MatCreateVecs(A, &x, &b));
   PetscCall(VecGetLocalSize(x, &nloc));
@@ -287,6 +293,19 @@ static PetscErrorCode SweepRate(MPI_Comm comm, PffPressure ps, KSP ksp, PetscInt
                           " level=0 ns_per_cell=%.2f bytes_per_cell=%.0f copy_GBs=%.1f "
                           "bound_ns_per_cell=%.2f ratio=%.2f\n",
                           N, (double)ns, BENCH_SWEEP_BYTES, (double)gbs, (double)bound, (double)(ns / bound)));
+  }
+  if (pst->its > 0) {
+    /* an iteration against the time its smoothing traffic takes at the copy bandwidth of all ranks: the
+       cell updates of all levels x 44 B (a lower bound: residuals, transfers and Krylov vectors omitted) */
+    PetscMPIInt size;
+    PetscCallMPI(MPI_Comm_size(comm, &size));
+    const PetscReal upd = (PetscReal)mst.cellUpdates / pst->its, it = pst->solveTime / pst->its;
+    const PetscReal bnd = upd * BENCH_SWEEP_BYTES / (gbs * 1e9 * size);
+    PetscCall(PetscPrintf(
+        comm,
+        "ITERATION pc=pffmg n=%" PetscInt_FMT " cell_updates=%.3g per_finest_cell=%.2f iteration_s=%.4f "
+        "bound_s=%.4f ratio=%.2f\n",
+        N, (double)upd, (double)(upd / ((PetscReal)nloc * size)), (double)it, (double)bnd, (double)(it / bnd)));
   }
   PetscCall(PetscRandomDestroy(&rnd));
   PetscCall(VecDestroy(&x));
@@ -357,7 +376,9 @@ static PetscErrorCode BenchGrid(MPI_Comm comm, const BenchOptions *o, PetscInt N
     /* repeat as a time step would: new coefficients (numeric set-up) and a solve from p = 0; the
        first set-up also holds the one-time symbolic work, so the minimum over repeats is reported */
     PetscLogDouble setupFirst = 0, setupMin = PETSC_MAX_REAL, solveMin = PETSC_MAX_REAL;
+    PetscCall(PetscStrcmp(o->pcs[k], "pffmg", &ispffmg));
     for (PetscInt rep = 0; rep < o->repeat; rep++) {
+      if (ispffmg && rep > 0 && rep == o->repeat - 1) PetscCall(PffPressureMGResetStats(ps)); /* count one solve */
       PetscCall(FillProblem(grid, o, betaCh, uCh)); /* the projection overwrote u */
       PetscCall(PffGridFillChannel(grid, pCh, Zero, NULL));
       PetscCall(PffPressureSetCoefficients(ps, betaCh, -1));
@@ -409,8 +430,7 @@ static PetscErrorCode BenchGrid(MPI_Comm comm, const BenchOptions *o, PetscInt N
           "iteration_s=%.4f\n",
           o->pcs[k], GridNames[g], N, m[0] / 1048576.0, m[1], (double)(st.its > 0 ? st.solveTime / st.its : 0)));
     }
-    PetscCall(PetscStrcmp(o->pcs[k], "pffmg", &ispffmg));
-    if (ispffmg) PetscCall(SweepRate(comm, ps, ksp, N));
+    if (ispffmg) PetscCall(SweepRate(comm, ps, ksp, N, &st));
     if (st.reason <= 0 || !(relres <= BENCH_RTOL_SLACK * o->rtol)) {
       PetscCall(PetscPrintf(comm, "# FAILED pc=%s grid=%s n=%" PetscInt_FMT ": %s, relres %.2e > %.2e\n", o->pcs[k],
                             GridNames[g], N, KSPConvergedReasons[st.reason], (double)relres,
