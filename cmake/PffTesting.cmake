@@ -2,7 +2,9 @@
 #                  [THREADS <t>])
 # Registers <name>_np<n> for every rank count, launched through MPIEXEC with the
 # flags that let Open MPI run as root and oversubscribe the two-core machine. THREADS > 1 sets
-# OMP_NUM_THREADS and names the tests <name>_np<n>_omp<t>.
+# OMP_NUM_THREADS and names the tests <name>_np<n>_omp<t>. The tests run more threads than the machine has
+# cores (ranks x threads > 2): OMP_WAIT_POLICY=passive keeps threads that wait at a barrier from spinning on
+# the core that the thread they wait for needs (pffmg's many small parallel regions were 100x slower).
 function(pff_add_mpi_test name)
   cmake_parse_arguments(T "WILL_FAIL" "REGEX;FAIL_REGEX;TIMEOUT;THREADS" "COMMAND;RANKS;LABELS" ${ARGN})
   if(NOT T_THREADS)
@@ -24,7 +26,7 @@ function(pff_add_mpi_test name)
              COMMAND ${MPIEXEC_EXECUTABLE} ${MPIEXEC_NUMPROC_FLAG} ${np} ${PFF_MPIEXEC_FLAGS} ${T_COMMAND}
              WORKING_DIRECTORY ${CMAKE_CURRENT_BINARY_DIR})
     set_tests_properties(${tname} PROPERTIES
-      ENVIRONMENT "OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1;OMP_NUM_THREADS=${T_THREADS};OMPI_MCA_rmaps_base_oversubscribe=1;ASAN_OPTIONS=detect_leaks=0"
+      ENVIRONMENT "OMPI_ALLOW_RUN_AS_ROOT=1;OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1;OMP_NUM_THREADS=${T_THREADS};OMP_WAIT_POLICY=passive;OMPI_MCA_rmaps_base_oversubscribe=1;ASAN_OPTIONS=detect_leaks=0"
       PROCESSORS ${procs} TIMEOUT ${T_TIMEOUT} LABELS "${T_LABELS};np${np}")
     if(T_REGEX)
       set_tests_properties(${tname} PROPERTIES PASS_REGULAR_EXPRESSION "${T_REGEX}")

@@ -111,17 +111,20 @@ typedef struct {
   PetscBool    built;     /* hierarchy structure exists (coefficients are refreshed each set-up) */
   PetscBool    optionsRead;
   /* per-block scratch for adaptive relaxation */
-  PetscInt      *nbr;     /* [6 nlocal] local face neighbour (or -1: none, wall, or remote -2 - gid) */
-  PetscInt       nraster; /* blocks in the raster */
-  unsigned char *flags;   /* [nraster] global activation requests (replicated) */
-  PetscReal     *bres;    /* [nlocal] per-block effective residual */
-  PetscReal     *face;    /* [6 nlocal] per-face border effective residual */
-  PetscInt      *list;    /* [nlocal] active blocks */
-  PetscInt      *gid;     /* [nlocal] raster index of each owned block */
-  unsigned char *next;    /* [nlocal] blocks active in the next adaptive step */
-  PetscReal     *r0;      /* [nlocal] first-sweep maxima of the active blocks (theta) */
-  PetscReal     *R;       /* [n0^3] effective residual per cell of the block being relaxed */
-  unsigned char *colour;  /* [nlocal] block colour (x_b + y_b + z_b) mod 2 */
+  PetscInt      *nbr;               /* [6 nlocal] local face neighbour (or -1: none, wall, or remote -2 - gid) */
+  PetscInt       nraster;           /* blocks in the raster */
+  PetscInt      *actLeafOf;         /* [6 nlocal] SF leaf of each face with an off-rank neighbour, or -1 */
+  PetscInt      *actLeaf, *actRoot; /* activation requests sent (per leaf) and received (per owned block) */
+  PetscSF        actSF;             /* leaves -> the neighbour blocks on their owners (BuildActivationSF) */
+  PetscReal     *bres;              /* [nlocal] per-block effective residual */
+  PetscReal     *face;              /* [6 nlocal] per-face border effective residual */
+  PetscInt      *list;              /* [nlocal] active blocks */
+  PetscInt      *gid;               /* [nlocal] raster index of each owned block */
+  unsigned char *next;              /* [nlocal] blocks active in the next adaptive step */
+  PetscReal     *r0;                /* [nlocal] first-sweep maxima of the active blocks (theta) */
+  PetscReal     *R;                 /* [Rsize * threads] effective residual per cell of the block each thread relaxes */
+  size_t         Rsize;             /* n0^3 */
+  unsigned char *colour;            /* [nlocal] block colour (x_b + y_b + z_b) mod 2 */
   PffMGStats     stats;
 } PffMG;
 

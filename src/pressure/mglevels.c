@@ -15,6 +15,8 @@
    rows split into red and black cells, the relevant blocks per block colour, and CSR views of the
    local and off-rank parts of A_L with a ghost scatter for the off-rank columns. */
 #include "mgimpl.h"
+#include <omp.h>
+#include <petscsf.h>
 
 static PetscInt ResolutionAt(PetscInt l, PetscInt L)
 {
@@ -395,6 +397,41 @@ static PetscErrorCode RescaleCoarse(PffMG *mg, PetscInt L)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Activation requests of adaptive relaxation to blocks on other ranks: one SF leaf per (owned block, face)
+   with an off-rank neighbour, rooted at that block on its owner, reduced with MPI_MAX; only neighbouring
+   ranks talk. The owner's local index of a block is its position among the owner's blocks in Morton
+   order, which the replicated raster gives without communication. */
+static PetscErrorCode BuildActivationSF(PffMG *mg, const PetscInt nb[3], const PetscMPIInt *owner)
+{
+  PetscInt        nactive, nleaf = 0, *lidx;
+  const PetscInt *gids;
+  PetscMPIInt     size;
+  PetscInt       *count;
+  PetscSFNode    *remote;
+
+  PetscFunctionBeginUser;
+  PetscCallMPI(MPI_Comm_size(mg->comm, &size));
+  PetscCall(PffGridGetMortonOrder(mg->grid, &nactive, &gids));
+  PetscCall(PetscMalloc1(nb[0] * nb[1] * nb[2], &lidx));
+  PetscCall(PetscCalloc1(size, &count));
+  for (PetscInt q = 0; q < nactive; q++) lidx[gids[q]] = count[owner[gids[q]]]++;
+  for (PetscInt e = 0; e < 6 * mg->nlocal; e++) mg->actLeafOf[e] = mg->nbr[e] <= -2 ? nleaf++ : -1;
+  PetscCall(PetscMalloc1(nleaf, &remote));
+  for (PetscInt e = 0; e < 6 * mg->nlocal; e++)
+    if (mg->nbr[e] <= -2) {
+      const PetscInt g               = -2 - mg->nbr[e];
+      remote[mg->actLeafOf[e]].rank  = owner[g];
+      remote[mg->actLeafOf[e]].index = lidx[g];
+    }
+  PetscCall(PetscSFCreate(mg->comm, &mg->actSF));
+  PetscCall(PetscSFSetGraph(mg->actSF, mg->nlocal, nleaf, NULL, PETSC_COPY_VALUES, remote, PETSC_OWN_POINTER));
+  PetscCall(PetscSFSetUp(mg->actSF));
+  PetscCall(PetscCalloc2(nleaf, &mg->actLeaf, mg->nlocal, &mg->actRoot));
+  PetscCall(PetscFree(count));
+  PetscCall(PetscFree(lidx));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
 {
   PetscInt           n0, nb[3], nblockLevels = 1, nmax;
@@ -410,11 +447,11 @@ PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
 
   /* per owned block: raster index, colour, face neighbours (local index, or -2 - gid on another rank),
      and the scratch of adaptive relaxation */
-  PetscCall(PetscMalloc5(6 * mg->nlocal, &mg->nbr, mg->nraster, &mg->flags, mg->nlocal, &mg->bres, 6 * mg->nlocal,
-                         &mg->face, mg->nlocal, &mg->list));
+  PetscCall(PetscMalloc5(6 * mg->nlocal, &mg->nbr, 6 * mg->nlocal, &mg->actLeafOf, mg->nlocal, &mg->bres,
+                         6 * mg->nlocal, &mg->face, mg->nlocal, &mg->list));
+  mg->Rsize = (size_t)n0 * n0 * n0;
   PetscCall(PetscMalloc5(mg->nlocal, &mg->gid, mg->nlocal, &mg->colour, mg->nlocal, &mg->next, mg->nlocal, &mg->r0,
-                         n0 * n0 * n0, &mg->R));
-  PetscCall(PetscArrayzero(mg->flags, mg->nraster));
+                         mg->Rsize * (size_t)omp_get_max_threads(), &mg->R));
   for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(mg->grid, lb, &info));
@@ -430,6 +467,7 @@ PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
       mg->nbr[6 * lb + f] = l;
     }
   }
+  PetscCall(BuildActivationSF(mg, nb, owner));
 
   while ((n0 >> (nblockLevels - 1)) > 1 && nblockLevels < mg->opt.maxLevels) nblockLevels++;
   nmax = mg->opt.maxLevels;
@@ -589,7 +627,9 @@ PetscErrorCode PffMGDestroyLevels_Private(PffMG *mg)
   PetscCall(MatDestroy(&mg->Apinned));
   PetscCall(MatNullSpaceDestroy(&mg->constants));
   if (mg->built) {
-    PetscCall(PetscFree5(mg->nbr, mg->flags, mg->bres, mg->face, mg->list));
+    PetscCall(PetscFree5(mg->nbr, mg->actLeafOf, mg->bres, mg->face, mg->list));
+    PetscCall(PetscFree2(mg->actLeaf, mg->actRoot));
+    PetscCall(PetscSFDestroy(&mg->actSF));
     PetscCall(PetscFree5(mg->gid, mg->colour, mg->next, mg->r0, mg->R));
   }
   mg->nlevels = 0;

@@ -10,11 +10,15 @@
    level; an active block is relaxed repeatedly until its largest update falls by 1/3 (or k_max
    sweeps), and stays active when its effective residual -- the largest |delta| a_jj of its cells,
    which equalises the air and water phases -- exceeds theta; a face neighbour joins when the
-   effective residual on the shared border exceeds theta (across ranks too). theta is the mean plus
+   effective residual on the shared border exceeds theta (across ranks too, through a PetscSF between
+   neighbouring ranks). theta is the mean plus
    two standard deviations of log10 of the per-block maxima of the initial effective residual, the
    omega |b_j - A_j x| each block sees in its first sweep. The loop ends after a fixed number of steps; the result is
-   not a symmetric operator, which is why the Krylov method is flexible CG. */
+   not a symmetric operator, which is why the Krylov method is flexible CG. The blocks of one colour are
+   relaxed by the OpenMP threads in parallel, in fixed sweeps and in adaptive relaxation. */
 #include "mgimpl.h"
+#include <omp.h>
+#include <petscsf.h>
 
 const char *const PffMGSmootherTypes[] = {"rbgs", "jacobi", "PffMGSmootherType", "PFF_MG_SMOOTHER_", NULL};
 
@@ -174,9 +178,9 @@ static PetscErrorCode Threshold(PffMG *mg, const PetscReal *r0, PetscInt n, Pets
 
 /* One adaptive step over the active list, one block colour at a time: relax each block (repeated
    block-local sweeps), keep its final effective residual in bres and its border maxima in face;
-   r0 (or NULL) receives the first sweep's maximum per list entry. */
-static PetscErrorCode RelaxActive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, PetscInt nactive, PetscReal *r0,
-                                  PetscReal *R)
+   r0 (or NULL) receives the first sweep's maximum per list entry. The blocks of one colour share no
+   face, so they are relaxed in parallel, each thread with its own scratch R (n0^3 per thread). */
+static PetscErrorCode RelaxActive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, PetscInt nactive, PetscReal *r0)
 {
   PetscFunctionBeginUser;
   for (PetscInt c = 0; c < 2; c++) {
@@ -186,10 +190,13 @@ static PetscErrorCode RelaxActive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, Petsc
     PetscCall(VecGetArray(x, &xa));
     PetscCall(VecGetArrayRead(b, &ba));
     for (PetscInt pass = 0; pass < 2; pass++) {
+      PetscInt64 relax = 0, cells = 0;
       if (pass == 1) PetscCall(GhostsEnd(lv, x, &ga));
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : relax, cells) if (nactive >= 8)
       for (PetscInt q = 0; q < nactive; q++) {
         const PetscInt lb = mg->list[q];
         if (mg->colour[lb] != c || lv->remote[lb] != pass) continue;
+        PetscReal      *R     = mg->R + mg->Rsize * (size_t)omp_get_thread_num();
         const PetscReal first = RelaxBlock(lv, lb, ba, xa, ga, mg->opt.omega, R);
         PetscReal       r     = first;
         PetscInt        k     = 1;
@@ -200,9 +207,11 @@ static PetscErrorCode RelaxActive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, Petsc
         if (r0) r0[q] = first;
         mg->bres[lb] = r;
         for (PetscInt f = 0; f < 6; f++) mg->face[6 * lb + f] = r > 0 ? FaceMax(R, lv->n[lb], f) : 0.0;
-        mg->stats.blockRelaxations += k;
-        mg->stats.cellUpdates += (PetscInt64)k * (lv->start[lb + 1] - lv->start[lb]);
+        relax += k;
+        cells += (PetscInt64)k * (lv->start[lb + 1] - lv->start[lb]);
       }
+      mg->stats.blockRelaxations += relax;
+      mg->stats.cellUpdates += cells;
     }
     if (ga) PetscCall(VecRestoreArrayRead(lv->ghost, &ga));
     PetscCall(VecRestoreArrayRead(b, &ba));
@@ -213,7 +222,7 @@ static PetscErrorCode RelaxActive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, Petsc
 
 static PetscErrorCode SmoothAdaptive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x)
 {
-  PetscReal      theta = 0, *R = mg->R, *r0 = mg->r0;
+  PetscReal      theta = 0, *r0 = mg->r0;
   PetscMPIInt    size;
   unsigned char *next = mg->next;
 
@@ -229,7 +238,7 @@ static PetscErrorCode SmoothAdaptive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x)
     PetscCall(PetscArrayzero(next, mg->nlocal));
     PetscCallMPI(MPI_Allreduce(&nactive, &nglobal, 1, MPIU_INT, MPI_SUM, mg->comm));
     if (nglobal == 0) break;
-    PetscCall(RelaxActive(mg, lv, b, x, nactive, it == 0 ? r0 : NULL, R));
+    PetscCall(RelaxActive(mg, lv, b, x, nactive, it == 0 ? r0 : NULL));
     if (it == 0) PetscCall(Threshold(mg, r0, nactive, &theta));
     for (PetscInt q = 0; q < nactive; q++) {
       const PetscInt lb = mg->list[q];
@@ -241,15 +250,18 @@ static PetscErrorCode SmoothAdaptive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x)
         if (nb >= 0) {
           if (lv->relevant[nb]) next[nb] = 1;
         } else
-          mg->flags[-2 - nb] = 1; /* another rank's block: reduced below */
+          mg->actLeaf[mg->actLeafOf[6 * lb + f]] = 1; /* another rank's block: sent below */
       }
     }
-    if (size > 1) {
-      PetscCallMPI(
-          MPI_Allreduce(MPI_IN_PLACE, mg->flags, (PetscMPIInt)mg->nraster, MPI_UNSIGNED_CHAR, MPI_MAX, mg->comm));
+    if (size > 1) { /* requests go to the neighbouring ranks only */
+      PetscInt nleaf;
+      PetscCall(PetscSFGetGraph(mg->actSF, NULL, &nleaf, NULL, NULL));
+      PetscCall(PetscArrayzero(mg->actRoot, mg->nlocal));
+      PetscCall(PetscSFReduceBegin(mg->actSF, MPIU_INT, mg->actLeaf, mg->actRoot, MPI_MAX));
+      PetscCall(PetscSFReduceEnd(mg->actSF, MPIU_INT, mg->actLeaf, mg->actRoot, MPI_MAX));
       for (PetscInt lb = 0; lb < mg->nlocal; lb++)
-        if (mg->flags[mg->gid[lb]] && lv->relevant[lb]) next[lb] = 1;
-      PetscCall(PetscArrayzero(mg->flags, mg->nraster));
+        if (mg->actRoot[lb] && lv->relevant[lb]) next[lb] = 1;
+      PetscCall(PetscArrayzero(mg->actLeaf, nleaf));
     }
     mg->stats.adaptiveSteps++;
   }

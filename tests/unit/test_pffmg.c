@@ -183,6 +183,34 @@ static PetscErrorCode TestGalerkin(PetscBool graded, PetscBool belowRaster)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* KSP its of FCG + the module's PC on b = A r (r random, fixed seed) from x = 0. */
+static PetscErrorCode SolveRandom(PffPressure ps, PetscInt *its)
+{
+  KSP         ksp;
+  Mat         A;
+  Vec         r, b, x;
+  PetscRandom rnd;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffPressureGetKSP(ps, &ksp));
+  PetscCall(KSPGetOperators(ksp, &A, NULL));
+  PetscCall(MatCreateVecs(A, &r, &b));
+  PetscCall(VecDuplicate(r, &x));
+  PetscCall(PetscRandomCreate(PETSC_COMM_WORLD, &rnd));
+  PetscCall(PetscRandomSetSeed(rnd, 5));
+  PetscCall(PetscRandomSeed(rnd));
+  PetscCall(VecSetRandom(r, rnd));
+  PetscCall(MatMult(A, r, b));
+  PetscCall(VecSet(x, 0.0));
+  PetscCall(KSPSolve(ksp, b, x));
+  PetscCall(KSPGetIterationNumber(ksp, its));
+  PetscCall(PetscRandomDestroy(&rnd));
+  PetscCall(VecDestroy(&r));
+  PetscCall(VecDestroy(&b));
+  PetscCall(VecDestroy(&x));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /* The matrix-free levels (face coefficients, Algorithm 1 without products) equal the AIJ Galerkin
    products of -pressure_pffmg_operator aij, rescaled and plain, on every level, up to their float storage;
    FCG + pffmg takes the same iterations within 1 with either. */
@@ -201,29 +229,10 @@ static PetscErrorCode TestStencilMatchesAIJ(PetscBool graded)
     PetscInt    its[2];
     PetscCall(PetscOptionsSetValue(NULL, "-pressure_pffmg_rescale", rescale ? "1" : "0"));
     for (PetscInt m = 0; m < 2; m++) { /* the same consistent system b = A r, r random, from x = 0 */
-      KSP         ksp;
-      Mat         A;
-      Vec         r, b, x;
-      PetscRandom rnd;
       PetscCall(PetscOptionsSetValue(NULL, "-pressure_pffmg_operator", m == 0 ? "stencil" : "aij"));
       PetscCall(CreatePressure(&t, &c, 1e-8, &ps[m]));
       PetscCall(PffPressureMGGetStats(ps[m], &st[m]));
-      PetscCall(PffPressureGetKSP(ps[m], &ksp));
-      PetscCall(PffPressureGetOperator(ps[m], &A));
-      PetscCall(MatCreateVecs(A, &r, &b));
-      PetscCall(VecDuplicate(r, &x));
-      PetscCall(PetscRandomCreate(PETSC_COMM_WORLD, &rnd));
-      PetscCall(PetscRandomSetSeed(rnd, 11));
-      PetscCall(PetscRandomSeed(rnd));
-      PetscCall(VecSetRandom(r, rnd));
-      PetscCall(MatMult(A, r, b));
-      PetscCall(VecSet(x, 0.0));
-      PetscCall(KSPSolve(ksp, b, x));
-      PetscCall(KSPGetIterationNumber(ksp, &its[m]));
-      PetscCall(PetscRandomDestroy(&rnd));
-      PetscCall(VecDestroy(&r));
-      PetscCall(VecDestroy(&b));
-      PetscCall(VecDestroy(&x));
+      PetscCall(SolveRandom(ps[m], &its[m]));
     }
     PetscCheck(st[0].levels == st[1].levels, PETSC_COMM_WORLD, PETSC_ERR_PLIB,
                "stencil: %" PetscInt_FMT " levels, aij %" PetscInt_FMT, st[0].levels, st[1].levels);
@@ -258,34 +267,6 @@ static PetscErrorCode TestStencilMatchesAIJ(PetscBool graded)
   PetscCall(PetscOptionsClearValue(NULL, "-pressure_pffmg_rescale"));
   PetscCall(PetscOptionsClearValue(NULL, "-pressure_pffmg_coarse_max"));
   PetscCall(PffGridDestroy(&t.grid));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-/* KSP its of FCG + the module's PC on b = A r (r random, fixed seed) from x = 0. */
-static PetscErrorCode SolveRandom(PffPressure ps, PetscInt *its)
-{
-  KSP         ksp;
-  Mat         A;
-  Vec         r, b, x;
-  PetscRandom rnd;
-
-  PetscFunctionBeginUser;
-  PetscCall(PffPressureGetKSP(ps, &ksp));
-  PetscCall(KSPGetOperators(ksp, &A, NULL));
-  PetscCall(MatCreateVecs(A, &r, &b));
-  PetscCall(VecDuplicate(r, &x));
-  PetscCall(PetscRandomCreate(PETSC_COMM_WORLD, &rnd));
-  PetscCall(PetscRandomSetSeed(rnd, 5));
-  PetscCall(PetscRandomSeed(rnd));
-  PetscCall(VecSetRandom(r, rnd));
-  PetscCall(MatMult(A, r, b));
-  PetscCall(VecSet(x, 0.0));
-  PetscCall(KSPSolve(ksp, b, x));
-  PetscCall(KSPGetIterationNumber(ksp, its));
-  PetscCall(PetscRandomDestroy(&rnd));
-  PetscCall(VecDestroy(&r));
-  PetscCall(VecDestroy(&b));
-  PetscCall(VecDestroy(&x));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
