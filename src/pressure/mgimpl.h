@@ -14,6 +14,10 @@ PETSC_INTERN const char *const PffMGSmootherTypes[];
 typedef enum { PFF_MG_OPERATOR_STENCIL, PFF_MG_OPERATOR_AIJ } PffMGOperatorType;
 PETSC_INTERN const char *const PffMGOperatorTypes[];
 
+/* Fewest rows on a level (per rank) for its smoothing and products to fork threads: below, a parallel region
+   costs more than the work it shares (the coarse levels of the K-cycle are visited 2^L times). */
+#define PFF_MG_OMP_MIN_ROWS 32768
+
 /* Storage precision of the matrix-free coefficients (the solve vectors stay double). */
 typedef float PffMGReal;
 #define MPIU_PFFMGREAL MPI_FLOAT
