@@ -29,6 +29,7 @@
 #define PFF_MG_KCYCLE_DEFAULT 2
 #define PFF_MG_COARSE_MAX_DEFAULT 4096
 #define PFF_MG_OPERATOR_DEFAULT PFF_MG_OPERATOR_STENCIL
+#define PFF_MG_OMP_MIN_ROWS_DEFAULT 32768
 
 static PetscErrorCode PffMGGetContext(PC pc, PffMG **mg)
 {
@@ -253,6 +254,7 @@ static PetscErrorCode PCCreate_PffMG(PC pc)
   mg->opt.kcycleIts      = PFF_MG_KCYCLE_DEFAULT;
   mg->opt.coarseMax      = PFF_MG_COARSE_MAX_DEFAULT;
   mg->opt.operatorType   = PFF_MG_OPERATOR_DEFAULT;
+  mg->opt.ompMinRows     = PFF_MG_OMP_MIN_ROWS_DEFAULT;
   PetscCall(KSPCreate(mg->comm, &mg->coarse));
   PetscCall(PCGetOptionsPrefix(pc, &prefix));
   PetscCall(KSPSetOptionsPrefix(mg->coarse, prefix));
@@ -353,6 +355,9 @@ PetscErrorCode PffPressureMGSetFromOptions_Private(PC pc)
   PetscCall(PffOptionsBoundedInt("-pffmg_coarse_max",
                                  "Uniform coarse levels below the block raster until at most this many cells",
                                  "PffPressureMG", mg->opt.coarseMax, &mg->opt.coarseMax, NULL, 1));
+  PetscCall(PffOptionsBoundedInt("-pffmg_omp_min_rows",
+                                 "Fewest rows per rank on a level for its smoothing and products to use OpenMP threads",
+                                 "PffPressureMG", mg->opt.ompMinRows, &mg->opt.ompMinRows, NULL, 0));
   PetscOptionsEnd();
   PetscCheck(mg->opt.omega > 0 && mg->opt.omega < 2, mg->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-pressure_pffmg_omega %g is invalid: must lie in (0, 2)", (double)mg->opt.omega);

@@ -14,10 +14,6 @@ PETSC_INTERN const char *const PffMGSmootherTypes[];
 typedef enum { PFF_MG_OPERATOR_STENCIL, PFF_MG_OPERATOR_AIJ } PffMGOperatorType;
 PETSC_INTERN const char *const PffMGOperatorTypes[];
 
-/* Fewest rows on a level (per rank) for its smoothing and products to fork threads: below, a parallel region
-   costs more than the work it shares (the coarse levels of the K-cycle are visited 2^L times). */
-#define PFF_MG_OMP_MIN_ROWS 32768
-
 /* Storage precision of the matrix-free coefficients (the solve vectors stay double). */
 typedef float PffMGReal;
 #define MPIU_PFFMGREAL MPI_FLOAT
@@ -63,6 +59,7 @@ typedef struct {
   PetscReal         correction; /* coarse-grid correction scale */
   PetscInt          kcycleIts;  /* flexible-CG steps per coarse correction, 0: V-cycle */
   PetscBool         rescale;    /* rediscretisation-consistent coarse coefficients (mglevels.c) */
+  PetscInt          ompMinRows; /* fewest rows per rank for a level's smoothing and products to fork threads */
 } PffMGOptions;
 
 /* One multigrid level. Rows are the owned cells: owned blocks in local (Morton) order, cells x
@@ -76,6 +73,7 @@ typedef struct {
                                    pressure module's, referenced */
   PffMGStencil  *st;            /* face coefficients (every block level with stencil operators) */
   PetscBool      mf;            /* relaxed and applied matrix-free (every block level but the last) */
+  PetscBool      omp;           /* enough rows for OpenMP (nrows >= ompMinRows) */
   Mat            P;             /* prolongation from level L+1 (piecewise constant), NULL on the coarsest */
   KSP            kcycle;        /* K-cycle solver of this level's correction, or NULL */
   Vec            x, b, r;       /* work (x, b unused on level 0, which works on the PC's vectors) */

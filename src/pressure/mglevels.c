@@ -504,6 +504,8 @@ PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
     }
   for (PetscInt L = 0; L < mg->nlevels; L++) {
     PffMGLevel *lv = &mg->lev[L];
+    /* a parallel region on a small level (the K-cycle visits level L 2^L times) costs more than it shares */
+    lv->omp = (PetscBool)(lv->nrows >= mg->opt.ompMinRows);
     PetscCall(PetscMalloc1(lv->nblk, &lv->remote));
     for (PetscInt q = 0; q < lv->nblk; q++) {
       lv->remote[q] = lv->uniform; /* coarse cells of uniform levels: no neighbour list, always after the exchange */

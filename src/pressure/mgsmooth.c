@@ -134,7 +134,7 @@ PetscErrorCode PffMGSmoothFixed_Private(PffMG *mg, PetscInt L, Vec b, Vec x, Pet
       PetscCall(VecGetArrayRead(b, &ba));
       for (PetscInt pass = 0; pass < 2; pass++) {
         if (pass == 1) PetscCall(GhostsEnd(lv, x, &ga));
-#pragma omp parallel for reduction(+ : cells) schedule(dynamic, 1) if (q1 - q0 >= 8 && lv->nrows >= PFF_MG_OMP_MIN_ROWS)
+#pragma omp parallel for reduction(+ : cells) schedule(dynamic, 1) if (q1 - q0 >= 8 && lv->omp)
         for (PetscInt q = q0; q < q1; q++) {
           const PetscInt lb = lv->colourList[q];
           if (lv->remote[lb] != pass) continue;
@@ -192,7 +192,7 @@ static PetscErrorCode RelaxActive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, Petsc
     for (PetscInt pass = 0; pass < 2; pass++) {
       PetscInt64 relax = 0, cells = 0;
       if (pass == 1) PetscCall(GhostsEnd(lv, x, &ga));
-#pragma omp parallel for schedule(dynamic, 1) reduction(+ : relax, cells) if (nactive >= 8 && lv->nrows >= PFF_MG_OMP_MIN_ROWS)
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : relax, cells) if (nactive >= 8 && lv->omp)
       for (PetscInt q = 0; q < nactive; q++) {
         const PetscInt lb = mg->list[q];
         if (mg->colour[lb] != c || lv->remote[lb] != pass) continue;

@@ -711,7 +711,7 @@ static PetscErrorCode StencilMult(Mat A, Vec xv, Vec yv)
   }
   PetscCall(VecGetArrayRead(xv, &x));
   PetscCall(VecGetArrayWrite(yv, &y));
-#pragma omp parallel for schedule(static) if (lv->nblk >= 8 && lv->nrows >= PFF_MG_OMP_MIN_ROWS)
+#pragma omp parallel for schedule(static) if (lv->nblk >= 8 && lv->omp)
   for (PetscInt lb = 0; lb < lv->nblk; lb++) {
     const PetscInt nr = lv->nrows, n = lv->n[lb], r0 = lv->start[lb];
     const PffMGReal *restrict cx = st->cf, *restrict cy = cx + nr, *restrict cz = cy + nr;

@@ -6,7 +6,7 @@ pff_add_unit(test_pressure RANKS 1 2 4)
 # adaptive relaxation cheaper than fixed sweeps for a localised residual, matrix-free levels equal to the
 # AIJ Galerkin levels. At 1, 2 and 4 ranks, and with 2 threads.
 pff_add_unit(test_pffmg RANKS 1 2 4)
-pff_add_unit(test_pffmg RANKS 2 THREADS 2)
+pff_add_unit(test_pffmg RANKS 2 THREADS 2 ARGS -pressure_pffmg_omp_min_rows 0) # threads on every level of the small grids
 # pressure with Dirichlet walls: symmetric, definite (no null space), exact for p = distance to the wall on
 # uniform and graded grids, CG on a nonzero-mean rhs, partition independence, bad input. At 1, 2 and 4 ranks.
 pff_add_unit(test_pressure_dirichlet RANKS 1 2 4)
