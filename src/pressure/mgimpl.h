@@ -118,6 +118,7 @@ typedef struct {
   PetscInt      *actLeafOf;         /* [6 nlocal] SF leaf of each face with an off-rank neighbour, or -1 */
   PetscInt      *actLeaf, *actRoot; /* activation requests sent (per leaf) and received (per owned block) */
   PetscSF        actSF;             /* leaves -> the neighbour blocks on their owners (BuildActivationSF) */
+  PetscInt       nactLeaf;          /* leaves of actSF */
   PetscReal     *bres;              /* [nlocal] per-block effective residual */
   PetscReal     *face;              /* [6 nlocal] per-face border effective residual */
   PetscInt      *list;              /* [nlocal] active blocks */

@@ -427,6 +427,7 @@ static PetscErrorCode BuildActivationSF(PffMG *mg, const PetscInt nb[3], const P
   PetscCall(PetscSFSetGraph(mg->actSF, mg->nlocal, nleaf, NULL, PETSC_COPY_VALUES, remote, PETSC_OWN_POINTER));
   PetscCall(PetscSFSetUp(mg->actSF));
   PetscCall(PetscCalloc2(nleaf, &mg->actLeaf, mg->nlocal, &mg->actRoot));
+  mg->nactLeaf = nleaf;
   PetscCall(PetscFree(count));
   PetscCall(PetscFree(lidx));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -443,7 +444,6 @@ PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
   PetscCall(PffGridGetSizes(mg->grid, &n0, NULL, NULL, NULL, periodic));
   PetscCall(PffGridGetRaster(mg->grid, nb, &level, &owner));
   PetscCall(PffGridGetLocalBlocks(mg->grid, &mg->nlocal));
-  mg->nraster = nb[0] * nb[1] * nb[2];
 
   /* per owned block: raster index, colour, face neighbours (local index, or -2 - gid on another rank),
      and the scratch of adaptive relaxation */

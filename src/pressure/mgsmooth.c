@@ -254,14 +254,12 @@ static PetscErrorCode SmoothAdaptive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x)
       }
     }
     if (size > 1) { /* requests go to the neighbouring ranks only */
-      PetscInt nleaf;
-      PetscCall(PetscSFGetGraph(mg->actSF, NULL, &nleaf, NULL, NULL));
       PetscCall(PetscArrayzero(mg->actRoot, mg->nlocal));
       PetscCall(PetscSFReduceBegin(mg->actSF, MPIU_INT, mg->actLeaf, mg->actRoot, MPI_MAX));
       PetscCall(PetscSFReduceEnd(mg->actSF, MPIU_INT, mg->actLeaf, mg->actRoot, MPI_MAX));
       for (PetscInt lb = 0; lb < mg->nlocal; lb++)
         if (mg->actRoot[lb] && lv->relevant[lb]) next[lb] = 1;
-      PetscCall(PetscArrayzero(mg->actLeaf, nleaf));
+      PetscCall(PetscArrayzero(mg->actLeaf, mg->nactLeaf));
     }
     mg->stats.adaptiveSteps++;
   }

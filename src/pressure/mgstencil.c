@@ -30,7 +30,6 @@ typedef struct {
   PetscInt           n0, L, nb[3], nraster;
   const PetscInt    *level;
   const PetscMPIInt *owner;
-  PetscBool          periodic[3];
   PetscInt          *first; /* [nraster] global first row (-1: inactive) */
   PetscInt          *rs;    /* [size + 1] */
   PetscMPIInt        size;
@@ -49,7 +48,7 @@ static PetscErrorCode NumberingCreate(PffMG *mg, PetscInt L, PffMGNumbering *t)
 
   PetscFunctionBeginUser;
   t->L = L;
-  PetscCall(PffGridGetSizes(mg->grid, &t->n0, NULL, NULL, NULL, t->periodic));
+  PetscCall(PffGridGetSizes(mg->grid, &t->n0, NULL, NULL, NULL, NULL));
   PetscCall(PffGridGetRaster(mg->grid, t->nb, &t->level, &t->owner));
   PetscCall(PffGridGetMortonOrder(mg->grid, &nactive, &gids));
   PetscCallMPI(MPI_Comm_size(mg->comm, &t->size));
@@ -132,20 +131,27 @@ static inline PetscInt64 FaceHandle(const PffMGLevel *lv, const PffMGNumbering *
   return lb >= 0 ? (PetscInt64)d * lv->nrows + lv->start[lb] + c : -2 - (3 * (PetscInt64)(t->first[gid] + c) + d);
 }
 
+/* The face neighbour of local block lb across side s (mglevels.c's neighbour table): its raster index
+   (-1: wall or inactive) and its local index (-1: another rank's). */
+static inline void SideNeighbour(const PffMG *mg, PetscInt lb, PetscInt s, PetscInt *g, PetscInt *l)
+{
+  const PetscInt nb = mg->nbr[6 * lb + s];
+  *l                = nb >= 0 ? nb : -1;
+  *g                = nb >= 0 ? mg->gid[nb] : (nb <= -2 ? -2 - nb : -1);
+}
+
 /* The couplings of the cells of local block lb through its side s (axis d = s / 2, upper if s odd).
    A lower side carries faces of this block's cells; an upper side faces of the neighbour's cells
    (their lower faces). n, m: cells per axis here and in the neighbour (m = n, n / 2 or 2 n). */
-static PetscErrorCode CollectSide(PffMG *mg, const PffMGLevel *lv, const PffMGNumbering *t, PetscInt lb,
-                                  const PffBlockInfo *info, PetscInt s, PffMGTerms *T)
+static PetscErrorCode CollectSide(PffMG *mg, const PffMGLevel *lv, const PffMGNumbering *t, PetscInt lb, PetscInt s,
+                                  PffMGTerms *T)
 {
   const PetscInt d = s / 2, a1 = (d + 1) % 3, a2 = (d + 2) % 3, upper = s % 2;
-  PetscInt       dir[3] = {0, 0, 0}, gN, lN = -1, n, m;
+  PetscInt       gN, lN, n, m;
 
   PetscFunctionBeginUser;
-  dir[d] = upper ? 1 : -1;
-  gN     = PffRasterNeighbour(t->nb, t->periodic, info->ijk, dir);
-  if (gN < 0 || t->level[gN] < 0) PetscFunctionReturn(PETSC_SUCCESS); /* wall or inactive: closed */
-  PetscCall(PffGridGetLocalIndex(mg->grid, gN, &lN));
+  SideNeighbour(mg, lb, s, &gN, &lN);
+  if (gN < 0) PetscFunctionReturn(PETSC_SUCCESS); /* wall or inactive: closed */
   n = lv->n[lb];
   m = CellsPerAxis(t, gN);
   PetscCheck(m == n || 2 * m == n || m == 2 * n, PETSC_COMM_SELF, PETSC_ERR_PLIB, "pffmg: blocks are not 2:1 graded");
@@ -266,11 +272,9 @@ PetscErrorCode PffMGStencilBuild_Private(PffMG *mg, PetscInt L)
   PetscCall(PetscNew(&st));
   lv->st = st;
   for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
-    PffBlockInfo info;
-    PetscCall(PffGridGetBlockInfo(mg->grid, lb, &info));
-    PetscCheck(t.first[info.gid] - t.rs[rank] == lv->start[lb], PETSC_COMM_SELF, PETSC_ERR_PLIB,
+    PetscCheck(t.first[mg->gid[lb]] - t.rs[rank] == lv->start[lb], PETSC_COMM_SELF, PETSC_ERR_PLIB,
                "pffmg: the level numbering does not follow the Morton order");
-    for (PetscInt s = 0; s < 6; s++) PetscCall(CollectSide(mg, lv, &t, lb, &info, s, &T));
+    for (PetscInt s = 0; s < 6; s++) PetscCall(CollectSide(mg, lv, &t, lb, s, &T));
   }
 
   /* ghosts: cells by global row, faces by global face 3 row + d, both increasing */
@@ -387,29 +391,22 @@ static PetscErrorCode CoefficientsFine(PffMG *mg)
 /* Algorithm 1: the coefficients of level L from those of level L - 1 (see the top of the file). */
 static PetscErrorCode CoefficientsCoarse(PffMG *mg, PetscInt L)
 {
-  const PffMGLevel  *f = &mg->lev[L - 1], *c = &mg->lev[L];
-  const PffMGReal   *cff = f->st->cf, *dxf = f->st->dx;
-  PffMGReal         *cfc = c->st->cf, *dxc = c->st->dx;
-  PetscInt           nb[3];
-  const PetscInt    *level;
-  const PetscMPIInt *owner;
-  PetscBool          periodic[3];
-  const PetscBool    rs = mg->opt.rescale;
+  const PffMGLevel *f = &mg->lev[L - 1], *c = &mg->lev[L];
+  const PffMGReal  *cff = f->st->cf, *dxf = f->st->dx;
+  PffMGReal        *cfc = c->st->cf, *dxc = c->st->dx;
+  const PetscInt   *level;
+  const PetscBool   rs = mg->opt.rescale;
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridGetRaster(mg->grid, nb, &level, &owner));
-  PetscCall(PffGridGetSizes(mg->grid, NULL, NULL, NULL, NULL, periodic));
+  PetscCall(PffGridGetRaster(mg->grid, NULL, &level, NULL));
   for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
-    PffBlockInfo    info;
     const PetscInt  nf = f->n[lb], nc = c->n[lb], of = f->start[lb], oc = c->start[lb];
     const PetscBool merged = (PetscBool)(nc < nf);
     PffMGReal       sside[3];
-    PetscCall(PffGridGetBlockInfo(mg->grid, lb, &info));
-    for (PetscInt d = 0; d < 3; d++) {
-      PetscInt dir[3]    = {0, 0, 0};
-      dir[d]             = -1;
-      const PetscInt  g  = PffRasterNeighbour(nb, periodic, info.ijk, dir);
-      const PetscBool mN = (PetscBool)(g >= 0 && level[g] >= 0 && level[g] < L);
+    for (PetscInt d = 0; d < 3; d++) { /* the lower side of axis d: side 2 d */
+      PetscInt g, l;
+      SideNeighbour(mg, lb, 2 * d, &g, &l);
+      const PetscBool mN = (PetscBool)(g >= 0 && level[g] < L); /* the neighbour merged into level L */
       sside[d]           = !rs ? 1 : (merged && mN ? 0.5f : (merged || mN ? 0.75f : 1));
     }
     if (!merged) {
