@@ -120,8 +120,9 @@ PETSC_EXTERN PetscErrorCode PffPressureProject(PffPressure ps, PetscInt chU, Pet
 PETSC_EXTERN PetscErrorCode PffPressureMaxDivergence(PffPressure ps, PetscInt chU, PetscReal *maxdiv);
 
 /* The operator interface for preconditioners (borrowed objects, valid until the next
-   SetCoefficients): the assembled A (MATMPIAIJ, without the dt factor), its diagonal, and the face
-   coefficients of the owned faces as a Vec in face numbering (3 per cell). The coefficient is the
+   SetCoefficients): the assembled A (MATMPIAIJ, without the dt factor; assembled on the first call
+   when nothing else needed it), its diagonal, and the face coefficients of the owned faces as three
+   arrays of the owned cells, cf[d][c] for the lower d-face of local cell c (0 when closed). The coefficient is the
    stencil weight c_f = M_f beta_f open_f / d_f^2 = A_f beta_f open_f / d_f (h beta on a uniform grid),
    so that A = sum_f c_f (e_upper - sum w e_lower)(...)^T; the 1/d_f^2 makes it agree with A = G^T
    diag(M beta open) G, where G carries 1/d_f. (An earlier version of this comment said "/ d_f".)
@@ -131,12 +132,12 @@ PETSC_EXTERN PetscErrorCode PffPressureMaxDivergence(PffPressure ps, PetscInt ch
    singular (constants, or the connected cells when solids isolate cells) or definite (NULL). */
 PETSC_EXTERN PetscErrorCode PffPressureGetOperator(PffPressure ps, Mat *A);
 PETSC_EXTERN PetscErrorCode PffPressureGetDiagonal(PffPressure ps, Vec *diag);
-PETSC_EXTERN PetscErrorCode PffPressureGetFaceCoefficients(PffPressure ps, Vec *coef);
+PETSC_EXTERN PetscErrorCode PffPressureGetFaceCoefficients(PffPressure ps, const PetscReal *cf[3]);
 PETSC_EXTERN PetscErrorCode PffPressureGetDirichletDiagonal(PffPressure ps, Vec *dirdiag);
 /* The matrix-free operator (MATSHELL: MatMult, MatMultTranspose, MatGetDiagonal, MatView) equal to the
    assembled A, including its diagonal-only terms (Dirichlet walls, the unit diagonal of cells with every
-   face closed); borrowed, valid until PffPressureDestroy and kept current by SetCoefficients. Built on
-   the first call when the operator type is aij. Needs SetCoefficients first. Collective. */
+   face closed); borrowed, valid until PffPressureDestroy and kept current by SetCoefficients. Needs
+   SetCoefficients first. */
 PETSC_EXTERN PetscErrorCode PffPressureGetShellOperator(PffPressure ps, Mat *S);
 PETSC_EXTERN PetscErrorCode PffPressureGetKSP(PffPressure ps, KSP *ksp);
 

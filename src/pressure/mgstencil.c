@@ -98,19 +98,17 @@ typedef struct {
 typedef struct {
   PffMGTerm *t;
   PetscInt   n, cap;
+  PetscBool  count; /* first pass: only count, so that the list is allocated once at its size */
 } PffMGTerms;
 
 static PetscErrorCode TermsAdd(PffMGTerms *T, PetscInt row, PetscInt64 col, PetscInt64 ref, PffMGReal fac)
 {
   PetscFunctionBeginUser;
-  if (T->n == T->cap) {
-    PffMGTerm *t;
-    T->cap = T->cap ? 2 * T->cap : 1024;
-    PetscCall(PetscMalloc1(T->cap, &t));
-    if (T->n) PetscCall(PetscArraycpy(t, T->t, T->n));
-    PetscCall(PetscFree(T->t));
-    T->t = t;
+  if (T->count) {
+    T->n++;
+    PetscFunctionReturn(PETSC_SUCCESS);
   }
+  PetscCheck(T->n < T->cap, PETSC_COMM_SELF, PETSC_ERR_PLIB, "pffmg: more side terms than counted");
   T->t[T->n++] = (PffMGTerm){row, col, ref, fac};
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -261,7 +259,7 @@ PetscErrorCode PffMGStencilBuild_Private(PffMG *mg, PetscInt L)
   PffMGLevel    *lv = &mg->lev[L];
   PffMGStencil  *st;
   PffMGNumbering t;
-  PffMGTerms     T = {NULL, 0, 0};
+  PffMGTerms     T = {NULL, 0, 0, PETSC_TRUE};
   PetscInt64    *gcell, *gface;
   PetscInt      *cursor;
   PetscMPIInt    rank;
@@ -276,6 +274,12 @@ PetscErrorCode PffMGStencilBuild_Private(PffMG *mg, PetscInt L)
                "pffmg: the level numbering does not follow the Morton order");
     for (PetscInt s = 0; s < 6; s++) PetscCall(CollectSide(mg, lv, &t, lb, s, &T));
   }
+  T.cap   = T.n;
+  T.n     = 0;
+  T.count = PETSC_FALSE;
+  PetscCall(PetscMalloc1(T.cap, &T.t));
+  for (PetscInt lb = 0; lb < mg->nlocal; lb++)
+    for (PetscInt s = 0; s < 6; s++) PetscCall(CollectSide(mg, lv, &t, lb, s, &T));
 
   /* ghosts: cells by global row, faces by global face 3 row + d, both increasing */
   PetscCall(RemoteHandles(&T, PETSC_FALSE, &st->nghost, &gcell));
@@ -368,23 +372,20 @@ PetscErrorCode PffMGStencilDestroy_Private(PffMGLevel *lv)
 /* Level 0: the pressure module's face coefficients and Dirichlet terms, in float. */
 static PetscErrorCode CoefficientsFine(PffMG *mg)
 {
-  PffMGLevel        *lv = &mg->lev[0];
-  PffMGStencil      *st = lv->st;
-  PffPressure        ps = mg->ps;
-  const PetscScalar *coef, *dd = NULL;
+  PffMGLevel        *lv  = &mg->lev[0];
+  PffMGStencil      *st  = lv->st;
+  PffPressure        ps  = mg->ps;
+  const PetscScalar *dd  = NULL;
   const PetscBool    dir = PffPressureHasDirichlet_Private(ps);
 
   PetscFunctionBeginUser;
   PetscCheck(ps->ncells == lv->nrows, PETSC_COMM_SELF, PETSC_ERR_PLIB,
              "pffmg: level 0 does not match the pressure cells");
-  PetscCall(VecGetArrayRead(ps->coef, &coef));
+  /* the same axis-major layout: cf[d * nrows + r] */
+  for (PetscInt q = 0; q < 3 * lv->nrows; q++) st->cf[q] = (PffMGReal)ps->cf[q];
   if (dir) PetscCall(VecGetArrayRead(ps->dirdiag, &dd));
-  for (PetscInt r = 0; r < lv->nrows; r++) {
-    for (PetscInt d = 0; d < 3; d++) st->cf[d * lv->nrows + r] = (PffMGReal)PetscRealPart(coef[3 * r + d]);
-    st->dx[r] = dd ? (PffMGReal)PetscRealPart(dd[r]) : 0;
-  }
+  for (PetscInt r = 0; r < lv->nrows; r++) st->dx[r] = dd ? (PffMGReal)PetscRealPart(dd[r]) : 0;
   if (dir) PetscCall(VecRestoreArrayRead(ps->dirdiag, &dd));
-  PetscCall(VecRestoreArrayRead(ps->coef, &coef));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -63,14 +63,23 @@ PetscErrorCode PffPressureVecToChannel_Private(PffPressure ps, Vec v, PffChannel
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* max_i |(V D u)_i| / V_i with V D u = -G^T M u; uses the work Vecs wf and vcell. */
+/* max_i |(V D u)_i| / V_i with V D u = -G^T M u (the shell's face lists); uses the work Vec vcell. */
 PetscErrorCode PffPressureMaxDivergenceVec_Private(PffPressure ps, Vec u, PetscReal *maxdiv)
 {
+  const PetscScalar *y;
+  PetscReal          m = 0;
+
   PetscFunctionBeginUser;
-  PetscCall(VecPointwiseMult(ps->wf, ps->mface, u));
-  PetscCall(MatMultTranspose(ps->G, ps->wf, ps->vcell));
-  PetscCall(VecPointwiseDivide(ps->vcell, ps->vcell, ps->vol));
-  PetscCall(VecNorm(ps->vcell, NORM_INFINITY, maxdiv));
+  PetscCall(PffPressureShellDivergence_Private(ps, ps->S, u, PETSC_FALSE, ps->vcell));
+  PetscCall(VecGetArrayRead(ps->vcell, &y));
+  for (PetscInt lb = 0; lb < ps->nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(ps->grid, lb, &info));
+    const PetscReal iv = 1.0 / (info.h * info.h * info.h);
+    for (PetscInt c = ps->blockStart[lb]; c < ps->blockStart[lb + 1]; c++) m = PetscMax(m, PetscAbsScalar(y[c]) * iv);
+  }
+  PetscCall(VecRestoreArrayRead(ps->vcell, &y));
+  PetscCall(MPIU_Allreduce(&m, maxdiv, 1, MPIU_REAL, MPIU_MAX, ps->comm));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -97,40 +106,31 @@ static PetscErrorCode AssembleDirect(PffPressure ps)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* dirdiag = sum over the Dirichlet walls that a cell touches of 2 h beta (see the top of the file).
-   Returns in *bad a local face row with a bad beta, or -1. */
-static PetscErrorCode PffPressureDirichletTerms(PffPressure ps, const PetscScalar *beta, PetscInt *bad)
+/* dirdiag += the Dirichlet terms 2 h beta of block lb (see the top of the file), with beta[d] the block's
+   data of the beta channel. Returns in *bad a local face row with a bad beta (unchanged if none). */
+static PetscErrorCode PffPressureDirichletTerms(PffPressure ps, PetscInt lb, const PetscInt nb[3], float *const beta[3],
+                                                PetscScalar *dd, PetscInt *bad)
 {
-  PetscInt     nb[3];
-  PetscScalar *dd;
+  PffBlockInfo info;
 
   PetscFunctionBeginUser;
-  *bad = -1;
-  PetscCall(VecSet(ps->dirdiag, 0.0));
-  if (!PffPressureHasDirichlet_Private(ps)) PetscFunctionReturn(PETSC_SUCCESS);
-  PetscCall(PffGridGetRaster(ps->grid, nb, NULL, NULL));
-  PetscCall(VecGetArray(ps->dirdiag, &dd));
-  for (PetscInt lb = 0; lb < ps->nlocal; lb++) {
-    PffBlockInfo info;
-    PetscCall(PffGridGetBlockInfo(ps->grid, lb, &info));
-    const PetscInt n = info.n, c0 = ps->blockStart[lb];
-    for (PetscInt w = 0; w < 6; w++) {
-      const PetscInt d = w / 2, upper = w % 2;
-      if (!ps->dirichlet[w] || info.ijk[d] != (upper ? nb[d] - 1 : 0)) continue;
-      /* the layer c[d] = 0 or n - 1 of the block, the other two indices free */
-      for (PetscInt b = 0; b < n; b++)
-        for (PetscInt a = 0; a < n; a++) {
-          PetscInt       c[3] = {0, 0, 0}, e = 0;
-          const PetscInt ab[2] = {a, b};
-          for (PetscInt q = 0; q < 3; q++) c[q] = q == d ? (upper ? n - 1 : 0) : ab[e++];
-          const PetscInt  cell = c0 + c[0] + n * (c[1] + n * c[2]), r = 3 * cell + d;
-          const PetscReal bf = PetscRealPart(beta[r]);
-          if (!(bf > 0 && PetscIsNormalReal(bf))) *bad = r;
-          dd[cell] += 2 * info.h * bf;
-        }
-    }
+  PetscCall(PffGridGetBlockInfo(ps->grid, lb, &info));
+  const PetscInt n = info.n, c0 = ps->blockStart[lb];
+  for (PetscInt w = 0; w < 6; w++) {
+    const PetscInt d = w / 2, upper = w % 2;
+    if (!ps->dirichlet[w] || info.ijk[d] != (upper ? nb[d] - 1 : 0)) continue;
+    /* the layer c[d] = 0 or n - 1 of the block, the other two indices free */
+    for (PetscInt b = 0; b < n; b++)
+      for (PetscInt a = 0; a < n; a++) {
+        PetscInt       c[3] = {0, 0, 0}, e = 0;
+        const PetscInt ab[2] = {a, b};
+        for (PetscInt q = 0; q < 3; q++) c[q] = q == d ? (upper ? n - 1 : 0) : ab[e++];
+        const PetscInt  cell = c0 + c[0] + n * (c[1] + n * c[2]);
+        const PetscReal bf   = beta[d][cell - c0];
+        if (!(bf > 0 && PetscIsNormalReal(bf))) *bad = 3 * cell + d;
+        dd[cell] += 2 * info.h * bf;
+      }
   }
-  PetscCall(VecRestoreArray(ps->dirdiag, &dd));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -181,47 +181,52 @@ PetscErrorCode PffPressureNullSpace_Private(PffPressure ps)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* c_f = M_f beta_f open_f / d_f^2 = h^2 beta_f / d_f on the open faces, 0 on the closed ones, straight
+   from the channels into the shell's coefficient arrays; the Dirichlet terms; A if it exists. */
 PetscErrorCode PffPressureAssemble_Private(PffPressure ps, PetscInt chBeta, PetscInt chOpen)
 {
-  PetscScalar       *beta, *open, *w, *coef;
-  const PetscScalar *m;
-  PetscInt           bad     = -1, gbad;
-  PetscReal          badBeta = 0;
+  PetscScalar   *dd;
+  PetscInt       bad     = -1, gbad, nb[3];
+  PetscReal      badBeta = 0;
+  const PetscInt nc      = ps->ncells;
+  PffChannelKind kb, ko = PFF_CHANNEL_FACE;
 
   PetscFunctionBeginUser;
-  PetscCall(PffPressureChannelToVec_Private(ps, chBeta, PFF_CHANNEL_FACE, ps->beta));
-  if (chOpen >= 0)
-    PetscCall(PffPressureChannelToVec_Private(ps, chOpen, PFF_CHANNEL_FACE, ps->open));
-  else
-    PetscCall(VecSet(ps->open, 1.0));
-  PetscCall(VecGetArray(ps->beta, &beta));
-  PetscCall(VecGetArray(ps->open, &open));
-  PetscCall(VecGetArrayWrite(ps->w, &w));
-  PetscCall(VecGetArrayWrite(ps->coef, &coef));
-  PetscCall(VecGetArrayRead(ps->mface, &m));
-  for (PetscInt r = 0; r < 3 * ps->ncells; r++) {
-    const PetscBool structural = (PetscBool)(ps->kind[r] != PFF_FACE_WALL && ps->kind[r] != PFF_FACE_INACTIVE);
-    open[r]                    = structural && PetscRealPart(open[r]) > 0.5 ? 1.0 : 0.0;
-    if (open[r] != 0 && !(PetscRealPart(beta[r]) > 0 && PetscIsNormalReal(PetscRealPart(beta[r])))) {
-      bad     = r;
-      badBeta = PetscRealPart(beta[r]);
+  PetscCall(PffGridGetChannelInfo(ps->grid, chBeta, NULL, &kb, NULL, NULL));
+  if (chOpen >= 0) PetscCall(PffGridGetChannelInfo(ps->grid, chOpen, NULL, &ko, NULL, NULL));
+  PetscCheck(kb == PFF_CHANNEL_FACE && ko == PFF_CHANNEL_FACE, ps->comm, PETSC_ERR_ARG_WRONG,
+             "pressure: the beta and open channels must be face channels");
+  PetscCall(PffGridGetRaster(ps->grid, nb, NULL, NULL));
+  PetscCall(VecSet(ps->dirdiag, 0.0));
+  PetscCall(VecGetArray(ps->dirdiag, &dd));
+  for (PetscInt lb = 0; lb < ps->nlocal; lb++) {
+    PffBlockInfo info;
+    float       *beta[3], *open[3] = {NULL, NULL, NULL};
+    PetscCall(PffGridGetBlockInfo(ps->grid, lb, &info));
+    const PetscReal h2 = info.h * info.h;
+    const PetscInt  c0 = ps->blockStart[lb], c1 = ps->blockStart[lb + 1];
+    for (PetscInt d = 0; d < 3; d++) {
+      PetscCall(PffGridGetBlockData(ps->grid, chBeta, lb, d, &beta[d]));
+      if (chOpen >= 0) PetscCall(PffGridGetBlockData(ps->grid, chOpen, lb, d, &open[d]));
     }
-    w[r]    = m[r] * beta[r] * open[r];
-    coef[r] = open[r] != 0 ? w[r] / (ps->dface[r] * ps->dface[r]) : 0.0;
-  }
-  if (bad < 0) {
-    PetscInt dbad;
-    PetscCall(PffPressureDirichletTerms(ps, beta, &dbad));
-    if (dbad >= 0) {
-      bad     = dbad;
-      badBeta = PetscRealPart(beta[dbad]);
+    for (PetscInt d = 0; d < 3; d++)
+      for (PetscInt c = c0; c < c1; c++) {
+        const PetscInt  r  = 3 * c + d;
+        const PetscReal bf = beta[d][c - c0];
+        const PetscBool op = (PetscBool)(ps->kind[r] != PFF_FACE_WALL && ps->kind[r] != PFF_FACE_INACTIVE &&
+                                         (!open[d] || open[d][c - c0] > 0.5f));
+        if (op && !(bf > 0 && PetscIsNormalReal(bf))) {
+          bad     = r;
+          badBeta = bf;
+        }
+        ps->cf[d * nc + c] = op ? h2 * bf / ps->dface[r] : 0.0;
+      }
+    if (bad < 0 && PffPressureHasDirichlet_Private(ps)) {
+      PetscCall(PffPressureDirichletTerms(ps, lb, nb, beta, dd, &bad));
+      if (bad >= 0) badBeta = beta[bad % 3][bad / 3 - c0];
     }
   }
-  PetscCall(VecRestoreArrayRead(ps->mface, &m));
-  PetscCall(VecRestoreArrayWrite(ps->coef, &coef));
-  PetscCall(VecRestoreArrayWrite(ps->w, &w));
-  PetscCall(VecRestoreArray(ps->open, &open));
-  PetscCall(VecRestoreArray(ps->beta, &beta));
+  PetscCall(VecRestoreArray(ps->dirdiag, &dd));
   PetscCall(MPIU_Allreduce(&bad, &gbad, 1, MPIU_INT, MPI_MAX, ps->comm));
   PetscCheck(
       gbad < 0, ps->comm, PETSC_ERR_ARG_OUTOFRANGE,
@@ -242,6 +247,8 @@ PetscErrorCode PffPressureCreateOperator_Private(PffPressure ps)
 
   PetscFunctionBeginUser;
   if (ps->A) PetscFunctionReturn(PETSC_SUCCESS);
+  if (!ps->G) PetscCall(PffPressureBuildGradient_Private(ps));
+  PetscCall(VecCreateMPI(ps->comm, nrows, 3 * ps->ntotal, &ps->w));
   PetscCall(MatCreateAIJ(ps->comm, nrows, nrows, 3 * ps->ntotal, 3 * ps->ntotal, 1, NULL, 0, NULL, &ps->W));
   for (PetscInt r = 0; r < nrows; r++) {
     const PetscInt row = 3 * ps->rstart + r;
@@ -256,10 +263,17 @@ PetscErrorCode PffPressureCreateOperator_Private(PffPressure ps)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* A from the current face weights w and Dirichlet terms, its diagonal and null space. */
+/* A from the current face coefficients and Dirichlet terms, its diagonal and null space. */
 PetscErrorCode PffPressureAssembleOperator_Private(PffPressure ps)
 {
+  PetscScalar *w;
+
   PetscFunctionBeginUser;
+  PetscCall(VecGetArrayWrite(ps->w, &w));
+  for (PetscInt c = 0; c < ps->ncells; c++)
+    for (PetscInt d = 0; d < 3; d++)
+      w[3 * c + d] = ps->cf[d * ps->ncells + c] * ps->dface[3 * c + d] * ps->dface[3 * c + d];
+  PetscCall(VecRestoreArrayWrite(ps->w, &w));
   if (ps->assembly == PFF_PRESSURE_ASSEMBLY_PTAP) {
     PetscCall(MatDiagonalSet(ps->W, ps->w, INSERT_VALUES));
     PetscCall(MatPtAP(ps->W, ps->G, MAT_REUSE_MATRIX, 2.0, &ps->A));

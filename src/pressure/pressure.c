@@ -18,6 +18,10 @@ const char *const PffPressureOperatorTypes[] = {"aij", "shell", "PffPressureOper
 #define PFF_PRESSURE_KSP_TYPE_DEFAULT KSPFCG
 #define PFF_PRESSURE_PC_TYPE_DEFAULT "pffmg"
 #define PFF_PRESSURE_RTOL_DEFAULT 1e-4
+/* FCG keeps this many earlier directions (two cell Vecs each): PETSc's 30 (10 allocated up front) cost
+   20 to 62 cell Vecs; 4 keeps the 8 iterations of the 128^3 bubbly problem at 1e3 to 1e5 and costs 10
+   (docs/pressure.md). 1 is the paper's Polak-Ribiere flexible CG. */
+#define PFF_PRESSURE_FCG_MMAX_DEFAULT 4
 #define PFF_PRESSURE_ASSEMBLY_DEFAULT PFF_PRESSURE_ASSEMBLY_PTAP
 #define PFF_PRESSURE_OPERATOR_DEFAULT PFF_PRESSURE_OPERATOR_AIJ
 
@@ -42,6 +46,8 @@ PetscErrorCode PffPressureCreate(PffGrid grid, PffPressure *ps)
   PetscCall(KSPCreate(p->comm, &p->ksp));
   PetscCall(KSPSetOptionsPrefix(p->ksp, "pressure_"));
   PetscCall(KSPSetType(p->ksp, PFF_PRESSURE_KSP_TYPE_DEFAULT));
+  PetscCall(KSPFCGSetMmax(p->ksp, PFF_PRESSURE_FCG_MMAX_DEFAULT));
+  PetscCall(KSPFCGSetNprealloc(p->ksp, PFF_PRESSURE_FCG_MMAX_DEFAULT + 1));
   PetscCall(KSPSetTolerances(p->ksp, PFF_PRESSURE_RTOL_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT));
   PetscCall(KSPSetInitialGuessNonzero(p->ksp, PETSC_TRUE));
   /* rtol then bounds the true residual V (D u + c_div) / dt, whatever the PC */
@@ -149,43 +155,19 @@ PetscErrorCode PffPressureGetDirichletWalls(PffPressure ps, PetscBool walls[6])
 
 PetscErrorCode PffPressureSetUp(PffPressure ps)
 {
-  PetscScalar *vol, *m;
-
   PetscFunctionBeginUser;
   if (ps->setup) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PetscLogEventBegin(PFF_PressSetUp, 0, 0, 0, 0));
   PetscCall(PffPressureBuildFaces_Private(ps));
-  PetscCall(PffPressureBuildGradient_Private(ps));
-  PetscCall(MatCreateVecs(ps->G, &ps->p, &ps->uf));
+  PetscCall(VecCreateMPI(ps->comm, ps->ncells, ps->ntotal, &ps->p));
+  PetscCall(VecCreateMPI(ps->comm, 3 * ps->ncells, 3 * (PetscInt)ps->ntotal, &ps->uf));
   PetscCall(VecDuplicate(ps->p, &ps->b));
   PetscCall(VecDuplicate(ps->p, &ps->vcell));
-  PetscCall(VecDuplicate(ps->p, &ps->vol));
   PetscCall(VecDuplicate(ps->p, &ps->diag));
   PetscCall(VecDuplicate(ps->p, &ps->dirdiag));
-  PetscCall(VecDuplicate(ps->uf, &ps->wf));
-  PetscCall(VecDuplicate(ps->uf, &ps->mface));
-  PetscCall(VecDuplicate(ps->uf, &ps->beta));
-  PetscCall(VecDuplicate(ps->uf, &ps->open));
-  PetscCall(VecDuplicate(ps->uf, &ps->coef));
-  PetscCall(VecDuplicate(ps->uf, &ps->w));
-
-  /* V_i = h^3 and M_f = A_f d_f = h^2 d_f with h the cell's own size (see faces.c) */
-  PetscCall(VecGetArrayWrite(ps->vol, &vol));
-  PetscCall(VecGetArrayWrite(ps->mface, &m));
-  for (PetscInt lb = 0; lb < ps->nlocal; lb++) {
-    PffBlockInfo info;
-    PetscCall(PffGridGetBlockInfo(ps->grid, lb, &info));
-    const PetscReal h = info.h;
-    for (PetscInt c = ps->blockStart[lb]; c < ps->blockStart[lb + 1]; c++) {
-      vol[c] = h * h * h;
-      for (PetscInt d = 0; d < 3; d++) m[3 * c + d] = h * h * ps->dface[3 * c + d];
-    }
-  }
-  PetscCall(VecRestoreArrayWrite(ps->mface, &m));
-  PetscCall(VecRestoreArrayWrite(ps->vol, &vol));
-
-  if (ps->operatorTypeSet && ps->operatorType == PFF_PRESSURE_OPERATOR_SHELL)
-    PetscCall(PffPressureShellCreate_Private(ps, &ps->S));
+  /* the shell holds the face coefficients and the face lists of the divergence and gradient */
+  PetscCall(PffPressureShellCreate_Private(ps, &ps->S));
+  PetscCall(PffPressureShellGetCoefficients_Private(ps->S, &ps->cf));
   ps->setup = PETSC_TRUE;
   PetscCall(PetscLogEventEnd(PFF_PressSetUp, 0, 0, 0, 0));
   PetscCall(PetscInfo(NULL,
@@ -209,19 +191,13 @@ PetscErrorCode PffPressureDestroy(PffPressure *ps)
   PetscCall(MatDestroy(&p->S));
   PetscCall(MatDestroy(&p->W));
   PetscCall(MatDestroy(&p->G));
+  PetscCall(VecDestroy(&p->w));
   PetscCall(VecDestroy(&p->p));
   PetscCall(VecDestroy(&p->b));
   PetscCall(VecDestroy(&p->vcell));
-  PetscCall(VecDestroy(&p->vol));
   PetscCall(VecDestroy(&p->diag));
   PetscCall(VecDestroy(&p->dirdiag));
   PetscCall(VecDestroy(&p->uf));
-  PetscCall(VecDestroy(&p->wf));
-  PetscCall(VecDestroy(&p->mface));
-  PetscCall(VecDestroy(&p->beta));
-  PetscCall(VecDestroy(&p->open));
-  PetscCall(VecDestroy(&p->coef));
-  PetscCall(VecDestroy(&p->w));
   PetscCall(PetscFree(p->blockStart));
   PetscCall(PetscFree(p->kind));
   PetscCall(PetscFree(p->lower));
@@ -257,9 +233,7 @@ PetscErrorCode PffPressureSetCoefficients(PffPressure ps, PetscInt chBeta, Petsc
   needA = (PetscBool)(ps->operatorType == PFF_PRESSURE_OPERATOR_AIJ || !stencilPC);
   if (needA) PetscCall(PffPressureCreateOperator_Private(ps));
   PetscCall(PffPressureAssemble_Private(ps, chBeta, chOpen));
-  if ((ps->operatorType == PFF_PRESSURE_OPERATOR_SHELL || !ps->A) && ps->S == NULL)
-    PetscCall(PffPressureShellCreate_Private(ps, &ps->S));
-  if (ps->S != NULL) PetscCall(PffPressureShellUpdate_Private(ps, ps->S));
+  PetscCall(PffPressureShellUpdate_Private(ps, ps->S));
   if (!ps->A) { /* diagonal and null space from the faces */
     PetscCall(PffPressureShellFaceDiagonal_Private(ps->S, ps->diag));
     PetscCall(VecAXPY(ps->diag, 1.0, ps->dirdiag));
@@ -304,11 +278,9 @@ static PetscErrorCode PffPressureApplySubPCDefault(PffPressure ps)
 PetscErrorCode PffPressureProject(PffPressure ps, PetscInt chU, PetscReal dt, PetscInt chCdiv, PetscInt chP,
                                   PffPressureStats *stats)
 {
-  PffPressureStats   st = {0};
-  PetscLogDouble     t0, t1, t2;
-  PetscScalar       *u;
-  const PetscScalar *gp, *beta, *open;
-  PetscReal          bnorm, rnorm;
+  PffPressureStats st = {0};
+  PetscLogDouble   t0, t1, t2;
+  PetscReal        bnorm, rnorm;
 
   PetscFunctionBeginUser;
   PetscCall(PffPressureCheckSetUp(ps, PETSC_TRUE));
@@ -320,13 +292,21 @@ PetscErrorCode PffPressureProject(PffPressure ps, PetscInt chU, PetscReal dt, Pe
 
   /* b = -(V D u*_open + V c_div) / dt = (G^T M (open u*) - V c_div) / dt; closed faces end at u = 0,
      so their u* must not enter the balance */
-  PetscCall(VecPointwiseMult(ps->wf, ps->uf, ps->open));
-  PetscCall(VecPointwiseMult(ps->wf, ps->wf, ps->mface));
-  PetscCall(MatMultTranspose(ps->G, ps->wf, ps->vcell));
+  PetscCall(PffPressureShellDivergence_Private(ps, ps->S, ps->uf, PETSC_TRUE, ps->vcell));
   if (chCdiv >= 0) {
+    PetscScalar       *b;
+    const PetscScalar *y;
     PetscCall(PffPressureChannelToVec_Private(ps, chCdiv, PFF_CHANNEL_CELL, ps->b));
-    PetscCall(VecPointwiseMult(ps->b, ps->b, ps->vol));
-    PetscCall(VecAYPX(ps->b, -1.0, ps->vcell));
+    PetscCall(VecGetArray(ps->b, &b));
+    PetscCall(VecGetArrayRead(ps->vcell, &y));
+    for (PetscInt lb = 0; lb < ps->nlocal; lb++) {
+      PffBlockInfo info;
+      PetscCall(PffGridGetBlockInfo(ps->grid, lb, &info));
+      const PetscReal v = info.h * info.h * info.h;
+      for (PetscInt c = ps->blockStart[lb]; c < ps->blockStart[lb + 1]; c++) b[c] = y[c] - v * b[c];
+    }
+    PetscCall(VecRestoreArrayRead(ps->vcell, &y));
+    PetscCall(VecRestoreArray(ps->b, &b));
   } else
     PetscCall(VecCopy(ps->vcell, ps->b));
   PetscCall(VecScale(ps->b, 1.0 / dt));
@@ -350,16 +330,7 @@ PetscErrorCode PffPressureProject(PffPressure ps, PetscInt chU, PetscReal dt, Pe
   st.rnorm = bnorm > 0 ? rnorm / bnorm : rnorm;
 
   /* u = u* - dt beta G p on open faces, 0 on closed ones */
-  PetscCall(MatMult(ps->G, ps->p, ps->wf));
-  PetscCall(VecGetArray(ps->uf, &u));
-  PetscCall(VecGetArrayRead(ps->wf, &gp));
-  PetscCall(VecGetArrayRead(ps->beta, &beta));
-  PetscCall(VecGetArrayRead(ps->open, &open));
-  for (PetscInt r = 0; r < 3 * ps->ncells; r++) u[r] = open[r] != 0 ? u[r] - dt * beta[r] * gp[r] : 0.0;
-  PetscCall(VecRestoreArrayRead(ps->open, &open));
-  PetscCall(VecRestoreArrayRead(ps->beta, &beta));
-  PetscCall(VecRestoreArrayRead(ps->wf, &gp));
-  PetscCall(VecRestoreArray(ps->uf, &u));
+  PetscCall(PffPressureShellProjectVelocity_Private(ps, ps->S, ps->p, dt, ps->uf));
   PetscCall(PffPressureMaxDivergenceVec_Private(ps, ps->uf, &st.divAfter));
   PetscCall(PffPressureVecToChannel_Private(ps, ps->uf, PFF_CHANNEL_FACE, chU));
   PetscCall(PffPressureVecToChannel_Private(ps, ps->p, PFF_CHANNEL_CELL, chP));
@@ -408,11 +379,12 @@ PetscErrorCode PffPressureGetDirichletDiagonal(PffPressure ps, Vec *dirdiag)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode PffPressureGetFaceCoefficients(PffPressure ps, Vec *coef)
+PetscErrorCode PffPressureGetFaceCoefficients(PffPressure ps, const PetscReal *cf[3])
 {
   PetscFunctionBeginUser;
   PetscCall(PffPressureCheckSetUp(ps, PETSC_TRUE));
-  *coef = ps->coef;
+  PetscCheck(cf != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL output argument");
+  for (PetscInt d = 0; d < 3; d++) cf[d] = ps->cf + d * ps->ncells;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -421,10 +393,6 @@ PetscErrorCode PffPressureGetShellOperator(PffPressure ps, Mat *S)
   PetscFunctionBeginUser;
   PetscCall(PffPressureCheckSetUp(ps, PETSC_TRUE));
   PetscCheck(S != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL output argument");
-  if (ps->S == NULL) {
-    PetscCall(PffPressureShellCreate_Private(ps, &ps->S));
-    PetscCall(PffPressureShellUpdate_Private(ps, ps->S));
-  }
   *S = ps->S;
   PetscFunctionReturn(PETSC_SUCCESS);
 }

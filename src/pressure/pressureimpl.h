@@ -38,18 +38,22 @@ struct _n_PffPressure {
   PetscReal     *dface;                  /* d_f (0 when closed) */
   PetscInt64     nkind[PFF_FACE_NKINDS]; /* global counts per class, for PffPressureView-style info */
 
+  /* G, W, w and A exist only when something needs A's entries (PffPressureCreateOperator_Private):
+     the projection itself and the matrix-free pffmg go through the shell's face lists */
   Mat          G;      /* gradient: 3 ncells x ncells rows, (G p)_f = (p_upper - sum w_c p_c) / d_f */
   Mat          W;      /* diag(M_f beta_f open_f) on the face rows, for MatPtAP */
-  Mat          A;      /* G^T W G, NULL until something needs entries (PffPressureCreateOperator_Private) */
-  Mat          S;      /* the matrix-free A (shell.c), NULL until an operator of type shell is needed */
+  Vec          w;      /* its diagonal, M_f beta_f open_f = c_f d_f^2 */
+  Mat          A;      /* G^T W G */
+  Mat          S;      /* the matrix-free A (shell.c), always: it owns the face coefficients */
+  PetscReal   *cf;     /* [3 ncells] c_f of the lower d-face of cell c at d * ncells + c (the shell's) */
   MatNullSpace nullsp; /* constants (or the connected cells), NULL when a Dirichlet wall makes A definite */
   KSP          ksp;
 
   PetscBool dirichlet[6]; /* p = 0 on wall -x, +x, -y, +y, -z, +z (at the wall face, half a cell out) */
   Vec       dirdiag;      /* cell Vec: the Dirichlet terms sum 2 h beta added to diag(A) */
 
-  Vec p, b, vcell, vol, diag;             /* cell Vecs: pressure, rhs, work, cell volumes, diag(A) */
-  Vec uf, wf, mface, beta, open, coef, w; /* face Vecs: velocity, work, M_f, beta_f, open_f, coefficient, W */
+  Vec p, b, vcell, diag; /* cell Vecs: pressure, rhs, work, diag(A) */
+  Vec uf;                /* face Vec (3 per cell): velocity */
 
   PffPressureAssemblyType assembly;
   PffPressureOperatorType operatorType;    /* the KSP's Amat */
@@ -97,6 +101,9 @@ PETSC_INTERN PetscErrorCode PffPressureShellFaceDiagonal_Private(Mat, Vec);
 PETSC_INTERN PetscErrorCode PffPressureMGUsesStencil_Private(PC, PetscBool *);
 PETSC_INTERN PetscErrorCode PffPressureShellCreate_Private(PffPressure, Mat *);
 PETSC_INTERN PetscErrorCode PffPressureShellUpdate_Private(PffPressure, Mat);
+PETSC_INTERN PetscErrorCode PffPressureShellGetCoefficients_Private(Mat, PetscReal **);
+PETSC_INTERN PetscErrorCode PffPressureShellDivergence_Private(PffPressure, Mat, Vec, PetscBool, Vec);
+PETSC_INTERN PetscErrorCode PffPressureShellProjectVelocity_Private(PffPressure, Mat, Vec, PetscReal, Vec);
 PETSC_INTERN PetscErrorCode PffPressureChannelToVec_Private(PffPressure, PetscInt, PffChannelKind, Vec);
 PETSC_INTERN PetscErrorCode PffPressureVecToChannel_Private(PffPressure, Vec, PffChannelKind, PetscInt);
 PETSC_INTERN PetscErrorCode PffPressureMaxDivergenceVec_Private(PffPressure, Vec, PetscReal *);

@@ -1,6 +1,6 @@
 /* The matrix-free pressure operator (PF-FLIP Eq. 8-10, stage "Pressure"): a MATSHELL that applies
      A = G^T diag(M_f beta_f open_f) G = sum_f c_f g_f g_f^T,   g_f = e_upper - sum_k w_k e_lower_k,
-   with the stencil weight c_f = M_f beta_f open_f / d_f^2 (PffPressureGetFaceCoefficients) and w_k = 1
+   with the stencil weight c_f = M_f beta_f open_f / d_f^2 and w_k = 1
    (one lower cell) or 1/4 (coarse above fine, the 4 fine cells; faces.c). Face by face,
      flux = c_f (x_upper - sum_k w_k x_lower_k),   y_upper += flux,   y_lower_k -= w_k flux,
    plus the diagonal-only terms of the assembly (operator.c): the Dirichlet wall terms 2 h beta and the
@@ -11,7 +11,13 @@
    lower cell is the cell minus the raster stride 1, n or n^2, and their coefficients sit in one
    contiguous array per axis; so a product reads 3 coefficients per cell against the 7 values and 7
    column indices per row of the AIJ matrix. The faces on block sides (same level, coarser, finer) go
-   through an explicit list of upper and lower cells.
+   through an explicit list of upper and lower cells, and take their coefficient from the same arrays.
+
+   The shell owns the coefficient arrays c_f of every owned face (cf[d * ncells + c], the lower d-face
+   of cell c, 0 when closed): the pressure module writes them once per step (operator.c), pffmg reads
+   its finest level from them, and nothing else holds face coefficients. The same face lists give the
+   projection its divergence G^T M u and its velocity update u -= dt beta G p without the gradient as a
+   matrix (M_f / d_f = h^2 of the upper cell, and beta_f / d_f = c_f / h^2 on an open face).
 
    Communication: a face's upper cell is always owned, its lower cells may belong to another rank.
    Their x values come through a VecScatter into a ghost Vec of the distinct remote lower cells, and
@@ -19,8 +25,7 @@
    grid topology. The product is split-phase: the gather is started, the faces whose lower cells are
    all owned are done, the gather is finished, then the faces touching a ghost.
 
-   The coefficients are copied into the shell's own arrays by PffPressureShellUpdate_Private (called
-   from SetCoefficients), so the shell does not depend on the PffPressure after it is built. */
+   PffPressureShellUpdate_Private (called from SetCoefficients) rebuilds the diagonal from them. */
 #include "pressureimpl.h"
 
 /* The two face lists: [PFF_SHELL_LOCAL] every lower cell owned, [PFF_SHELL_GHOST] at least one not. */
@@ -30,14 +35,15 @@ typedef struct {
   PetscInt   ncells;                  /* owned cells */
   PetscInt   nblocks, *bstart;        /* owned blocks: first local cell, [nblocks + 1] */
   PetscInt  *bn;                      /* cells per block edge */
-  PetscReal *cin[3];                  /* [ncells] c_f of the lower d-face of each cell if inside its block, else 0 */
+  PetscReal *h;                       /* cell size of each block */
+  PetscReal *cf;                      /* [3 ncells] c_f of the lower d-face of cell c at d * ncells + c */
   PetscInt   nface[PFF_SHELL_NLISTS]; /* faces on block sides */
-  /* per list, over its faces i: the owned face row, the local upper cell, lower cells lo[off[i] ..
-     off[i+1]-1] (1 or 4 of them, weight 1/count) as local cell numbers, ghosts as ncells + ghost index */
+  /* per list, over its faces i: the face's index into cf (d * ncells + upper cell), the local upper
+     cell, lower cells lo[off[i] .. off[i+1]-1] (1 or 4 of them, weight 1/count) as local cell numbers,
+     ghosts as ncells + ghost index */
   PetscInt  *row[PFF_SHELL_NLISTS], *up[PFF_SHELL_NLISTS], *off[PFF_SHELL_NLISTS], *lo[PFF_SHELL_NLISTS];
-  PetscReal *c[PFF_SHELL_NLISTS]; /* c_f of each face, refreshed by Update */
-  PetscInt   ndiag, *diagCell;    /* cells with a diagonal-only term: Dirichlet walls, or the unit */
-  PetscReal *diagVal;             /* diagonal of a cell with every face closed */
+  PetscInt   ndiag, *diagCell; /* cells with a diagonal-only term: Dirichlet walls, or the unit */
+  PetscReal *diagVal;          /* diagonal of a cell with every face closed */
   PetscInt   nghost;
   Vec        xg, yg;  /* ghost values of x, contributions to y (sequential) */
   VecScatter scatter; /* owned x -> xg; reversed, yg -> y */
@@ -52,13 +58,13 @@ static PetscErrorCode PffShellDestroy(void *ctx)
   PetscFunctionBeginUser;
   PetscCall(PetscFree(s->bstart));
   PetscCall(PetscFree(s->bn));
-  for (PetscInt d = 0; d < 3; d++) PetscCall(PetscFree(s->cin[d]));
+  PetscCall(PetscFree(s->h));
+  PetscCall(PetscFree(s->cf));
   for (PetscInt l = 0; l < PFF_SHELL_NLISTS; l++) {
     PetscCall(PetscFree(s->row[l]));
     PetscCall(PetscFree(s->up[l]));
     PetscCall(PetscFree(s->off[l]));
     PetscCall(PetscFree(s->lo[l]));
-    PetscCall(PetscFree(s->c[l]));
   }
   PetscCall(PetscFree(s->diagCell));
   PetscCall(PetscFree(s->diagVal));
@@ -73,7 +79,7 @@ static PetscErrorCode PffShellDestroy(void *ctx)
 /* y += sum over the faces inside the blocks, per block and axis, the lower cell one stride down. */
 static inline void PffShellInterior(const PffShell *s, const PetscScalar *restrict x, PetscScalar *restrict y)
 {
-  const PetscReal *restrict cx = s->cin[0], *restrict cy = s->cin[1], *restrict cz = s->cin[2];
+  const PetscReal *restrict cx = s->cf, *restrict cy = s->cf + s->ncells, *restrict cz = s->cf + 2 * s->ncells;
 
   for (PetscInt b = 0; b < s->nblocks; b++) {
     const PetscInt n = s->bn[b], n2 = n * n;
@@ -105,17 +111,17 @@ static inline void PffShellInterior(const PffShell *s, const PetscScalar *restri
 static inline void PffShellFaces(const PffShell *s, PetscInt l, const PetscScalar *x, const PetscScalar *xg,
                                  PetscScalar *y, PetscScalar *yg)
 {
-  const PetscInt  *up = s->up[l], *off = s->off[l], *lo = s->lo[l], nc = s->ncells;
-  const PetscReal *c = s->c[l];
+  const PetscInt  *up = s->up[l], *off = s->off[l], *lo = s->lo[l], *row = s->row[l], nc = s->ncells;
+  const PetscReal *cf = s->cf;
 
   if (l == PFF_SHELL_LOCAL) {
     for (PetscInt i = 0; i < s->nface[l]; i++) {
       const PetscInt  k0 = off[i], k1 = off[i + 1];
-      const PetscReal w  = k1 - k0 == 1 ? 1.0 : 0.25;
+      const PetscReal w = k1 - k0 == 1 ? 1.0 : 0.25, c = cf[row[i]];
       PetscScalar     xl = 0;
-      if (c[i] == 0) continue; /* closed by the phase field or a solid */
+      if (c == 0) continue; /* closed by the phase field or a solid */
       for (PetscInt k = k0; k < k1; k++) xl += x[lo[k]];
-      const PetscScalar flux = c[i] * (x[up[i]] - w * xl), wf = w * flux;
+      const PetscScalar flux = c * (x[up[i]] - w * xl), wf = w * flux;
       y[up[i]] += flux;
       for (PetscInt k = k0; k < k1; k++) y[lo[k]] -= wf;
     }
@@ -123,11 +129,11 @@ static inline void PffShellFaces(const PffShell *s, PetscInt l, const PetscScala
   }
   for (PetscInt i = 0; i < s->nface[l]; i++) {
     const PetscInt  k0 = off[i], k1 = off[i + 1];
-    const PetscReal w  = k1 - k0 == 1 ? 1.0 : 0.25;
+    const PetscReal w = k1 - k0 == 1 ? 1.0 : 0.25, c = cf[row[i]];
     PetscScalar     xl = 0;
-    if (c[i] == 0) continue;
+    if (c == 0) continue;
     for (PetscInt k = k0; k < k1; k++) xl += lo[k] < nc ? x[lo[k]] : xg[lo[k] - nc];
-    const PetscScalar flux = c[i] * (x[up[i]] - w * xl), wf = w * flux;
+    const PetscScalar flux = c * (x[up[i]] - w * xl), wf = w * flux;
     y[up[i]] += flux;
     for (PetscInt k = k0; k < k1; k++) {
       if (lo[k] < nc)
@@ -246,13 +252,15 @@ PetscErrorCode PffPressureShellCreate_Private(PffPressure ps, Mat *S)
   s->nblocks = ps->nlocal;
   PetscCall(PetscMalloc1(ps->nlocal + 1, &s->bstart));
   PetscCall(PetscMalloc1(ps->nlocal, &s->bn));
+  PetscCall(PetscMalloc1(ps->nlocal, &s->h));
   PetscCall(PetscArraycpy(s->bstart, ps->blockStart, ps->nlocal + 1));
   for (PetscInt lb = 0; lb < ps->nlocal; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(ps->grid, lb, &info));
     s->bn[lb] = info.n;
+    s->h[lb]  = info.h;
   }
-  for (PetscInt d = 0; d < 3; d++) PetscCall(PetscCalloc1(ps->ncells, &s->cin[d]));
+  PetscCall(PetscCalloc1(3 * ps->ncells, &s->cf));
 
   /* the distinct remote lower cells, and the size of each list */
   PetscCall(PetscMalloc1(nrows + 3 * ps->nfiner, &ghosts));
@@ -278,7 +286,6 @@ PetscErrorCode PffPressureShellCreate_Private(PffPressure ps, Mat *S)
     PetscCall(PetscMalloc1(count[l], &s->up[l]));
     PetscCall(PetscMalloc1(count[l] + 1, &s->off[l]));
     PetscCall(PetscMalloc1(nlo[l], &s->lo[l]));
-    PetscCall(PetscCalloc1(count[l], &s->c[l]));
     s->off[l][0] = 0;
   }
   for (PetscInt r = 0; r < nrows; r++) {
@@ -289,7 +296,7 @@ PetscErrorCode PffPressureShellCreate_Private(PffPressure ps, Mat *S)
     for (PetscInt q = 1; q < m; q++)
       if (cols[q] < ps->rstart || cols[q] >= rend) l = PFF_SHELL_GHOST;
     const PetscInt i = s->nface[l]++;
-    s->row[l][i]     = r;
+    s->row[l][i]     = (r % 3) * ps->ncells + r / 3;
     s->up[l][i]      = r / 3;
     s->off[l][i + 1] = s->off[l][i] + m - 1;
     for (PetscInt q = 1; q < m; q++)
@@ -317,19 +324,18 @@ PetscErrorCode PffPressureShellCreate_Private(PffPressure ps, Mat *S)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Copies c_f from ps->coef into the lists and rebuilds the diagonal, sum_f c_f (1 on the upper cell,
-   w_k^2 on the lower ones), with the ghost part sent home. Then the diagonal-only terms of the assembly
-   (operator.c): the Dirichlet wall terms 2 h beta of ps->dirdiag, and 1 for a cell whose diagonal is
-   still exactly zero (every face closed, no Dirichlet term), the criterion of the assembly. */
+/* Rebuilds the diagonal from the shell's c_f, sum_f c_f (1 on the upper cell, w_k^2 on the lower ones),
+   with the ghost part sent home. Then the diagonal-only terms of the assembly (operator.c): the
+   Dirichlet wall terms 2 h beta of ps->dirdiag, and 1 for a cell whose diagonal is still exactly zero
+   (every face closed, no Dirichlet term), the criterion of the assembly. */
 PetscErrorCode PffPressureShellUpdate_Private(PffPressure ps, Mat S)
 {
   PffShell          *s;
-  const PetscScalar *coef, *dd;
+  const PetscScalar *dd;
   PetscScalar       *d, *dg;
 
   PetscFunctionBeginUser;
   PetscCall(MatShellGetContext(S, &s));
-  PetscCall(VecGetArrayRead(ps->coef, &coef));
   PetscCall(VecGetArrayWrite(s->diag, &d));
   PetscCall(VecGetArrayWrite(s->yg, &dg));
   PetscCall(PetscArrayzero(d, s->ncells));
@@ -338,18 +344,16 @@ PetscErrorCode PffPressureShellUpdate_Private(PffPressure ps, Mat S)
     const PetscInt n = s->bn[b], stride[3] = {1, n, n * n};
     for (PetscInt c = s->bstart[b]; c < s->bstart[b + 1]; c++)
       for (PetscInt e = 0; e < 3; e++) {
-        const PetscInt r = 3 * c + e;
-        s->cin[e][c]     = ps->kind[r] == PFF_FACE_INTERIOR ? PetscRealPart(coef[r]) : 0.0;
-        if (ps->kind[r] != PFF_FACE_INTERIOR) continue;
-        d[c] += s->cin[e][c];
-        d[c - stride[e]] += s->cin[e][c];
+        if (ps->kind[3 * c + e] != PFF_FACE_INTERIOR) continue;
+        const PetscReal cf = s->cf[e * s->ncells + c];
+        d[c] += cf;
+        d[c - stride[e]] += cf;
       }
   }
   for (PetscInt l = 0; l < PFF_SHELL_NLISTS; l++)
     for (PetscInt i = 0; i < s->nface[l]; i++) {
       const PetscInt  k0 = s->off[l][i], k1 = s->off[l][i + 1];
-      const PetscReal w = k1 - k0 == 1 ? 1.0 : 0.25, c = PetscRealPart(coef[s->row[l][i]]);
-      s->c[l][i] = c;
+      const PetscReal w = k1 - k0 == 1 ? 1.0 : 0.25, c = s->cf[s->row[l][i]];
       d[s->up[l][i]] += c;
       for (PetscInt k = k0; k < k1; k++) {
         if (s->lo[l][k] < s->ncells)
@@ -360,7 +364,6 @@ PetscErrorCode PffPressureShellUpdate_Private(PffPressure ps, Mat S)
     }
   PetscCall(VecRestoreArrayWrite(s->yg, &dg));
   PetscCall(VecRestoreArrayWrite(s->diag, &d));
-  PetscCall(VecRestoreArrayRead(ps->coef, &coef));
   PetscCall(VecScatterBegin(s->scatter, s->yg, s->diag, ADD_VALUES, SCATTER_REVERSE));
   PetscCall(VecScatterEnd(s->scatter, s->yg, s->diag, ADD_VALUES, SCATTER_REVERSE));
 
@@ -390,5 +393,109 @@ PetscErrorCode PffPressureShellUpdate_Private(PffPressure ps, Mat S)
   PetscCall(MatAssemblyBegin(S, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(S, MAT_FINAL_ASSEMBLY));
   PetscCall(MatSetNullSpace(S, ps->nullsp));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureShellGetCoefficients_Private(Mat S, PetscReal **cf)
+{
+  PffShell *s;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatShellGetContext(S, &s));
+  *cf = s->cf;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* y = G^T diag(M) (mask u) = sum_f h_upper^2 u_f g_f over the face rows r = 3 c + d of the face Vec u,
+   with mask the open faces (c_f != 0) if openOnly, else every face that has a lower cell (walls and
+   inactive neighbours have no row in G). -y is V D u, the volume-weighted divergence. */
+PetscErrorCode PffPressureShellDivergence_Private(PffPressure ps, Mat S, Vec u, PetscBool openOnly, Vec y)
+{
+  PffShell          *s;
+  const PetscScalar *ua;
+  PetscScalar       *ya, *yg;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatShellGetContext(S, &s));
+  PetscCall(VecGetArrayRead(u, &ua));
+  PetscCall(VecGetArrayWrite(y, &ya));
+  PetscCall(VecGetArrayWrite(s->yg, &yg));
+  PetscCall(PetscArrayzero(ya, s->ncells));
+  PetscCall(PetscArrayzero(yg, s->nghost));
+  for (PetscInt b = 0; b < s->nblocks; b++) {
+    const PetscInt  n = s->bn[b], stride[3] = {1, n, n * n};
+    const PetscReal h2 = s->h[b] * s->h[b];
+    for (PetscInt c = s->bstart[b]; c < s->bstart[b + 1]; c++)
+      for (PetscInt e = 0; e < 3; e++) {
+        if (ps->kind[3 * c + e] != PFF_FACE_INTERIOR || (openOnly && s->cf[e * s->ncells + c] == 0)) continue;
+        const PetscScalar f = h2 * ua[3 * c + e];
+        ya[c] += f;
+        ya[c - stride[e]] -= f;
+      }
+  }
+  for (PetscInt l = 0; l < PFF_SHELL_NLISTS; l++)
+    for (PetscInt i = 0, b = 0; i < s->nface[l]; i++) {
+      const PetscInt  k0 = s->off[l][i], k1 = s->off[l][i + 1], c = s->up[l][i], e = s->row[l][i] / s->ncells;
+      const PetscReal w = k1 - k0 == 1 ? 1.0 : 0.25;
+      if (openOnly && s->cf[s->row[l][i]] == 0) continue;
+      while (c >= s->bstart[b + 1]) b++; /* the lists run in cell order */
+      const PetscScalar f = s->h[b] * s->h[b] * ua[3 * c + e];
+      ya[c] += f;
+      for (PetscInt k = k0; k < k1; k++) {
+        if (s->lo[l][k] < s->ncells)
+          ya[s->lo[l][k]] -= w * f;
+        else
+          yg[s->lo[l][k] - s->ncells] -= w * f;
+      }
+    }
+  PetscCall(VecRestoreArrayWrite(s->yg, &yg));
+  PetscCall(VecRestoreArrayWrite(y, &ya));
+  PetscCall(VecRestoreArrayRead(u, &ua));
+  PetscCall(VecScatterBegin(s->scatter, s->yg, y, ADD_VALUES, SCATTER_REVERSE));
+  PetscCall(VecScatterEnd(s->scatter, s->yg, y, ADD_VALUES, SCATTER_REVERSE));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* u_f <- u_f - dt beta_f (G p)_f on the open faces, 0 on the closed ones, in the face Vec u. On an open
+   face beta_f (G p)_f = c_f (p_upper - sum_k w_k p_lower_k) / h_upper^2 (see the top of the file). */
+PetscErrorCode PffPressureShellProjectVelocity_Private(PffPressure ps, Mat S, Vec p, PetscReal dt, Vec u)
+{
+  PffShell          *s;
+  const PetscScalar *pa, *pg;
+  PetscScalar       *ua;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatShellGetContext(S, &s));
+  PetscCall(VecScatterBegin(s->scatter, p, s->xg, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecGetArrayRead(p, &pa));
+  PetscCall(VecGetArray(u, &ua));
+  for (PetscInt b = 0; b < s->nblocks; b++) {
+    const PetscInt  n = s->bn[b], stride[3] = {1, n, n * n};
+    const PetscReal ih2 = dt / (s->h[b] * s->h[b]);
+    for (PetscInt c = s->bstart[b]; c < s->bstart[b + 1]; c++)
+      for (PetscInt e = 0; e < 3; e++) {
+        const PetscInt  r  = 3 * c + e;
+        const PetscReal cf = s->cf[e * s->ncells + c];
+        if (cf == 0)
+          ua[r] = 0; /* closed, a wall or an inactive neighbour */
+        else if (ps->kind[r] == PFF_FACE_INTERIOR)
+          ua[r] -= ih2 * cf * (pa[c] - pa[c - stride[e]]);
+      }
+  }
+  PetscCall(VecScatterEnd(s->scatter, p, s->xg, INSERT_VALUES, SCATTER_FORWARD));
+  PetscCall(VecGetArrayRead(s->xg, &pg));
+  for (PetscInt l = 0; l < PFF_SHELL_NLISTS; l++)
+    for (PetscInt i = 0, b = 0; i < s->nface[l]; i++) {
+      const PetscInt  k0 = s->off[l][i], k1 = s->off[l][i + 1], c = s->up[l][i], e = s->row[l][i] / s->ncells;
+      const PetscReal w = k1 - k0 == 1 ? 1.0 : 0.25, cf = s->cf[s->row[l][i]];
+      PetscScalar     pl = 0;
+      if (cf == 0) continue;
+      while (c >= s->bstart[b + 1]) b++;
+      for (PetscInt k = k0; k < k1; k++) pl += s->lo[l][k] < s->ncells ? pa[s->lo[l][k]] : pg[s->lo[l][k] - s->ncells];
+      ua[3 * c + e] -= dt * cf * (pa[c] - w * pl) / (s->h[b] * s->h[b]);
+    }
+  PetscCall(VecRestoreArrayRead(s->xg, &pg));
+  PetscCall(VecRestoreArray(u, &ua));
+  PetscCall(VecRestoreArrayRead(p, &pa));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
