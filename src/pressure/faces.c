@@ -71,15 +71,15 @@ PetscErrorCode PffPressureBuildFaces_Private(PffPressure ps)
 
   PetscCall(PetscMalloc1(3 * ps->ncells, &ps->kind));
   PetscCall(PetscMalloc1(3 * ps->ncells, &ps->lower));
-  PetscCall(PetscMalloc1(3 * ps->ncells, &ps->dface));
+  PetscCall(PetscMalloc1(ps->nlocal, &ps->hblock));
   PetscCall(PetscMalloc1(4 * nfiner, &ps->lower4));
   ps->nfiner = 0;
 
   for (PetscInt lb = 0; lb < ps->nlocal; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(grid, lb, &info));
-    const PetscInt  n = info.n, c0 = ps->blockStart[lb];
-    const PetscReal h = info.h;
+    const PetscInt n = info.n, c0 = ps->blockStart[lb];
+    ps->hblock[lb] = info.h;
     for (PetscInt d = 0; d < 3; d++) {
       PetscInt dir[3]     = {0, 0, 0};
       dir[d]              = -1;
@@ -106,7 +106,6 @@ PetscErrorCode PffPressureBuildFaces_Private(PffPressure ps)
               lo[d]--;
               ps->kind[r]  = PFF_FACE_INTERIOR;
               ps->lower[r] = (PetscInt)(rstart + c0) + lo[0] + n * (lo[1] + n * lo[2]);
-              ps->dface[r] = h;
               continue;
             }
             ps->kind[r] = (unsigned char)bkind;
@@ -114,20 +113,17 @@ PetscErrorCode PffPressureBuildFaces_Private(PffPressure ps)
             case PFF_FACE_WALL:
             case PFF_FACE_INACTIVE:
               ps->lower[r] = -1;
-              ps->dface[r] = 0;
               break;
             case PFF_FACE_SAME: {
               PetscInt lo[3] = {i, j, k};
               lo[d]          = n - 1;
               ps->lower[r]   = CellNumber(nfirst, n, lo[0], lo[1], lo[2]);
-              ps->dface[r]   = h;
             } break;
             case PFF_FACE_COARSER: {
               const PetscInt nc    = n / 2;
               PetscInt       lo[3] = {i / 2, j / 2, k / 2};
               lo[d]                = nc - 1;
               ps->lower[r]         = CellNumber(nfirst, nc, lo[0], lo[1], lo[2]);
-              ps->dface[r]         = PFF_PRESSURE_DELTA_G * 2 * h;
             } break;
             case PFF_FACE_FINER: {
               const PetscInt nf = 2 * n;
@@ -143,7 +139,6 @@ PetscErrorCode PffPressureBuildFaces_Private(PffPressure ps)
                   ps->lower4[4 * ps->nfiner + q++] = CellNumber(nfirst, nf, lo[0], lo[1], lo[2]);
                 }
               ps->lower[r] = ps->nfiner++;
-              ps->dface[r] = PFF_PRESSURE_DELTA_G * 2 * (h / 2); /* Delta_g 2 h_fine */
             } break;
             default:
               break;
@@ -165,25 +160,29 @@ PetscErrorCode PffPressureBuildGradient_Private(PffPressure ps)
   PetscFunctionBeginUser;
   PetscCall(PetscCalloc1(nrows, &dnz));
   PetscCall(PetscCalloc1(nrows, &onz));
-  for (PetscInt r = 0; r < nrows; r++) {
-    PetscInt    cols[5], m;
-    PetscScalar vals[5];
-    m = PffPressureGradientRow(ps, r, cols, vals);
-    for (PetscInt q = 0; q < m; q++) {
-      if (cols[q] >= ps->rstart && cols[q] < cend)
-        dnz[r]++;
-      else
-        onz[r]++;
+  for (PetscInt lb = 0; lb < ps->nlocal; lb++)
+    for (PetscInt r = 3 * ps->blockStart[lb]; r < 3 * ps->blockStart[lb + 1]; r++) {
+      const PetscReal h = ps->hblock[lb];
+      PetscInt        cols[5], m;
+      PetscScalar     vals[5];
+      m = PffPressureGradientRow(ps, r, h, cols, vals);
+      for (PetscInt q = 0; q < m; q++) {
+        if (cols[q] >= ps->rstart && cols[q] < cend)
+          dnz[r]++;
+        else
+          onz[r]++;
+      }
     }
-  }
   PetscCall(MatCreateAIJ(ps->comm, nrows, ps->ncells, 3 * ps->ntotal, ps->ntotal, 0, dnz, 0, onz, &ps->G));
   PetscCall(MatSetOption(ps->G, MAT_NO_OFF_PROC_ENTRIES, PETSC_TRUE));
-  for (PetscInt r = 0; r < nrows; r++) {
-    PetscInt    cols[5], m, row = 3 * ps->rstart + r;
-    PetscScalar vals[5];
-    m = PffPressureGradientRow(ps, r, cols, vals);
-    if (m) PetscCall(MatSetValues(ps->G, 1, &row, m, cols, vals, INSERT_VALUES));
-  }
+  for (PetscInt lb = 0; lb < ps->nlocal; lb++)
+    for (PetscInt r = 3 * ps->blockStart[lb]; r < 3 * ps->blockStart[lb + 1]; r++) {
+      const PetscReal h = ps->hblock[lb];
+      PetscInt        cols[5], m, row = 3 * ps->rstart + r;
+      PetscScalar     vals[5];
+      m = PffPressureGradientRow(ps, r, h, cols, vals);
+      if (m) PetscCall(MatSetValues(ps->G, 1, &row, m, cols, vals, INSERT_VALUES));
+    }
   PetscCall(MatAssemblyBegin(ps->G, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(ps->G, MAT_FINAL_ASSEMBLY));
   PetscCall(PetscFree(dnz));

@@ -91,15 +91,16 @@ static PetscErrorCode AssembleDirect(PffPressure ps)
   PetscFunctionBeginUser;
   PetscCall(MatZeroEntries(ps->A));
   PetscCall(VecGetArrayRead(ps->w, &w));
-  for (PetscInt r = 0; r < 3 * ps->ncells; r++) {
-    PetscInt    cols[5], m;
-    PetscScalar g[5], vals[25];
-    if (w[r] == 0) continue;
-    m = PffPressureGradientRow(ps, r, cols, g);
-    for (PetscInt a = 0; a < m; a++)
-      for (PetscInt b = 0; b < m; b++) vals[a * m + b] = w[r] * g[a] * g[b];
-    PetscCall(MatSetValues(ps->A, m, cols, m, cols, vals, ADD_VALUES));
-  }
+  for (PetscInt lb = 0; lb < ps->nlocal; lb++)
+    for (PetscInt r = 3 * ps->blockStart[lb]; r < 3 * ps->blockStart[lb + 1]; r++) {
+      PetscInt    cols[5], m;
+      PetscScalar g[5], vals[25];
+      if (w[r] == 0) continue;
+      m = PffPressureGradientRow(ps, r, ps->hblock[lb], cols, g);
+      for (PetscInt a = 0; a < m; a++)
+        for (PetscInt b = 0; b < m; b++) vals[a * m + b] = w[r] * g[a] * g[b];
+      PetscCall(MatSetValues(ps->A, m, cols, m, cols, vals, ADD_VALUES));
+    }
   PetscCall(VecRestoreArrayRead(ps->w, &w));
   PetscCall(MatAssemblyBegin(ps->A, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(ps->A, MAT_FINAL_ASSEMBLY));
@@ -185,11 +186,12 @@ PetscErrorCode PffPressureNullSpace_Private(PffPressure ps)
    from the channels into the shell's coefficient arrays; the Dirichlet terms; A if it exists. */
 PetscErrorCode PffPressureAssemble_Private(PffPressure ps, PetscInt chBeta, PetscInt chOpen)
 {
-  PetscScalar   *dd;
-  PetscInt       bad     = -1, gbad, nb[3];
-  PetscReal      badBeta = 0;
-  const PetscInt nc      = ps->ncells;
-  PffChannelKind kb, ko = PFF_CHANNEL_FACE;
+  PetscScalar    *dd      = NULL;
+  const PetscBool dir     = PffPressureHasDirichlet_Private(ps);
+  PetscInt        bad     = -1, gbad, nb[3];
+  PetscReal       badBeta = 0;
+  const PetscInt  nc      = ps->ncells;
+  PffChannelKind  kb, ko = PFF_CHANNEL_FACE;
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetChannelInfo(ps->grid, chBeta, NULL, &kb, NULL, NULL));
@@ -197,8 +199,11 @@ PetscErrorCode PffPressureAssemble_Private(PffPressure ps, PetscInt chBeta, Pets
   PetscCheck(kb == PFF_CHANNEL_FACE && ko == PFF_CHANNEL_FACE, ps->comm, PETSC_ERR_ARG_WRONG,
              "pressure: the beta and open channels must be face channels");
   PetscCall(PffGridGetRaster(ps->grid, nb, NULL, NULL));
-  PetscCall(VecSet(ps->dirdiag, 0.0));
-  PetscCall(VecGetArray(ps->dirdiag, &dd));
+  if (dir && !ps->dirdiag) PetscCall(VecDuplicate(ps->p, &ps->dirdiag));
+  if (ps->dirdiag) {
+    PetscCall(VecSet(ps->dirdiag, 0.0));
+    PetscCall(VecGetArray(ps->dirdiag, &dd));
+  }
   for (PetscInt lb = 0; lb < ps->nlocal; lb++) {
     PffBlockInfo info;
     float       *beta[3], *open[3] = {NULL, NULL, NULL};
@@ -219,14 +224,14 @@ PetscErrorCode PffPressureAssemble_Private(PffPressure ps, PetscInt chBeta, Pets
           bad     = r;
           badBeta = bf;
         }
-        ps->cf[d * nc + c] = op ? h2 * bf / ps->dface[r] : 0.0;
+        ps->cf[d * nc + c] = op ? h2 * bf / PffPressureFaceDistance(ps->kind[r], info.h) : 0.0;
       }
-    if (bad < 0 && PffPressureHasDirichlet_Private(ps)) {
+    if (bad < 0 && dir) {
       PetscCall(PffPressureDirichletTerms(ps, lb, nb, beta, dd, &bad));
       if (bad >= 0) badBeta = beta[bad % 3][bad / 3 - c0];
     }
   }
-  PetscCall(VecRestoreArray(ps->dirdiag, &dd));
+  if (ps->dirdiag) PetscCall(VecRestoreArray(ps->dirdiag, &dd));
   PetscCall(MPIU_Allreduce(&bad, &gbad, 1, MPIU_INT, MPI_MAX, ps->comm));
   PetscCheck(
       gbad < 0, ps->comm, PETSC_ERR_ARG_OUTOFRANGE,
@@ -270,9 +275,12 @@ PetscErrorCode PffPressureAssembleOperator_Private(PffPressure ps)
 
   PetscFunctionBeginUser;
   PetscCall(VecGetArrayWrite(ps->w, &w));
-  for (PetscInt c = 0; c < ps->ncells; c++)
-    for (PetscInt d = 0; d < 3; d++)
-      w[3 * c + d] = ps->cf[d * ps->ncells + c] * ps->dface[3 * c + d] * ps->dface[3 * c + d];
+  for (PetscInt lb = 0; lb < ps->nlocal; lb++)
+    for (PetscInt c = ps->blockStart[lb]; c < ps->blockStart[lb + 1]; c++)
+      for (PetscInt d = 0; d < 3; d++) {
+        const PetscReal df = PffPressureFaceDistance(ps->kind[3 * c + d], ps->hblock[lb]);
+        w[3 * c + d]       = ps->cf[d * ps->ncells + c] * df * df;
+      }
   PetscCall(VecRestoreArrayWrite(ps->w, &w));
   if (ps->assembly == PFF_PRESSURE_ASSEMBLY_PTAP) {
     PetscCall(MatDiagonalSet(ps->W, ps->w, INSERT_VALUES));

@@ -18,10 +18,11 @@ const char *const PffPressureOperatorTypes[] = {"aij", "shell", "PffPressureOper
 #define PFF_PRESSURE_KSP_TYPE_DEFAULT KSPFCG
 #define PFF_PRESSURE_PC_TYPE_DEFAULT "pffmg"
 #define PFF_PRESSURE_RTOL_DEFAULT 1e-4
-/* FCG keeps this many earlier directions (two cell Vecs each): PETSc's 30 (10 allocated up front) cost
-   20 to 62 cell Vecs; 4 keeps the 8 iterations of the 128^3 bubbly problem at 1e3 to 1e5 and costs 10
-   (docs/pressure.md). 1 is the paper's Polak-Ribiere flexible CG. */
-#define PFF_PRESSURE_FCG_MMAX_DEFAULT 4
+/* FCG keeps this many earlier directions (two cell Vecs each, allocated up front): PETSc's 30 cost 20
+   to 62 cell Vecs; 2 keeps the iterations of the 128^3 bubbly problem at 1e3 to 1e5 and of the bubbles
+   scene and costs 6, but needs more on the hard 64^3 problem at 1e5 (docs/pressure.md). 1 is the
+   paper's Polak-Ribiere flexible CG. */
+#define PFF_PRESSURE_FCG_MMAX_DEFAULT 2
 #define PFF_PRESSURE_ASSEMBLY_DEFAULT PFF_PRESSURE_ASSEMBLY_PTAP
 #define PFF_PRESSURE_OPERATOR_DEFAULT PFF_PRESSURE_OPERATOR_AIJ
 
@@ -164,7 +165,6 @@ PetscErrorCode PffPressureSetUp(PffPressure ps)
   PetscCall(VecDuplicate(ps->p, &ps->b));
   PetscCall(VecDuplicate(ps->p, &ps->vcell));
   PetscCall(VecDuplicate(ps->p, &ps->diag));
-  PetscCall(VecDuplicate(ps->p, &ps->dirdiag));
   /* the shell holds the face coefficients and the face lists of the divergence and gradient */
   PetscCall(PffPressureShellCreate_Private(ps, &ps->S));
   PetscCall(PffPressureShellGetCoefficients_Private(ps->S, &ps->cf));
@@ -202,7 +202,7 @@ PetscErrorCode PffPressureDestroy(PffPressure *ps)
   PetscCall(PetscFree(p->kind));
   PetscCall(PetscFree(p->lower));
   PetscCall(PetscFree(p->lower4));
-  PetscCall(PetscFree(p->dface));
+  PetscCall(PetscFree(p->hblock));
   PetscCall(PetscFree(*ps));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -236,7 +236,7 @@ PetscErrorCode PffPressureSetCoefficients(PffPressure ps, PetscInt chBeta, Petsc
   PetscCall(PffPressureShellUpdate_Private(ps, ps->S));
   if (!ps->A) { /* diagonal and null space from the faces */
     PetscCall(PffPressureShellFaceDiagonal_Private(ps->S, ps->diag));
-    PetscCall(VecAXPY(ps->diag, 1.0, ps->dirdiag));
+    if (ps->dirdiag) PetscCall(VecAXPY(ps->diag, 1.0, ps->dirdiag));
     PetscCall(PffPressureNullSpace_Private(ps));
     PetscCall(MatSetNullSpace(ps->S, ps->nullsp));
   }
@@ -375,6 +375,10 @@ PetscErrorCode PffPressureGetDirichletDiagonal(PffPressure ps, Vec *dirdiag)
 {
   PetscFunctionBeginUser;
   PetscCall(PffPressureCheckSetUp(ps, PETSC_TRUE));
+  if (!ps->dirdiag) { /* no Dirichlet wall: zero, made only when asked for */
+    PetscCall(VecDuplicate(ps->p, &ps->dirdiag));
+    PetscCall(VecSet(ps->dirdiag, 0.0));
+  }
   *dirdiag = ps->dirdiag;
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -35,7 +35,7 @@ struct _n_PffPressure {
   PetscInt      *lower;  /* global lower cell; for PFF_FACE_FINER the index of its 4-cell set; -1 when closed */
   PetscInt      *lower4; /* [4 * nfiner] the fine cells under each coarse face */
   PetscInt       nfiner;
-  PetscReal     *dface;                  /* d_f (0 when closed) */
+  PetscReal     *hblock;                 /* [nlocal] cell size of each owned block; d_f from it and the kind */
   PetscInt64     nkind[PFF_FACE_NKINDS]; /* global counts per class, for PffPressureView-style info */
 
   /* G, W, w and A exist only when something needs A's entries (PffPressureCreateOperator_Private):
@@ -70,11 +70,30 @@ static inline PetscBool PffPressureHasDirichlet_Private(PffPressure ps)
   return PETSC_FALSE;
 }
 
-/* Columns and values of face row r of G: at most 5 (the cell, and 1 or 4 lower cells). */
-static inline PetscInt PffPressureGradientRow(PffPressure ps, PetscInt r, PetscInt cols[5], PetscScalar vals[5])
+/* d_f of a face of the given kind below a cell of size h, the distance between the cell centres on both
+   sides (faces.c); 0 when closed. */
+static inline PetscReal PffPressureFaceDistance(PetscInt kind, PetscReal h)
+{
+  switch (kind) {
+  case PFF_FACE_INTERIOR:
+  case PFF_FACE_SAME:
+    return h;
+  case PFF_FACE_COARSER:
+    return PFF_PRESSURE_DELTA_G * 2 * h;
+  case PFF_FACE_FINER:
+    return PFF_PRESSURE_DELTA_G * 2 * (h / 2); /* Delta_g 2 h_fine */
+  default:
+    return 0;
+  }
+}
+
+/* Columns and values of face row r of G, the row of a cell of size h: at most 5 (the cell, and 1 or 4
+   lower cells). */
+static inline PetscInt PffPressureGradientRow(PffPressure ps, PetscInt r, PetscReal h, PetscInt cols[5],
+                                              PetscScalar vals[5])
 {
   const PetscInt  kind = ps->kind[r];
-  const PetscReal id   = ps->dface[r] > 0 ? 1.0 / ps->dface[r] : 0.0;
+  const PetscReal df = PffPressureFaceDistance(kind, h), id = df > 0 ? 1.0 / df : 0.0;
 
   if (kind == PFF_FACE_WALL || kind == PFF_FACE_INACTIVE) return 0;
   cols[0] = ps->rstart + r / 3;

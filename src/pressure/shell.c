@@ -268,7 +268,7 @@ PetscErrorCode PffPressureShellCreate_Private(PffPressure ps, Mat *S)
     PetscInt    cols[5], m;
     PetscBool   remote = PETSC_FALSE;
     PetscScalar vals[5];
-    m = PffPressureGradientRow(ps, r, cols, vals);
+    m = PffPressureGradientRow(ps, r, 1, cols, vals);         /* the columns only */
     if (m == 0 || ps->kind[r] == PFF_FACE_INTERIOR) continue; /* wall or inactive: never a flux */
     for (PetscInt q = 1; q < m; q++)
       if (cols[q] < ps->rstart || cols[q] >= rend) {
@@ -291,7 +291,7 @@ PetscErrorCode PffPressureShellCreate_Private(PffPressure ps, Mat *S)
   for (PetscInt r = 0; r < nrows; r++) {
     PetscInt    cols[5], m, l = PFF_SHELL_LOCAL;
     PetscScalar vals[5];
-    m = PffPressureGradientRow(ps, r, cols, vals);
+    m = PffPressureGradientRow(ps, r, 1, cols, vals); /* the columns only */
     if (m == 0 || ps->kind[r] == PFF_FACE_INTERIOR) continue;
     for (PetscInt q = 1; q < m; q++)
       if (cols[q] < ps->rstart || cols[q] >= rend) l = PFF_SHELL_GHOST;
@@ -370,22 +370,23 @@ PetscErrorCode PffPressureShellUpdate_Private(PffPressure ps, Mat S)
   PetscCall(PetscFree(s->diagCell));
   PetscCall(PetscFree(s->diagVal));
   PetscCall(VecGetArray(s->diag, &d));
-  PetscCall(VecGetArrayRead(ps->dirdiag, &dd));
+  dd = NULL;
+  if (ps->dirdiag) PetscCall(VecGetArrayRead(ps->dirdiag, &dd));
   s->ndiag = 0;
   for (PetscInt i = 0; i < s->ncells; i++)
-    if (PetscRealPart(dd[i]) != 0 || PetscRealPart(d[i]) == 0) s->ndiag++;
+    if ((dd && PetscRealPart(dd[i]) != 0) || PetscRealPart(d[i]) == 0) s->ndiag++;
   PetscCall(PetscMalloc1(s->ndiag, &s->diagCell));
   PetscCall(PetscMalloc1(s->ndiag, &s->diagVal));
   s->ndiag = 0;
   for (PetscInt i = 0; i < s->ncells; i++) {
-    PetscReal extra = PetscRealPart(dd[i]);
+    PetscReal extra = dd ? PetscRealPart(dd[i]) : 0;
     if (PetscRealPart(d[i]) + extra == 0) extra = 1.0; /* no open face and no Dirichlet term */
     if (extra == 0) continue;
     d[i] += extra;
     s->diagCell[s->ndiag]  = i;
     s->diagVal[s->ndiag++] = extra;
   }
-  PetscCall(VecRestoreArrayRead(ps->dirdiag, &dd));
+  if (ps->dirdiag) PetscCall(VecRestoreArrayRead(ps->dirdiag, &dd));
   PetscCall(VecRestoreArray(s->diag, &d));
   s->updated = PETSC_TRUE;
   /* new values: a PC built from this operator (the matrix-free pffmg) must set up again, and PETSc
