@@ -127,7 +127,8 @@ typedef struct {
   PetscReal     *r0;                /* [nlocal] first-sweep maxima of the active blocks (theta) */
   PetscReal     *R;                 /* [Rsize * threads] effective residual per cell of the block each thread relaxes */
   size_t         Rsize;             /* n0^3 */
-  unsigned char *colour;            /* [nlocal] block colour (x_b + y_b + z_b) mod 2 */
+  PetscScalar   *BB;     /* [Rsize * threads] right-hand side of the block each thread relaxes (stencil levels) */
+  unsigned char *colour; /* [nlocal] block colour (x_b + y_b + z_b) mod 2 */
   PffMGStats     stats;
 } PffMG;
 
@@ -141,5 +142,7 @@ PETSC_INTERN PetscErrorCode PffMGStencilUpdate_Private(PffMG *, PetscInt);
 PETSC_INTERN PetscErrorCode PffMGStencilAssemble_Private(PffMG *, PetscInt, Mat *);
 PETSC_INTERN PetscErrorCode PffMGStencilCreateShell_Private(PffMG *, PetscInt);
 PETSC_INTERN PetscErrorCode PffMGStencilDestroy_Private(PffMGLevel *);
-PETSC_INTERN PetscReal PffMGStencilRelaxBlock_Private(const PffMGLevel *, PetscInt, const PetscScalar *, PetscScalar *,
-                                                      const PetscScalar *, PetscReal, PetscReal *);
+PETSC_INTERN PetscBool      PffMGStencilBlockRhs_Private(const PffMGLevel *, PetscInt, const PetscScalar *,
+                                                         const PetscScalar *, const PetscScalar *, PetscScalar *);
+PETSC_INTERN PetscReal      PffMGStencilRelaxBlock_Private(const PffMGLevel *, PetscInt, const PetscScalar *, PetscBool,
+                                                           PetscScalar *, PetscReal, PetscReal *);

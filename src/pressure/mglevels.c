@@ -450,8 +450,9 @@ PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
   PetscCall(PetscMalloc5(6 * mg->nlocal, &mg->nbr, 6 * mg->nlocal, &mg->actLeafOf, mg->nlocal, &mg->bres,
                          6 * mg->nlocal, &mg->face, mg->nlocal, &mg->list));
   mg->Rsize = (size_t)n0 * n0 * n0;
-  PetscCall(PetscMalloc5(mg->nlocal, &mg->gid, mg->nlocal, &mg->colour, mg->nlocal, &mg->next, mg->nlocal, &mg->r0,
-                         mg->Rsize * (size_t)omp_get_max_threads(), &mg->R));
+  PetscCall(PetscMalloc6(mg->nlocal, &mg->gid, mg->nlocal, &mg->colour, mg->nlocal, &mg->next, mg->nlocal, &mg->r0,
+                         mg->Rsize * (size_t)omp_get_max_threads(), &mg->R, mg->Rsize * (size_t)omp_get_max_threads(),
+                         &mg->BB));
   for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(mg->grid, lb, &info));
@@ -632,7 +633,7 @@ PetscErrorCode PffMGDestroyLevels_Private(PffMG *mg)
     PetscCall(PetscFree5(mg->nbr, mg->actLeafOf, mg->bres, mg->face, mg->list));
     PetscCall(PetscFree2(mg->actLeaf, mg->actRoot));
     PetscCall(PetscSFDestroy(&mg->actSF));
-    PetscCall(PetscFree5(mg->gid, mg->colour, mg->next, mg->r0, mg->R));
+    PetscCall(PetscFree6(mg->gid, mg->colour, mg->next, mg->r0, mg->R, mg->BB));
   }
   mg->nlevels = 0;
   mg->built   = PETSC_FALSE;

@@ -63,14 +63,32 @@ static inline PetscReal RelaxRows(const PffMGLevel *lv, PetscInt q0, PetscInt q1
   return rmax;
 }
 
-/* One in-place red-black sweep over the cells of local block lb. */
-static inline PetscReal RelaxBlock(const PffMGLevel *lv, PetscInt lb, const PetscScalar *b, PetscScalar *x,
-                                   const PetscScalar *g, PetscReal omega, PetscReal *R)
+/* One visit of local block lb: sweeps in-place red-black sweeps while more() asks for them. A matrix-free
+   level folds the side couplings into the block's right-hand side bb once for the visit
+   (PffMGStencilBlockRhs_Private); an AIJ level relaxes its permuted rows. first receives the first
+   sweep's largest |delta| a_jj, the return value the last one's; k the number of sweeps. */
+static inline PetscReal VisitBlock(const PffMG *mg, const PffMGLevel *lv, PetscInt lb, const PetscScalar *b,
+                                   PetscScalar *x, const PetscScalar *g, PetscScalar *bb, PetscReal *R,
+                                   PetscInt maxSweeps, PetscBool adaptive, PetscReal *first, PetscInt *k)
 {
-  if (lv->mf) return PffMGStencilRelaxBlock_Private(lv, lb, b, x, g, omega, R);
-  const PetscReal r0 = RelaxRows(lv, lv->start[lb], lv->split[lb], lv->start[lb], b, x, g, omega, R);
-  const PetscReal r1 = RelaxRows(lv, lv->split[lb], lv->start[lb + 1], lv->start[lb], b, x, g, omega, R);
-  return PetscMax(r0, r1);
+  const PetscReal omega = mg->opt.omega;
+  PetscReal       r     = 0;
+  PetscBool       own   = PETSC_FALSE;
+
+  if (lv->mf) own = PffMGStencilBlockRhs_Private(lv, lb, b, x, g, bb);
+  for (*k = 0; *k < maxSweeps;) {
+    if (lv->mf)
+      r = PffMGStencilRelaxBlock_Private(lv, lb, bb, own, x, omega, R);
+    else {
+      const PetscReal r0 = RelaxRows(lv, lv->start[lb], lv->split[lb], lv->start[lb], b, x, g, omega, R);
+      const PetscReal r1 = RelaxRows(lv, lv->split[lb], lv->start[lb + 1], lv->start[lb], b, x, g, omega, R);
+      r                  = PetscMax(r0, r1);
+    }
+    if ((*k)++ == 0) *first = r;
+    /* repeated block-local sweeps (Algorithm 2): until the update falls by 1/3 */
+    if (!adaptive || !(*first > 0) || r < *first / 3) break;
+  }
+  return r;
 }
 
 /* Largest R over the cells of face f (0..5: -x, +x, -y, +y, -z, +z) of an n^3 block. */
@@ -137,8 +155,11 @@ PetscErrorCode PffMGSmoothFixed_Private(PffMG *mg, PetscInt L, Vec b, Vec x, Pet
 #pragma omp parallel for reduction(+ : cells) schedule(dynamic, 1) if (q1 - q0 >= 8 && lv->omp)
         for (PetscInt q = q0; q < q1; q++) {
           const PetscInt lb = lv->colourList[q];
+          PetscReal      first;
+          PetscInt       k;
           if (lv->remote[lb] != pass) continue;
-          (void)RelaxBlock(lv, lb, ba, xa, ga, mg->opt.omega, NULL);
+          (void)VisitBlock(mg, lv, lb, ba, xa, ga, mg->BB + mg->Rsize * (size_t)omp_get_thread_num(), NULL, 1,
+                           PETSC_FALSE, &first, &k);
           cells += lv->start[lb + 1] - lv->start[lb];
         }
       }
@@ -196,14 +217,12 @@ static PetscErrorCode RelaxActive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, Petsc
       for (PetscInt q = 0; q < nactive; q++) {
         const PetscInt lb = mg->list[q];
         if (mg->colour[lb] != c || lv->remote[lb] != pass) continue;
-        PetscReal      *R     = mg->R + mg->Rsize * (size_t)omp_get_thread_num();
-        const PetscReal first = RelaxBlock(lv, lb, ba, xa, ga, mg->opt.omega, R);
-        PetscReal       r     = first;
-        PetscInt        k     = 1;
-        if (mg->opt.blockSweeps && first > 0) do {
-            r = RelaxBlock(lv, lb, ba, xa, ga, mg->opt.omega, R);
-            k++;
-          } while (!(r < first / 3 || k >= mg->opt.blockSweepsMax));
+        const size_t    t = mg->Rsize * (size_t)omp_get_thread_num();
+        PetscReal      *R = mg->R + t, first = 0;
+        PetscInt        k;
+        const PetscReal r =
+            VisitBlock(mg, lv, lb, ba, xa, ga, mg->BB + t, R, mg->opt.blockSweeps ? mg->opt.blockSweepsMax : 1,
+                       mg->opt.blockSweeps, &first, &k);
         if (r0) r0[q] = first;
         mg->bres[lb] = r;
         for (PetscInt f = 0; f < 6; f++) mg->face[6 * lb + f] = r > 0 ? FaceMax(R, lv->n[lb], f) : 0.0;

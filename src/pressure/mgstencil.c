@@ -490,18 +490,6 @@ static inline PetscReal Diagonal(const PffMGStencil *st, PetscInt nr, PetscInt r
   return DiagonalInBlock(st, nr, r, i, j, k, n) + st->ds[r];
 }
 
-/* Sum of the side couplings of row r (no diagonal): val x_col. */
-static inline PetscScalar SideSum(const PffMGStencil *st, PetscInt nr, PetscInt r, const PetscScalar *x,
-                                  const PetscScalar *g)
-{
-  PetscScalar s = 0;
-  for (PetscInt e = st->rowptr[r]; e < st->rowptr[r + 1]; e++) {
-    const PetscInt c = st->col[e];
-    s += st->val[e] * (c < nr ? x[c] : g[c - nr]);
-  }
-  return s;
-}
-
 /* Coefficients, side-coupling values and inverse diagonal of level L, at every set-up (levels in order). */
 PetscErrorCode PffMGStencilUpdate_Private(PffMG *mg, PetscInt L)
 {
@@ -544,9 +532,9 @@ PetscErrorCode PffMGStencilUpdate_Private(PffMG *mg, PetscInt L)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* (A x)_r for a cell at either x end of its row (the general path, 2 cells a row). */
-static inline PetscScalar RowEnd(const PffMGStencil *st, PetscInt nr, PetscInt r, PetscInt i, PetscInt j, PetscInt k,
-                                 PetscInt n, const PetscScalar *x, const PetscScalar *g)
+/* The in-block part of (A x)_r, the general path for a cell that must not read past x. */
+static inline PetscScalar RowInBlock(const PffMGStencil *st, PetscInt nr, PetscInt r, PetscInt i, PetscInt j,
+                                     PetscInt k, PetscInt n, const PetscScalar *x)
 {
   const PffMGReal *cx = st->cf, *cy = cx + nr, *cz = cy + nr;
   const PetscInt   n2  = n * n;
@@ -558,15 +546,59 @@ static inline PetscScalar RowEnd(const PffMGStencil *st, PetscInt nr, PetscInt r
   if (j < n - 1) off -= cy[r + n] * x[r + n];
   if (k > 0) off -= cz[r] * x[r - n2];
   if (k < n - 1) off -= cz[r + n2] * x[r + n2];
-  return Diagonal(st, nr, r, i, j, k, n) * x[r] + off + SideSum(st, nr, r, x, g);
+  return Diagonal(st, nr, r, i, j, k, n) * x[r] + off;
 }
 
-/* Relaxes the cell at one x end of its row; returns |omega (b - A x)_r| and stores it in R. */
-static inline PetscReal RelaxEnd(const PffMGLevel *lv, const PffMGStencil *st, PetscInt r, PetscInt i, PetscInt j,
-                                 PetscInt k, PetscInt n, const PetscScalar *b, PetscScalar *x, const PetscScalar *g,
-                                 PetscReal omega, PetscReal *R, PetscInt r0)
+/* bb = b - (the side couplings of the cells of local block lb to other blocks), block-local. The blocks
+   around are frozen while a block is relaxed (the other block colour, or ghosts), so their part of each
+   row is a constant of the block's visit: it is gathered once, in one pass over the block's side list,
+   for all the sweeps of the visit, and the sweeps run one uniform loop. The side terms between cells
+   of the block itself (fine cells under one coarse face above the block) change within a sweep; they
+   are left out here and added row by row (OwnSums). Returns whether the block has any. */
+PetscBool PffMGStencilBlockRhs_Private(const PffMGLevel *lv, PetscInt lb, const PetscScalar *b, const PetscScalar *x,
+                                       const PetscScalar *g, PetscScalar *bb)
 {
-  const PetscScalar s   = b[r] - RowEnd(st, lv->nrows, r, i, j, k, n, x, g);
+  const PffMGStencil *st = lv->st;
+  const PetscInt      n = lv->n[lb], r0 = lv->start[lb], nc = n * n * n, nr = lv->nrows;
+  const PetscInt *restrict rowptr = st->rowptr + r0, *restrict col = st->col;
+  const PffMGReal *restrict val = st->val;
+  PetscBool own                 = PETSC_FALSE;
+
+  for (PetscInt i = 0; i < nc; i++) {
+    PetscScalar s = b[r0 + i];
+    for (PetscInt e = rowptr[i]; e < rowptr[i + 1]; e++) {
+      const PetscInt c = col[e];
+      if (c >= r0 && c < r0 + nc)
+        own = PETSC_TRUE;
+      else
+        s -= val[e] * (c < nr ? x[c] : g[c - nr]);
+    }
+    bb[i] = s;
+  }
+  return own;
+}
+
+/* tb = bb - the in-block side terms of the cells i0, i0 + 2, ... of the row starting at base (see above),
+   with the current x; the other cells keep bb. */
+static inline void OwnSums(const PffMGLevel *lv, PetscInt r0, PetscInt nc, PetscInt base, PetscInt i0, PetscInt n,
+                           const PetscScalar *bb, const PetscScalar *x, PetscScalar *tb)
+{
+  const PffMGStencil *st = lv->st;
+
+  for (PetscInt i = 0; i < n; i++) tb[i] = bb[i];
+  for (PetscInt i = i0; i < n; i += 2)
+    for (PetscInt e = st->rowptr[base + i]; e < st->rowptr[base + i + 1]; e++) {
+      const PetscInt c = st->col[e];
+      if (c >= r0 && c < r0 + nc) tb[i] -= st->val[e] * x[c];
+    }
+}
+
+/* Relaxes the cell at one x end of its row; returns |omega (bb - A x)_r| and stores it in R. */
+static inline PetscReal RelaxEnd(const PffMGLevel *lv, const PffMGStencil *st, PetscInt r, PetscInt i, PetscInt j,
+                                 PetscInt k, PetscInt n, PetscScalar bb, PetscScalar *x, PetscReal omega, PetscReal *R,
+                                 PetscInt r0)
+{
+  const PetscScalar s   = bb - RowInBlock(st, lv->nrows, r, i, j, k, n, x);
   const PetscReal   eff = PetscAbsScalar(omega * s);
   x[r] += omega * s * lv->idiag[r];
   if (R) R[r - r0] = eff;
@@ -587,31 +619,18 @@ static inline void RowEnds(PetscInt n, PffMGRowEnds *e)
   }
 }
 
-/* Side sums of the cells of row base that have side couplings: both ends, and every cell on a row of
-   the block's sides. */
-static inline void RowSideSums(const PffMGStencil *st, PetscInt nr, PetscInt base, PetscInt n, PetscBool side,
-                               const PetscScalar *x, const PetscScalar *g, PetscScalar *sc)
-{
-  if (side)
-    for (PetscInt i = 0; i < n; i++) sc[i] = SideSum(st, nr, base + i, x, g);
-  else {
-    for (PetscInt i = 1; i < n - 1; i++) sc[i] = 0;
-    sc[0]     = SideSum(st, nr, base, x, g);
-    sc[n - 1] = SideSum(st, nr, base + n - 1, x, g);
-  }
-}
-
 /* Relaxes the cells of colour c of the row starting at r0 (n cells, (i + j + k) % 2 == c for i =
    i0, i0 + 2, ...): the candidate values of every cell are computed from x into a buffer, then those
    of the colour are stored. The first loop only reads x, runs over contiguous cells and vectorises (a
    loop over one colour has 8 cells for n = 16, too few for an 8-wide vector); it computes twice the
    cells for no extra memory traffic. The x-neighbours outside the block are read (the cells around the
    row in memory, never outside the array: the first and last rows go through RelaxRowEnds) and
-   weighted 0; sc holds the side sums. R (or NULL) receives |omega (b - A x)| of the colour's cells.
-   Returns their maximum. */
-static inline PetscReal RelaxRow(const PffMGStencil *st, PetscInt nr, const PetscScalar *restrict b, PetscScalar *x,
-                                 PetscInt r0, PetscInt i0, PetscInt n, PffMGRowMask m, const PffMGRowEnds *restrict e,
-                                 const PetscScalar *restrict sc, PetscReal omega, PetscReal *R)
+   weighted 0; bb is the row's right-hand side with its side couplings (PffMGStencilBlockRhs_Private).
+   R (or NULL) receives |omega (bb - A x)| of the colour's cells. Returns their maximum. */
+static inline PetscReal RelaxRow(const PffMGStencil *st, PetscInt                nr, const PetscScalar *restrict bb,
+                                 const PetscScalar *restrict idiag, PetscScalar *x, PetscInt r0, PetscInt i0,
+                                 PetscInt n, PffMGRowMask m, const PffMGRowEnds *restrict e, PetscReal omega,
+                                 PetscReal *R)
 {
   const PffMGReal *restrict cx = st->cf, *restrict cy = cx + nr, *restrict cz = cy + nr;
   const PetscReal *restrict ds   = st->ds;
@@ -624,10 +643,10 @@ static inline PetscReal RelaxRow(const PffMGStencil *st, PetscInt nr, const Pets
     const PetscReal   c0 = e->lo[i] * cx[r], c1 = e->hi[i] * cx[r + 1], c2 = m.mym * cy[r], c3 = m.myp * cy[r + m.syp];
     const PetscReal   c4 = m.mzm * cz[r], c5 = m.mzp * cz[r + m.szp];
     const PetscReal   d = c0 + c1 + c2 + c3 + c4 + c5 + ds[r];
-    const PetscScalar s = b[r] - sc[i] - d * xr[r] + c0 * xr[r - 1] + c1 * xr[r + 1] + c2 * xr[r - m.sym] +
+    const PetscScalar s = bb[i] - d * xr[r] + c0 * xr[r - 1] + c1 * xr[r + 1] + c2 * xr[r - m.sym] +
                           c3 * xr[r + m.syp] + c4 * xr[r - m.szm] + c5 * xr[r + m.szp];
     ev[i] = PetscAbsReal(omega * s);
-    nx[i] = d > 0 ? xr[r] + omega * s / d : xr[r]; /* a zero row is not relaxed */
+    nx[i] = xr[r] + omega * s * idiag[r]; /* idiag = 0: a zero row is not relaxed */
   }
   for (PetscInt i = i0; i < n; i += 2) { /* a double max does not vectorise: kept out of the stencil loop */
     x[r0 + i] = nx[i];
@@ -638,55 +657,47 @@ static inline PetscReal RelaxRow(const PffMGStencil *st, PetscInt nr, const Pets
 }
 
 /* The same for the first and the last row of the rank's cells, whose ends must not read past x: the
-   two ends by the general path. */
+   cells by the general path. */
 static inline PetscReal RelaxRowEnds(const PffMGLevel *lv, const PffMGStencil *st, PetscInt base, PetscInt i0,
-                                     PetscInt j, PetscInt k, PetscInt n, const PetscScalar *b, PetscScalar *x,
-                                     const PetscScalar *g, PetscReal omega, PetscReal *R, PetscInt r0)
+                                     PetscInt j, PetscInt k, PetscInt n, const PetscScalar *bb, PetscScalar *x,
+                                     PetscReal omega, PetscReal *R, PetscInt r0)
 {
   PetscReal rmax = 0;
   for (PetscInt i = i0; i < n; i += 2) {
-    const PetscReal e = RelaxEnd(lv, st, base + i, i, j, k, n, b, x, g, omega, R, r0);
+    const PetscReal e = RelaxEnd(lv, st, base + i, i, j, k, n, bb[i], x, omega, R, r0);
     rmax              = rmax > e ? rmax : e;
   }
   return rmax;
 }
 
-/* One in-place red-black sweep over the cells of local block lb (cells (i + j + k) even, then odd).
-   Every row runs the masked 7-point loop after gathering its side sums (the neighbour blocks are
-   frozen during the sweep; the few couplings between fine cells under one coarse face take the values
-   at the start of the row). R (or NULL) receives |omega (b - A x)| per cell of the block; FaceMax reads
-   the cells of its sides. */
-PetscReal PffMGStencilRelaxBlock_Private(const PffMGLevel *lv, PetscInt lb, const PetscScalar *b, PetscScalar *x,
-                                         const PetscScalar *g, PetscReal omega, PetscReal *R)
+/* One in-place red-black sweep over the cells of local block lb (cells (i + j + k) even, then odd),
+   with bb from PffMGStencilBlockRhs_Private. R (or NULL) receives |omega (b - A x)| per cell of the
+   block; FaceMax reads the cells of its sides. */
+PetscReal PffMGStencilRelaxBlock_Private(const PffMGLevel *lv, PetscInt lb, const PetscScalar *bb, PetscBool own,
+                                         PetscScalar *x, PetscReal omega, PetscReal *R)
 {
   const PffMGStencil *st = lv->st;
-  const PetscInt      n = lv->n[lb], r0 = lv->start[lb], nr = lv->nrows;
-  PetscScalar         sci[PFF_GRID_BLOCK_SIZE_MAX], scs[PFF_GRID_BLOCK_SIZE_MAX];
+  const PetscInt      n = lv->n[lb], r0 = lv->start[lb], nr = lv->nrows, nc = n * n * n;
   PffMGRowEnds        ends;
+  PetscScalar         tb[PFF_GRID_BLOCK_SIZE_MAX];
   PetscReal           rmax = 0;
 
   RowEnds(n, &ends);
-  for (PetscInt i = 0; i < n; i++) sci[i] = 0; /* an inner row has side couplings at its ends only */
   for (PetscInt c = 0; c < 2; c++)
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt j = 0; j < n; j++) {
-        const PetscInt base = r0 + n * (j + n * k), i0 = (j + k + c) & 1;
-        PetscReal      e;
-        if (base == 0 || base + n == nr || n < 3)
-          e = RelaxRowEnds(lv, st, base, i0, j, k, n, b, x, g, omega, R, r0);
-        else {
-          /* side sums of the cells of this colour only: the others are computed and dropped */
-          PetscScalar *sc = sci;
-          if (j == 0 || j == n - 1 || k == 0 || k == n - 1) {
-            sc = scs;
-            for (PetscInt i = 0; i < n; i++) sc[i] = ((i ^ i0) & 1) ? 0 : SideSum(st, nr, base + i, x, g);
-          } else {
-            sc[0]     = i0 == 0 ? SideSum(st, nr, base, x, g) : 0;
-            sc[n - 1] = ((n - 1 - i0) & 1) ? 0 : SideSum(st, nr, base + n - 1, x, g);
-          }
-          e = RelaxRow(st, nr, b, x, base, i0, n, RowMask(j, k, n), &ends, sc, omega, R ? R + (base - r0) : NULL);
+        const PetscInt     base = r0 + n * (j + n * k), i0 = (j + k + c) & 1;
+        const PetscScalar *rb = bb + (base - r0);
+        if (own) { /* in-block side terms sit on the block's upper sides only */
+          const PetscInt from = (j == n - 1 || k == n - 1) ? i0 : n - 1 - ((n - 1 - i0) & 1);
+          OwnSums(lv, r0, nc, base, from, n, rb, x, tb);
+          rb = tb;
         }
-        rmax = rmax > e ? rmax : e;
+        const PetscReal e = base == 0 || base + n == nr || n < 3
+                                ? RelaxRowEnds(lv, st, base, i0, j, k, n, rb, x, omega, R, r0)
+                                : RelaxRow(st, nr, rb, lv->idiag, x, base, i0, n, RowMask(j, k, n), &ends, omega,
+                                           R ? R + (base - r0) : NULL);
+        rmax              = rmax > e ? rmax : e;
       }
   return rmax;
 }
@@ -715,25 +726,32 @@ static PetscErrorCode StencilMult(Mat A, Vec xv, Vec yv)
     const PffMGReal *restrict cx = st->cf, *restrict cy = cx + nr, *restrict cz = cy + nr;
     const PetscReal *restrict ds = st->ds;
     PetscScalar *restrict yr     = y;
-    PetscScalar  sc[PFF_GRID_BLOCK_SIZE_MAX];
     PffMGRowEnds e;
     RowEnds(n, &e);
+    /* the side couplings first, in one pass over the block's side list; the rows add their in-block part */
+    for (PetscInt i = 0; i < n * n * n; i++) {
+      PetscScalar sc = 0;
+      for (PetscInt q = st->rowptr[r0 + i]; q < st->rowptr[r0 + i + 1]; q++) {
+        const PetscInt c = st->col[q];
+        sc += st->val[q] * (c < nr ? x[c] : g[c - nr]);
+      }
+      yr[r0 + i] = sc;
+    }
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt j = 0; j < n; j++) {
         const PetscInt     base = r0 + n * (j + n * k);
         const PffMGRowMask m    = RowMask(j, k, n);
         if (base == 0 || base + n == nr || n < 3) {
-          for (PetscInt i = 0; i < n; i++) yr[base + i] = RowEnd(st, nr, base + i, i, j, k, n, x, g);
+          for (PetscInt i = 0; i < n; i++) yr[base + i] += RowInBlock(st, nr, base + i, i, j, k, n, x);
           continue;
         }
-        RowSideSums(st, nr, base, n, (PetscBool)(j == 0 || j == n - 1 || k == 0 || k == n - 1), x, g, sc);
         for (PetscInt i = 0; i < n; i++) {
           const PetscInt    r  = base + i;
           const PetscScalar xc = x[r];
           const PetscReal   c0 = e.lo[i] * cx[r], c1 = e.hi[i] * cx[r + 1], c2 = m.mym * cy[r],
                           c3 = m.myp * cy[r + m.syp], c4 = m.mzm * cz[r], c5 = m.mzp * cz[r + m.szp];
-          yr[r] = c0 * (xc - x[r - 1]) + c1 * (xc - x[r + 1]) + c2 * (xc - x[r - m.sym]) + c3 * (xc - x[r + m.syp]) +
-                  c4 * (xc - x[r - m.szm]) + c5 * (xc - x[r + m.szp]) + ds[r] * xc + sc[i];
+          yr[r] += c0 * (xc - x[r - 1]) + c1 * (xc - x[r + 1]) + c2 * (xc - x[r - m.sym]) + c3 * (xc - x[r + m.syp]) +
+                   c4 * (xc - x[r - m.szm]) + c5 * (xc - x[r + m.szp]) + ds[r] * xc;
         }
       }
   }
