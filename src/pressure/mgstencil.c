@@ -606,37 +606,42 @@ static inline PetscReal RelaxEnd(const PffMGLevel *lv, const PffMGStencil *st, P
 }
 
 /* Weights of the x-faces of the cells of a row: 0 where the neighbour is outside the block (its
-   coupling is a side term), so that the whole row runs one loop. */
+   coupling is a side term), so that the whole row runs one loop; and the colour masks of a row, 1 on
+   the cells i0, i0 + 2, ... (col[i0]). */
 typedef struct {
-  PetscReal lo[PFF_GRID_BLOCK_SIZE_MAX], hi[PFF_GRID_BLOCK_SIZE_MAX];
+  PetscReal lo[PFF_GRID_BLOCK_SIZE_MAX], hi[PFF_GRID_BLOCK_SIZE_MAX], col[2][PFF_GRID_BLOCK_SIZE_MAX];
 } PffMGRowEnds;
 
 static inline void RowEnds(PetscInt n, PffMGRowEnds *e)
 {
   for (PetscInt i = 0; i < n; i++) {
-    e->lo[i] = i > 0;
-    e->hi[i] = i < n - 1;
+    e->lo[i]     = i > 0;
+    e->hi[i]     = i < n - 1;
+    e->col[0][i] = (i & 1) == 0;
+    e->col[1][i] = (i & 1) == 1;
   }
 }
 
 /* Relaxes the cells of colour c of the row starting at r0 (n cells, (i + j + k) % 2 == c for i =
    i0, i0 + 2, ...): the candidate values of every cell are computed from x into a buffer, then those
-   of the colour are stored. The first loop only reads x, runs over contiguous cells and vectorises (a
-   loop over one colour has 8 cells for n = 16, too few for an 8-wide vector); it computes twice the
-   cells for no extra memory traffic. The x-neighbours outside the block are read (the cells around the
-   row in memory, never outside the array: the first and last rows go through RelaxRowEnds) and
-   weighted 0; bb is the row's right-hand side with its side couplings (PffMGStencilBlockRhs_Private).
-   R (or NULL) receives |omega (bb - A x)| of the colour's cells. Returns their maximum. */
-static inline PetscReal RelaxRow(const PffMGStencil *st, PetscInt                nr, const PetscScalar *restrict bb,
-                                 const PetscScalar *restrict idiag, PetscScalar *x, PetscInt r0, PetscInt i0,
-                                 PetscInt n, PffMGRowMask m, const PffMGRowEnds *restrict e, PetscReal omega,
-                                 PetscReal *R)
+   of the colour are stored. Both loops run over contiguous cells and vectorise (a loop over one colour
+   has 8 cells for n = 16, too few for an 8-wide vector): the first only reads x and computes twice the
+   cells for no extra memory traffic, the second blends by the colour mask. The x-neighbours outside the
+   block are read (the cells around the row in memory, never outside the array: the first and last rows
+   go through RelaxRowEnds) and weighted 0; bb is the row's right-hand side with its side couplings
+   (PffMGStencilBlockRhs_Private). R (or NULL) receives |omega (bb - A x)| of the colour's cells, and mx
+   the running per-lane maximum of it, so that no reduction runs per row. */
+static inline void RelaxRow(const PffMGStencil *st, PetscInt                nr, const PetscScalar *restrict bb,
+                            const PetscScalar *restrict idiag, PetscScalar *x, PetscInt r0, PetscInt i0, PetscInt n,
+                            PffMGRowMask m, const PffMGRowEnds *restrict e, PetscReal omega, PetscReal *restrict R,
+                            PetscReal *restrict mx)
 {
   const PffMGReal *restrict cx = st->cf, *restrict cy = cx + nr, *restrict cz = cy + nr;
-  const PetscReal *restrict ds   = st->ds;
+  const PetscReal *restrict ds = st->ds, *restrict cm = e->col[i0];
   const PetscScalar *restrict xr = x;
+  PetscScalar *restrict xw       = x + r0;
   PetscScalar nx[PFF_GRID_BLOCK_SIZE_MAX];
-  PetscReal   ev[PFF_GRID_BLOCK_SIZE_MAX], emax = 0;
+  PetscReal   ev[PFF_GRID_BLOCK_SIZE_MAX];
 
   for (PetscInt i = 0; i < n; i++) {
     const PetscInt    r  = r0 + i;
@@ -645,15 +650,15 @@ static inline PetscReal RelaxRow(const PffMGStencil *st, PetscInt               
     const PetscReal   d = c0 + c1 + c2 + c3 + c4 + c5 + ds[r];
     const PetscScalar s = bb[i] - d * xr[r] + c0 * xr[r - 1] + c1 * xr[r + 1] + c2 * xr[r - m.sym] +
                           c3 * xr[r + m.syp] + c4 * xr[r - m.szm] + c5 * xr[r + m.szp];
-    ev[i] = PetscAbsReal(omega * s);
+    ev[i] = cm[i] * PetscAbsReal(omega * s);
     nx[i] = xr[r] + omega * s * idiag[r]; /* idiag = 0: a zero row is not relaxed */
   }
-  for (PetscInt i = i0; i < n; i += 2) { /* a double max does not vectorise: kept out of the stencil loop */
-    x[r0 + i] = nx[i];
-    emax      = emax > ev[i] ? emax : ev[i];
-    if (R) R[i] = ev[i];
+  for (PetscInt i = 0; i < n; i++) {
+    xw[i] = cm[i] != 0 ? nx[i] : xw[i];
+    mx[i] = mx[i] > ev[i] ? mx[i] : ev[i];
   }
-  return emax;
+  if (R)
+    for (PetscInt i = 0; i < n; i++) R[i] = cm[i] != 0 ? ev[i] : R[i];
 }
 
 /* The same for the first and the last row of the rank's cells, whose ends must not read past x: the
@@ -680,9 +685,10 @@ PetscReal PffMGStencilRelaxBlock_Private(const PffMGLevel *lv, PetscInt lb, cons
   const PetscInt      n = lv->n[lb], r0 = lv->start[lb], nr = lv->nrows, nc = n * n * n;
   PffMGRowEnds        ends;
   PetscScalar         tb[PFF_GRID_BLOCK_SIZE_MAX];
-  PetscReal           rmax = 0;
+  PetscReal           mx[PFF_GRID_BLOCK_SIZE_MAX], rmax = 0;
 
   RowEnds(n, &ends);
+  for (PetscInt i = 0; i < n; i++) mx[i] = 0;
   for (PetscInt c = 0; c < 2; c++)
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt j = 0; j < n; j++) {
@@ -693,12 +699,14 @@ PetscReal PffMGStencilRelaxBlock_Private(const PffMGLevel *lv, PetscInt lb, cons
           OwnSums(lv, r0, nc, base, from, n, rb, x, tb);
           rb = tb;
         }
-        const PetscReal e = base == 0 || base + n == nr || n < 3
-                                ? RelaxRowEnds(lv, st, base, i0, j, k, n, rb, x, omega, R, r0)
-                                : RelaxRow(st, nr, rb, lv->idiag, x, base, i0, n, RowMask(j, k, n), &ends, omega,
-                                           R ? R + (base - r0) : NULL);
-        rmax              = rmax > e ? rmax : e;
+        if (base == 0 || base + n == nr || n < 3) {
+          const PetscReal e = RelaxRowEnds(lv, st, base, i0, j, k, n, rb, x, omega, R, r0);
+          rmax              = rmax > e ? rmax : e;
+        } else
+          RelaxRow(st, nr, rb, lv->idiag, x, base, i0, n, RowMask(j, k, n), &ends, omega, R ? R + (base - r0) : NULL,
+                   mx);
       }
+  for (PetscInt i = 0; i < n; i++) rmax = rmax > mx[i] ? rmax : mx[i];
   return rmax;
 }
 
