@@ -18,11 +18,6 @@ const char *const PffPressureOperatorTypes[] = {"aij", "shell", "PffPressureOper
 #define PFF_PRESSURE_KSP_TYPE_DEFAULT KSPFCG
 #define PFF_PRESSURE_PC_TYPE_DEFAULT "pffmg"
 #define PFF_PRESSURE_RTOL_DEFAULT 1e-4
-/* FCG keeps this many earlier directions (two cell Vecs each, allocated up front): PETSc's 30 cost 20
-   to 62 cell Vecs; 2 keeps the iterations of the 128^3 bubbly problem at 1e3 to 1e5 and of the bubbles
-   scene and costs 6, but needs more on the hard 64^3 problem at 1e5 (docs/pressure.md). 1 is the
-   paper's Polak-Ribiere flexible CG. */
-#define PFF_PRESSURE_FCG_MMAX_DEFAULT 2
 #define PFF_PRESSURE_ASSEMBLY_DEFAULT PFF_PRESSURE_ASSEMBLY_PTAP
 #define PFF_PRESSURE_OPERATOR_DEFAULT PFF_PRESSURE_OPERATOR_AIJ
 
@@ -47,8 +42,6 @@ PetscErrorCode PffPressureCreate(PffGrid grid, PffPressure *ps)
   PetscCall(KSPCreate(p->comm, &p->ksp));
   PetscCall(KSPSetOptionsPrefix(p->ksp, "pressure_"));
   PetscCall(KSPSetType(p->ksp, PFF_PRESSURE_KSP_TYPE_DEFAULT));
-  PetscCall(KSPFCGSetMmax(p->ksp, PFF_PRESSURE_FCG_MMAX_DEFAULT));
-  PetscCall(KSPFCGSetNprealloc(p->ksp, PFF_PRESSURE_FCG_MMAX_DEFAULT + 1));
   PetscCall(KSPSetTolerances(p->ksp, PFF_PRESSURE_RTOL_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT, PETSC_DEFAULT));
   PetscCall(KSPSetInitialGuessNonzero(p->ksp, PETSC_TRUE));
   /* rtol then bounds the true residual V (D u + c_div) / dt, whatever the PC */
