@@ -11,7 +11,7 @@ import re
 import sys
 
 FIELDS = ["commit", "load1", "options", "pc", "grid", "n", "ratio", "ranks", "threads", "its", "setup_s", "solve_s",
-          "relres", "peak_rss_MB_max_rank", "peak_rss_B_per_cell", "iteration_s", "sweep_ns_per_cell",
+          "relres", "peak_rss_MB_max_rank", "peak_rss_B_per_cell", "solver_B_per_cell", "iteration_s", "sweep_ns_per_cell",
           "sweep_bound_ns_per_cell", "sweep_ratio", "copy_GBs", "it_cell_updates", "it_updates_per_finest_cell",
           "it_bound_s", "it_ratio"]
 
@@ -42,7 +42,7 @@ def main(path):
                 rows.append(cur)
             elif cur is not None and line.startswith("MEMORY "):
                 p = pairs(line)
-                for k in ("peak_rss_MB_max_rank", "peak_rss_B_per_cell", "iteration_s"):
+                for k in ("peak_rss_MB_max_rank", "peak_rss_B_per_cell", "solver_B_per_cell", "iteration_s"):
                     cur[k] = p.get(k, "")
             elif cur is not None and line.startswith("SWEEP "):
                 p = pairs(line)

@@ -39,9 +39,10 @@ PetscErrorCode PffPressureBuildFaces_Private(PffPressure ps)
   PetscCall(PffGridGetSizes(grid, &n0, &nlevels, origin, &h0, periodic));
   PetscCall(PffGridGetLocalBlocks(grid, &ps->nlocal));
   PetscCall(PffGridGetCellNumbering(grid, -1, NULL, &nowned, &rstart, &ntotal));
-  PetscCheck(3 * ntotal < PETSC_MAX_INT, ps->comm, PETSC_ERR_SUP,
-             "pressure: 3 x %" PetscInt64_FMT " face rows exceed PetscInt; configure PETSc with 64-bit indices",
-             ntotal);
+  /* the matrix-free path numbers cells globally and faces only locally (3 per owned cell), so it reaches
+     PetscInt's range in cells; the assembled operator's 3 N face rows are checked where it is built */
+  PetscCheck(ntotal < PETSC_MAX_INT && 3 * nowned < PETSC_MAX_INT, ps->comm, PETSC_ERR_SUP,
+             "pressure: %" PetscInt64_FMT " cells exceed PetscInt; configure PETSc with 64-bit indices", ntotal);
   ps->ncells = (PetscInt)nowned;
   ps->rstart = (PetscInt)rstart;
   ps->ntotal = (PetscInt)ntotal;
@@ -158,6 +159,11 @@ PetscErrorCode PffPressureBuildGradient_Private(PffPressure ps)
   PetscInt      *dnz, *onz;
 
   PetscFunctionBeginUser;
+  PetscCheck(3 * (PetscInt64)ps->ntotal < PETSC_MAX_INT, ps->comm, PETSC_ERR_SUP,
+             "pressure: the assembled operator needs 3 x %" PetscInt_FMT
+             " face rows, more than PetscInt holds; use the matrix-free default (-pressure_pc_type pffmg "
+             "-pressure_operator shell) or PETSc with 64-bit indices",
+             ps->ntotal);
   PetscCall(PetscCalloc1(nrows, &dnz));
   PetscCall(PetscCalloc1(nrows, &onz));
   for (PetscInt lb = 0; lb < ps->nlocal; lb++)

@@ -154,7 +154,7 @@ PetscErrorCode PffPressureSetUp(PffPressure ps)
   PetscCall(PetscLogEventBegin(PFF_PressSetUp, 0, 0, 0, 0));
   PetscCall(PffPressureBuildFaces_Private(ps));
   PetscCall(VecCreateMPI(ps->comm, ps->ncells, ps->ntotal, &ps->p));
-  PetscCall(VecCreateMPI(ps->comm, 3 * ps->ncells, 3 * (PetscInt)ps->ntotal, &ps->uf));
+  PetscCall(VecCreateSeq(PETSC_COMM_SELF, 3 * ps->ncells, &ps->uf)); /* faces are numbered per rank only */
   PetscCall(VecDuplicate(ps->p, &ps->b));
   PetscCall(VecDuplicate(ps->p, &ps->vcell));
   PetscCall(VecDuplicate(ps->p, &ps->diag));

@@ -53,7 +53,7 @@ struct _n_PffPressure {
   Vec       dirdiag;      /* cell Vec: the Dirichlet terms sum 2 h beta added to diag(A) */
 
   Vec p, b, vcell, diag; /* cell Vecs: pressure, rhs, work, diag(A) */
-  Vec uf;                /* face Vec (3 per cell): velocity */
+  Vec uf;                /* velocity, 3 per owned cell (a sequential Vec: faces are numbered per rank only) */
 
   PffPressureAssemblyType assembly;
   PffPressureOperatorType operatorType;    /* the KSP's Amat */
