@@ -134,6 +134,13 @@ static PetscErrorCode TestEquality(PetscInt g, PetscBool dirichlet)
     PetscCall(VecSum(dd, &ddsum));
     PetscCheck(nsp == NULL && ddsum > 0, PETSC_COMM_WORLD, PETSC_ERR_PLIB, "%s: Dirichlet walls not applied",
                GridNames[g]);
+  } else { /* no walls: the Dirichlet diagonal is made on request, and is zero */
+    Vec       dd;
+    PetscReal ddmax;
+    PetscCall(PffPressureGetDirichletDiagonal(ps, &dd));
+    PetscCall(VecNorm(dd, NORM_INFINITY, &ddmax));
+    PetscCheck(ddmax == 0, PETSC_COMM_WORLD, PETSC_ERR_PLIB, "%s: Dirichlet terms %g without Dirichlet walls",
+               GridNames[g], (double)ddmax);
   }
   PetscCall(MatCreateVecs(A, &x, &ya));
   PetscCall(VecDuplicate(ya, &ys));
