@@ -29,6 +29,8 @@ typedef struct {
   PetscReal *ds;     /* [nrows] the diagonal but for the faces inside the block: side faces, dx (double, so that the
                         rows sum to dx exactly) */
   PetscInt  *rowptr; /* [nrows + 1] side couplings of each row to other cells */
+  PetscInt  *side;   /* the rows that have any, in order (the block's sides: about a third of the cells for n = 16) */
+  PetscInt  *bside;  /* [nblk + 1] the rows of block lb are side[bside[lb] .. bside[lb + 1] - 1] */
   PetscInt  *col;    /* local row, or nrows + ghost index */
   PffMGReal *val;    /* matrix entry: fac * c of the face */
   PetscInt  *ref;    /* the face: slot d nrows + row of cf, or 3 nrows + ghost slot */

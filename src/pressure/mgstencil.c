@@ -335,6 +335,18 @@ PetscErrorCode PffMGStencilBuild_Private(PffMG *mg, PetscInt L)
   }
   PetscCall(PetscFree(cursor));
   PetscCall(PetscFree(T.t));
+  {
+    PetscInt nside = 0;
+    for (PetscInt r = 0; r < lv->nrows; r++) nside += st->rowptr[r + 1] > st->rowptr[r];
+    PetscCall(PetscMalloc2(nside, &st->side, lv->nblk + 1, &st->bside));
+    nside = 0;
+    for (PetscInt lb = 0; lb < lv->nblk; lb++) {
+      st->bside[lb] = nside;
+      for (PetscInt r = lv->start[lb]; r < lv->start[lb + 1]; r++)
+        if (st->rowptr[r + 1] > st->rowptr[r]) st->side[nside++] = r;
+    }
+    st->bside[lv->nblk] = nside;
+  }
   PetscCall(PetscFree(gcell));
   PetscCall(PetscFree(gface));
   PetscCall(NumberingDestroy(&t));
@@ -359,6 +371,7 @@ PetscErrorCode PffMGStencilDestroy_Private(PffMGLevel *lv)
   PetscFunctionBeginUser;
   if (!st) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PetscFree(st->rowptr));
+  PetscCall(PetscFree2(st->side, st->bside));
   PetscCall(PetscFree4(st->col, st->val, st->ref, st->fac));
   PetscCall(PetscFree3(st->drow, st->dref, st->dfac));
   PetscCall(PetscFree(st->ghostRow));
@@ -560,20 +573,22 @@ PetscBool PffMGStencilBlockRhs_Private(const PffMGLevel *lv, PetscInt lb, const 
 {
   const PffMGStencil *st = lv->st;
   const PetscInt      n = lv->n[lb], r0 = lv->start[lb], nc = n * n * n, nr = lv->nrows;
-  const PetscInt *restrict rowptr = st->rowptr + r0, *restrict col = st->col;
+  const PetscInt *restrict rowptr = st->rowptr, *restrict col = st->col;
   const PffMGReal *restrict val = st->val;
   PetscBool own                 = PETSC_FALSE;
 
-  for (PetscInt i = 0; i < nc; i++) {
-    PetscScalar s = b[r0 + i];
-    for (PetscInt e = rowptr[i]; e < rowptr[i + 1]; e++) {
+  for (PetscInt i = 0; i < nc; i++) bb[i] = b[r0 + i];
+  for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++) { /* only the rows that have side terms */
+    const PetscInt r = st->side[q];
+    PetscScalar    s = 0;
+    for (PetscInt e = rowptr[r]; e < rowptr[r + 1]; e++) {
       const PetscInt c = col[e];
       if (c >= r0 && c < r0 + nc)
         own = PETSC_TRUE;
       else
-        s -= val[e] * (c < nr ? x[c] : g[c - nr]);
+        s += val[e] * (c < nr ? x[c] : g[c - nr]);
     }
-    bb[i] = s;
+    bb[r - r0] -= s;
   }
   return own;
 }
@@ -736,14 +751,16 @@ static PetscErrorCode StencilMult(Mat A, Vec xv, Vec yv)
     PetscScalar *restrict yr     = y;
     PffMGRowEnds e;
     RowEnds(n, &e);
-    /* the side couplings first, in one pass over the block's side list; the rows add their in-block part */
-    for (PetscInt i = 0; i < n * n * n; i++) {
-      PetscScalar sc = 0;
-      for (PetscInt q = st->rowptr[r0 + i]; q < st->rowptr[r0 + i + 1]; q++) {
-        const PetscInt c = st->col[q];
-        sc += st->val[q] * (c < nr ? x[c] : g[c - nr]);
+    /* the side couplings first, from the block's rows that have any; the rows add their in-block part */
+    for (PetscInt i = 0; i < n * n * n; i++) yr[r0 + i] = 0;
+    for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++) {
+      const PetscInt r  = st->side[q];
+      PetscScalar    sc = 0;
+      for (PetscInt e = st->rowptr[r]; e < st->rowptr[r + 1]; e++) {
+        const PetscInt c = st->col[e];
+        sc += st->val[e] * (c < nr ? x[c] : g[c - nr]);
       }
-      yr[r0 + i] = sc;
+      yr[r] = sc;
     }
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt j = 0; j < n; j++) {
