@@ -22,6 +22,10 @@
    through a PetscSF, the values of other ranks' cells through a VecScatter. */
 #include "mgimpl.h"
 #include <petscsf.h>
+#if defined(__AVX512F__) && defined(PETSC_USE_REAL_DOUBLE) && !defined(PETSC_USE_COMPLEX)
+#include <immintrin.h>
+#define PFF_MG_AVX512 1
+#endif
 
 const char *const PffMGOperatorTypes[] = {"stencil", "aij", "PffMGOperatorType", "PFF_MG_OPERATOR_", NULL};
 
@@ -676,6 +680,66 @@ static inline void RelaxRow(const PffMGStencil *st, PetscInt                nr, 
     for (PetscInt i = 0; i < n; i++) R[i] = cm[i] != 0 ? ev[i] : R[i];
 }
 
+#if defined(PFF_MG_AVX512)
+/* RelaxRow for n = 16 with AVX-512: the 8 cells of the colour only, gathered from the row's two 8-wide
+   vectors by lane permutes (the x-neighbours are the other colour's lanes), so each row costs one
+   vector of arithmetic instead of two; the new values and R go back to the colour's lanes by masked
+   permutes. Reads nothing outside the row. Equal to RelaxRow to rounding (fused multiply-adds);
+   about 1.7x faster in isolation (docs/pressure.md). */
+static inline void RelaxRow16(const PffMGStencil *st, PetscInt                nr, const PetscScalar *restrict bb,
+                              const PetscScalar *restrict idiag, PetscScalar *x, PetscInt r0, PetscInt i0,
+                              PffMGRowMask m, PetscReal omega, PetscReal *restrict R, PetscReal *restrict mx)
+{
+  const PffMGReal *cx = st->cf, *cy = cx + nr, *cz = cy + nr;
+  /* lanes of the colour's cells i0 + 2t in the row's 16 values, and of their x-neighbours (an unused lane
+     where the neighbour is outside the row: its face weight is 0) */
+  const __m512i  ic = i0 ? _mm512_setr_epi64(1, 3, 5, 7, 9, 11, 13, 15) : _mm512_setr_epi64(0, 2, 4, 6, 8, 10, 12, 14);
+  const __m512i  il = i0 ? _mm512_setr_epi64(0, 2, 4, 6, 8, 10, 12, 14) : _mm512_setr_epi64(0, 1, 3, 5, 7, 9, 11, 13);
+  const __m512i  ir = i0 ? _mm512_setr_epi64(2, 4, 6, 8, 10, 12, 14, 15) : _mm512_setr_epi64(1, 3, 5, 7, 9, 11, 13, 15);
+  const __m512i  fc = i0 ? _mm512_setr_epi32(1, 3, 5, 7, 9, 11, 13, 15, 0, 0, 0, 0, 0, 0, 0, 0)
+                         : _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 0, 0, 0, 0, 0, 0, 0, 0);
+  const __m512i  fr = i0 ? _mm512_setr_epi32(2, 4, 6, 8, 10, 12, 14, 15, 0, 0, 0, 0, 0, 0, 0, 0)
+                         : _mm512_setr_epi32(1, 3, 5, 7, 9, 11, 13, 15, 0, 0, 0, 0, 0, 0, 0, 0);
+  const __mmask8 mk = i0 ? 0xAA : 0x55;
+  const __m512i  back0 = i0 ? _mm512_setr_epi64(0, 0, 0, 1, 0, 2, 0, 3) : _mm512_setr_epi64(0, 0, 1, 0, 2, 0, 3, 0);
+  const __m512i  back1 = i0 ? _mm512_setr_epi64(0, 4, 0, 5, 0, 6, 0, 7) : _mm512_setr_epi64(4, 0, 5, 0, 6, 0, 7, 0);
+#define PFF_COLOUR_PD(p) _mm512_permutex2var_pd(_mm512_loadu_pd(p), ic, _mm512_loadu_pd((p) + 8))
+#define PFF_COLOUR_PS(p, ix) _mm512_cvtps_pd(_mm512_castps512_ps256(_mm512_permutexvar_ps(ix, _mm512_loadu_ps(p))))
+  const __m512d X0 = _mm512_loadu_pd(x + r0), X1 = _mm512_loadu_pd(x + r0 + 8);
+  const __m512d xc = _mm512_permutex2var_pd(X0, ic, X1), xl = _mm512_permutex2var_pd(X0, il, X1),
+                xr = _mm512_permutex2var_pd(X0, ir, X1);
+  __m512d c0 = PFF_COLOUR_PS(cx + r0, fc), c1 = PFF_COLOUR_PS(cx + r0, fr);
+  if (!i0)
+    c0 = _mm512_mask_mov_pd(c0, 0x01, _mm512_setzero_pd()); /* cell 0: its -x face is a side face */
+  else
+    c1 = _mm512_mask_mov_pd(c1, 0x80, _mm512_setzero_pd()); /* cell 15: its +x face is a side face */
+  const __m512d c2 = _mm512_mul_pd(_mm512_set1_pd(m.mym), PFF_COLOUR_PS(cy + r0, fc)),
+                c3 = _mm512_mul_pd(_mm512_set1_pd(m.myp), PFF_COLOUR_PS(cy + r0 + m.syp, fc)),
+                c4 = _mm512_mul_pd(_mm512_set1_pd(m.mzm), PFF_COLOUR_PS(cz + r0, fc)),
+                c5 = _mm512_mul_pd(_mm512_set1_pd(m.mzp), PFF_COLOUR_PS(cz + r0 + m.szp, fc));
+  const __m512d d  = _mm512_add_pd(_mm512_add_pd(_mm512_add_pd(c0, c1), _mm512_add_pd(c2, c3)),
+                                   _mm512_add_pd(_mm512_add_pd(c4, c5), PFF_COLOUR_PD(st->ds + r0)));
+  __m512d       s  = _mm512_fnmadd_pd(d, xc, PFF_COLOUR_PD(bb));
+  s                = _mm512_fmadd_pd(c0, xl, s);
+  s                = _mm512_fmadd_pd(c1, xr, s);
+  s                = _mm512_fmadd_pd(c2, PFF_COLOUR_PD(x + r0 - m.sym), s);
+  s                = _mm512_fmadd_pd(c3, PFF_COLOUR_PD(x + r0 + m.syp), s);
+  s                = _mm512_fmadd_pd(c4, PFF_COLOUR_PD(x + r0 - m.szm), s);
+  s                = _mm512_fmadd_pd(c5, PFF_COLOUR_PD(x + r0 + m.szp), s);
+  const __m512d os = _mm512_mul_pd(_mm512_set1_pd(omega), s), ev = _mm512_abs_pd(os);
+  const __m512d nx = _mm512_fmadd_pd(os, PFF_COLOUR_PD(idiag + r0), xc); /* idiag = 0: not relaxed */
+#undef PFF_COLOUR_PD
+#undef PFF_COLOUR_PS
+  _mm512_storeu_pd(mx, _mm512_max_pd(_mm512_loadu_pd(mx), ev));
+  _mm512_storeu_pd(x + r0, _mm512_mask_permutexvar_pd(X0, mk, back0, nx));
+  _mm512_storeu_pd(x + r0 + 8, _mm512_mask_permutexvar_pd(X1, mk, back1, nx));
+  if (R) {
+    _mm512_storeu_pd(R, _mm512_mask_permutexvar_pd(_mm512_loadu_pd(R), mk, back0, ev));
+    _mm512_storeu_pd(R + 8, _mm512_mask_permutexvar_pd(_mm512_loadu_pd(R + 8), mk, back1, ev));
+  }
+}
+#endif
+
 /* The same for the first and the last row of the rank's cells, whose ends must not read past x: the
    cells by the general path. */
 static inline PetscReal RelaxRowEnds(const PffMGLevel *lv, const PffMGStencil *st, PetscInt base, PetscInt i0,
@@ -717,9 +781,16 @@ PetscReal PffMGStencilRelaxBlock_Private(const PffMGLevel *lv, PetscInt lb, cons
         if (base == 0 || base + n == nr || n < 3) {
           const PetscReal e = RelaxRowEnds(lv, st, base, i0, j, k, n, rb, x, omega, R, r0);
           rmax              = rmax > e ? rmax : e;
-        } else
+        } else {
+#if defined(PFF_MG_AVX512)
+          if (n == 16) {
+            RelaxRow16(st, nr, rb, lv->idiag, x, base, i0, RowMask(j, k, n), omega, R ? R + (base - r0) : NULL, mx);
+            continue;
+          }
+#endif
           RelaxRow(st, nr, rb, lv->idiag, x, base, i0, n, RowMask(j, k, n), &ends, omega, R ? R + (base - r0) : NULL,
                    mx);
+        }
       }
   for (PetscInt i = 0; i < n; i++) rmax = rmax > mx[i] ? rmax : mx[i];
   return rmax;
