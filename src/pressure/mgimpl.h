@@ -116,7 +116,6 @@ typedef struct {
   PetscBool    optionsRead;
   /* per-block scratch for adaptive relaxation */
   PetscInt      *nbr;               /* [6 nlocal] local face neighbour (or -1: none, wall, or remote -2 - gid) */
-  PetscInt       nraster;           /* blocks in the raster */
   PetscInt      *actLeafOf;         /* [6 nlocal] SF leaf of each face with an off-rank neighbour, or -1 */
   PetscInt      *actLeaf, *actRoot; /* activation requests sent (per leaf) and received (per owned block) */
   PetscSF        actSF;             /* leaves -> the neighbour blocks on their owners (BuildActivationSF) */

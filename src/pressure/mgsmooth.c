@@ -63,8 +63,9 @@ static inline PetscReal RelaxRows(const PffMGLevel *lv, PetscInt q0, PetscInt q1
   return rmax;
 }
 
-/* One visit of local block lb: sweeps in-place red-black sweeps while more() asks for them. A matrix-free
-   level folds the side couplings into the block's right-hand side bb once for the visit
+/* One visit of local block lb: in-place red-black sweeps, one, or in adaptive relaxation until the update
+   falls by 1/3 (at most maxSweeps). A matrix-free level folds the side couplings into the block's
+   right-hand side bb once for the visit
    (PffMGStencilBlockRhs_Private); an AIJ level relaxes its permuted rows. first receives the first
    sweep's largest |delta| a_jj, the return value the last one's; k the number of sweeps. */
 static inline PetscReal VisitBlock(const PffMG *mg, const PffMGLevel *lv, PetscInt lb, const PetscScalar *b,

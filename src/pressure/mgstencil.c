@@ -566,6 +566,22 @@ static inline PetscScalar RowInBlock(const PffMGStencil *st, PetscInt nr, PetscI
   return Diagonal(st, nr, r, i, j, k, n) * x[r] + off;
 }
 
+/* Sum of the side couplings of row r, val x_col, over the columns outside [lo, hi) (an empty range: all);
+ *inside (or NULL) is set when a column lies in the range. */
+static inline PetscScalar SideSum(const PffMGStencil *st, PetscInt nr, PetscInt r, const PetscScalar *x,
+                                  const PetscScalar *g, PetscInt lo, PetscInt hi, PetscBool *inside)
+{
+  PetscScalar s = 0;
+  for (PetscInt e = st->rowptr[r]; e < st->rowptr[r + 1]; e++) {
+    const PetscInt c = st->col[e];
+    if (c >= lo && c < hi)
+      *inside = PETSC_TRUE;
+    else
+      s += st->val[e] * (c < nr ? x[c] : g[c - nr]);
+  }
+  return s;
+}
+
 /* bb = b - (the side couplings of the cells of local block lb to other blocks), block-local. The blocks
    around are frozen while a block is relaxed (the other block colour, or ghosts), so their part of each
    row is a constant of the block's visit: it is gathered once, in one pass over the block's side list,
@@ -576,23 +592,13 @@ PetscBool PffMGStencilBlockRhs_Private(const PffMGLevel *lv, PetscInt lb, const 
                                        const PetscScalar *g, PetscScalar *bb)
 {
   const PffMGStencil *st = lv->st;
-  const PetscInt      n = lv->n[lb], r0 = lv->start[lb], nc = n * n * n, nr = lv->nrows;
-  const PetscInt *restrict rowptr = st->rowptr, *restrict col = st->col;
-  const PffMGReal *restrict val = st->val;
-  PetscBool own                 = PETSC_FALSE;
+  const PetscInt      n = lv->n[lb], r0 = lv->start[lb], nc = n * n * n;
+  PetscBool           own = PETSC_FALSE;
 
   for (PetscInt i = 0; i < nc; i++) bb[i] = b[r0 + i];
   for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++) { /* only the rows that have side terms */
     const PetscInt r = st->side[q];
-    PetscScalar    s = 0;
-    for (PetscInt e = rowptr[r]; e < rowptr[r + 1]; e++) {
-      const PetscInt c = col[e];
-      if (c >= r0 && c < r0 + nc)
-        own = PETSC_TRUE;
-      else
-        s += val[e] * (c < nr ? x[c] : g[c - nr]);
-    }
-    bb[r - r0] -= s;
+    bb[r - r0] -= SideSum(st, lv->nrows, r, x, g, r0, r0 + nc, &own);
   }
   return own;
 }
@@ -824,15 +830,8 @@ static PetscErrorCode StencilMult(Mat A, Vec xv, Vec yv)
     RowEnds(n, &e);
     /* the side couplings first, from the block's rows that have any; the rows add their in-block part */
     for (PetscInt i = 0; i < n * n * n; i++) yr[r0 + i] = 0;
-    for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++) {
-      const PetscInt r  = st->side[q];
-      PetscScalar    sc = 0;
-      for (PetscInt e = st->rowptr[r]; e < st->rowptr[r + 1]; e++) {
-        const PetscInt c = st->col[e];
-        sc += st->val[e] * (c < nr ? x[c] : g[c - nr]);
-      }
-      yr[r] = sc;
-    }
+    for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++)
+      yr[st->side[q]] = SideSum(st, nr, st->side[q], x, g, 0, 0, NULL);
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt j = 0; j < n; j++) {
         const PetscInt     base = r0 + n * (j + n * k);

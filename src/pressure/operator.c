@@ -73,9 +73,7 @@ PetscErrorCode PffPressureMaxDivergenceVec_Private(PffPressure ps, Vec u, PetscR
   PetscCall(PffPressureShellDivergence_Private(ps, ps->S, u, PETSC_FALSE, ps->vcell));
   PetscCall(VecGetArrayRead(ps->vcell, &y));
   for (PetscInt lb = 0; lb < ps->nlocal; lb++) {
-    PffBlockInfo info;
-    PetscCall(PffGridGetBlockInfo(ps->grid, lb, &info));
-    const PetscReal iv = 1.0 / (info.h * info.h * info.h);
+    const PetscReal h = ps->hblock[lb], iv = 1.0 / (h * h * h);
     for (PetscInt c = ps->blockStart[lb]; c < ps->blockStart[lb + 1]; c++) m = PetscMax(m, PetscAbsScalar(y[c]) * iv);
   }
   PetscCall(VecRestoreArrayRead(ps->vcell, &y));
@@ -205,10 +203,8 @@ PetscErrorCode PffPressureAssemble_Private(PffPressure ps, PetscInt chBeta, Pets
     PetscCall(VecGetArray(ps->dirdiag, &dd));
   }
   for (PetscInt lb = 0; lb < ps->nlocal; lb++) {
-    PffBlockInfo info;
-    float       *beta[3], *open[3] = {NULL, NULL, NULL};
-    PetscCall(PffGridGetBlockInfo(ps->grid, lb, &info));
-    const PetscReal h2 = info.h * info.h;
+    float          *beta[3], *open[3] = {NULL, NULL, NULL};
+    const PetscReal h = ps->hblock[lb], h2 = h * h;
     const PetscInt  c0 = ps->blockStart[lb], c1 = ps->blockStart[lb + 1];
     for (PetscInt d = 0; d < 3; d++) {
       PetscCall(PffGridGetBlockData(ps->grid, chBeta, lb, d, &beta[d]));
@@ -224,7 +220,7 @@ PetscErrorCode PffPressureAssemble_Private(PffPressure ps, PetscInt chBeta, Pets
           bad     = r;
           badBeta = bf;
         }
-        ps->cf[d * nc + c] = op ? h2 * bf / PffPressureFaceDistance(ps->kind[r], info.h) : 0.0;
+        ps->cf[d * nc + c] = op ? h2 * bf / PffPressureFaceDistance(ps->kind[r], h) : 0.0;
       }
     if (bad < 0 && dir) {
       PetscCall(PffPressureDirichletTerms(ps, lb, nb, beta, dd, &bad));

@@ -293,9 +293,7 @@ PetscErrorCode PffPressureProject(PffPressure ps, PetscInt chU, PetscReal dt, Pe
     PetscCall(VecGetArray(ps->b, &b));
     PetscCall(VecGetArrayRead(ps->vcell, &y));
     for (PetscInt lb = 0; lb < ps->nlocal; lb++) {
-      PffBlockInfo info;
-      PetscCall(PffGridGetBlockInfo(ps->grid, lb, &info));
-      const PetscReal v = info.h * info.h * info.h;
+      const PetscReal h = ps->hblock[lb], v = h * h * h;
       for (PetscInt c = ps->blockStart[lb]; c < ps->blockStart[lb + 1]; c++) b[c] = y[c] - v * b[c];
     }
     PetscCall(VecRestoreArrayRead(ps->vcell, &y));

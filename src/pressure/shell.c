@@ -35,7 +35,6 @@ typedef struct {
   PetscInt   ncells;                  /* owned cells */
   PetscInt   nblocks, *bstart;        /* owned blocks: first local cell, [nblocks + 1] */
   PetscInt  *bn;                      /* cells per block edge */
-  PetscReal *h;                       /* cell size of each block */
   PetscReal *cf;                      /* [3 ncells] c_f of the lower d-face of cell c at d * ncells + c */
   PetscInt   nface[PFF_SHELL_NLISTS]; /* faces on block sides */
   /* per list, over its faces i: the face's index into cf (d * ncells + upper cell), the local upper
@@ -58,7 +57,6 @@ static PetscErrorCode PffShellDestroy(void *ctx)
   PetscFunctionBeginUser;
   PetscCall(PetscFree(s->bstart));
   PetscCall(PetscFree(s->bn));
-  PetscCall(PetscFree(s->h));
   PetscCall(PetscFree(s->cf));
   for (PetscInt l = 0; l < PFF_SHELL_NLISTS; l++) {
     PetscCall(PetscFree(s->row[l]));
@@ -252,13 +250,11 @@ PetscErrorCode PffPressureShellCreate_Private(PffPressure ps, Mat *S)
   s->nblocks = ps->nlocal;
   PetscCall(PetscMalloc1(ps->nlocal + 1, &s->bstart));
   PetscCall(PetscMalloc1(ps->nlocal, &s->bn));
-  PetscCall(PetscMalloc1(ps->nlocal, &s->h));
   PetscCall(PetscArraycpy(s->bstart, ps->blockStart, ps->nlocal + 1));
   for (PetscInt lb = 0; lb < ps->nlocal; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(ps->grid, lb, &info));
     s->bn[lb] = info.n;
-    s->h[lb]  = info.h;
   }
   PetscCall(PetscCalloc1(3 * ps->ncells, &s->cf));
 
@@ -425,7 +421,7 @@ PetscErrorCode PffPressureShellDivergence_Private(PffPressure ps, Mat S, Vec u, 
   PetscCall(PetscArrayzero(yg, s->nghost));
   for (PetscInt b = 0; b < s->nblocks; b++) {
     const PetscInt  n = s->bn[b], stride[3] = {1, n, n * n};
-    const PetscReal h2 = s->h[b] * s->h[b];
+    const PetscReal h2 = ps->hblock[b] * ps->hblock[b];
     for (PetscInt c = s->bstart[b]; c < s->bstart[b + 1]; c++)
       for (PetscInt e = 0; e < 3; e++) {
         if (ps->kind[3 * c + e] != PFF_FACE_INTERIOR || (openOnly && s->cf[e * s->ncells + c] == 0)) continue;
@@ -440,7 +436,7 @@ PetscErrorCode PffPressureShellDivergence_Private(PffPressure ps, Mat S, Vec u, 
       const PetscReal w = k1 - k0 == 1 ? 1.0 : 0.25;
       if (openOnly && s->cf[s->row[l][i]] == 0) continue;
       while (c >= s->bstart[b + 1]) b++; /* the lists run in cell order */
-      const PetscScalar f = s->h[b] * s->h[b] * ua[3 * c + e];
+      const PetscScalar f = ps->hblock[b] * ps->hblock[b] * ua[3 * c + e];
       ya[c] += f;
       for (PetscInt k = k0; k < k1; k++) {
         if (s->lo[l][k] < s->ncells)
@@ -472,7 +468,7 @@ PetscErrorCode PffPressureShellProjectVelocity_Private(PffPressure ps, Mat S, Ve
   PetscCall(VecGetArray(u, &ua));
   for (PetscInt b = 0; b < s->nblocks; b++) {
     const PetscInt  n = s->bn[b], stride[3] = {1, n, n * n};
-    const PetscReal ih2 = dt / (s->h[b] * s->h[b]);
+    const PetscReal ih2 = dt / (ps->hblock[b] * ps->hblock[b]);
     for (PetscInt c = s->bstart[b]; c < s->bstart[b + 1]; c++)
       for (PetscInt e = 0; e < 3; e++) {
         const PetscInt  r  = 3 * c + e;
@@ -493,7 +489,7 @@ PetscErrorCode PffPressureShellProjectVelocity_Private(PffPressure ps, Mat S, Ve
       if (cf == 0) continue;
       while (c >= s->bstart[b + 1]) b++;
       for (PetscInt k = k0; k < k1; k++) pl += s->lo[l][k] < s->ncells ? pa[s->lo[l][k]] : pg[s->lo[l][k] - s->ncells];
-      ua[3 * c + e] -= dt * cf * (pa[c] - w * pl) / (s->h[b] * s->h[b]);
+      ua[3 * c + e] -= dt * cf * (pa[c] - w * pl) / (ps->hblock[b] * ps->hblock[b]);
     }
   PetscCall(VecRestoreArrayRead(s->xg, &pg));
   PetscCall(VecRestoreArray(u, &ua));
