@@ -40,10 +40,10 @@
    (one fixed red-black sweep of the finest level against its memory traffic at the streaming copy
    bandwidth measured in the same run) and
      ITERATION pc=pffmg n=<N> cell_updates=<u> per_finest_cell=<u/cells> iteration_s=<s> bound_s=<s> ratio=<r>
-   (the smoother's cell updates, all levels, per FCG iteration of the last solve, and the time of an iteration
-   against u x 44 B at the copy bandwidth of all ranks; a lower bound, without residuals, transfers and Krylov
-   vectors), with setup_s = KSPSetUp + KSPSetUpOnBlocks, solve_s = KSPSolve
-   (PffPressureStats, timed with PetscTime inside the PressSolve log event; -log_view shows one stage per grid), relres
+   imbalance=<max rank/mean> (the smoother's cell updates, all levels, per FCG iteration of the last solve, and the time
+   of an iteration against u x 44 B at the copy bandwidth of all ranks; a lower bound, without residuals, transfers and
+   Krylov vectors), with setup_s = KSPSetUp + KSPSetUpOnBlocks, solve_s = KSPSolve (PffPressureStats, timed with
+   PetscTime inside the PressSolve log event; -log_view shows one stage per grid), relres
    =
    ||b - A p|| / ||b|| recomputed here from the module's operator, b and p. With -bench_repeat R (default 1)
    each PC sets up (new coefficients, as in a time step) and solves R times and the times are the
@@ -306,8 +306,9 @@ static PetscErrorCode SweepRate(MPI_Comm comm, PffPressure ps, KSP ksp, PetscInt
     PetscCall(PetscPrintf(
         comm,
         "ITERATION pc=pffmg n=%" PetscInt_FMT " cell_updates=%.3g per_finest_cell=%.2f iteration_s=%.4f "
-        "bound_s=%.4f ratio=%.2f\n",
-        N, (double)upd, (double)(upd / ((PetscReal)nloc * size)), (double)it, (double)bnd, (double)(it / bnd)));
+        "bound_s=%.4f ratio=%.2f imbalance=%.2f\n",
+        N, (double)upd, (double)(upd / ((PetscReal)nloc * size)), (double)it, (double)bnd, (double)(it / bnd),
+        (double)(mst.cellUpdates > 0 ? (PetscReal)mst.cellUpdatesMax * size / (PetscReal)mst.cellUpdates : 1)));
   }
   PetscCall(PetscRandomDestroy(&rnd));
   PetscCall(VecDestroy(&x));

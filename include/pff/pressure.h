@@ -147,15 +147,17 @@ PETSC_EXTERN PetscErrorCode PffPressureGetKSP(PffPressure ps, KSP *ksp);
    Algorithm 2, default true), -pffmg_block_sweeps (repeat block-local sweeps until the update falls by 1/3,
    default true), -pffmg_block_sweeps_max (4), -pffmg_adaptive_steps (10), -pffmg_sweeps (fixed pre/post
    sweeps without adaptivity, 2), -pffmg_omega (6/7), -pffmg_theta_sigmas (2), -pffmg_max_levels, -pffmg_rescale (coarse
-   coefficients consistent with the coarse discretisation, default true), -pffmg_kcycle (flexible-CG steps per coarse
-   correction, default 2; 0 = V-cycle), -pffmg_correction (coarse-correction scale, 1), and
-   the coarsest-level KSP under pressure_pffmg_coarse_ (default preonly + redundant LU). The functions
-   below need pffmg as the PC and a KSPSetUp or solve before them. */
+   coefficients consistent with the coarse discretisation, default true), -pffmg_kcycle (most flexible-CG steps per
+   coarse correction, default 4; 0 = V-cycle), -pffmg_kcycle_rtol (a coarse correction stops when its residual has
+   fallen by this factor, default 0.25; 0 = always -pffmg_kcycle steps), -pffmg_correction (coarse-correction scale, 1),
+   and the coarsest-level KSP under pressure_pffmg_coarse_ (default preonly + redundant LU). The functions below need
+   pffmg as the PC and a KSPSetUp or solve before them. */
 typedef struct {
   PetscInt   levels;           /* multigrid levels; the last is solved by the coarse KSP */
   PetscInt64 applications;     /* V-cycles (PC applications) on this rank */
   PetscInt64 blockRelaxations; /* block relaxations, summed over ranks by GetStats */
   PetscInt64 cellUpdates;      /* cell updates, summed over ranks by GetStats */
+  PetscInt64 cellUpdatesMax;   /* the largest rank's cell updates (GetStats); max/mean is the smoothing imbalance */
   PetscInt64 adaptiveSteps;    /* steps of Algorithm 2 on this rank */
 } PffMGStats;
 

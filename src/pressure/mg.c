@@ -26,7 +26,8 @@
 #define PFF_MG_MAX_LEVELS_DEFAULT 16
 #define PFF_MG_CORRECTION_DEFAULT 1.0
 #define PFF_MG_RESCALE_DEFAULT PETSC_TRUE
-#define PFF_MG_KCYCLE_DEFAULT 2
+#define PFF_MG_KCYCLE_DEFAULT 4
+#define PFF_MG_KCYCLE_RTOL_DEFAULT 0.25
 #define PFF_MG_COARSE_MAX_DEFAULT 4096
 #define PFF_MG_OPERATOR_DEFAULT PFF_MG_OPERATOR_STENCIL
 #define PFF_MG_OMP_MIN_ROWS_DEFAULT 32768
@@ -135,8 +136,10 @@ static PetscErrorCode PffMGSetUpKCycle(PffMG *mg, PetscInt L)
   if (lv->kcycle == NULL) {
     PetscCall(KSPCreate(mg->comm, &lv->kcycle));
     PetscCall(KSPSetType(lv->kcycle, KSPFCG));
-    PetscCall(KSPSetNormType(lv->kcycle, KSP_NORM_NONE));
-    PetscCall(KSPSetTolerances(lv->kcycle, 0.0, 0.0, PETSC_DEFAULT, mg->opt.kcycleIts));
+    /* Notay's conditional K-cycle: the residual norm costs one reduction per step, and the steps it saves
+       are those the level's problem does not need */
+    PetscCall(KSPSetNormType(lv->kcycle, mg->opt.kcycleRtol > 0 ? KSP_NORM_UNPRECONDITIONED : KSP_NORM_NONE));
+    PetscCall(KSPSetTolerances(lv->kcycle, mg->opt.kcycleRtol, 0.0, PETSC_DEFAULT, mg->opt.kcycleIts));
     /* kcycleIts steps need no more directions (FCG would keep 2 x 10 vectors per level) */
     PetscCall(KSPFCGSetMmax(lv->kcycle, mg->opt.kcycleIts));
     PetscCall(KSPFCGSetNprealloc(lv->kcycle, mg->opt.kcycleIts));
@@ -252,6 +255,7 @@ static PetscErrorCode PCCreate_PffMG(PC pc)
   mg->opt.correction     = PFF_MG_CORRECTION_DEFAULT;
   mg->opt.rescale        = PFF_MG_RESCALE_DEFAULT;
   mg->opt.kcycleIts      = PFF_MG_KCYCLE_DEFAULT;
+  mg->opt.kcycleRtol     = PFF_MG_KCYCLE_RTOL_DEFAULT;
   mg->opt.coarseMax      = PFF_MG_COARSE_MAX_DEFAULT;
   mg->opt.operatorType   = PFF_MG_OPERATOR_DEFAULT;
   mg->opt.ompMinRows     = PFF_MG_OMP_MIN_ROWS_DEFAULT;
@@ -352,6 +356,10 @@ PetscErrorCode PffPressureMGSetFromOptions_Private(PC pc)
                            "PffPressureMG", mg->opt.rescale, &mg->opt.rescale, NULL));
   PetscCall(PffOptionsBoundedInt("-pffmg_kcycle", "Flexible-CG steps per coarse correction (K-cycle); 0: V-cycle",
                                  "PffPressureMG", mg->opt.kcycleIts, &mg->opt.kcycleIts, NULL, 0));
+  PetscCall(
+      PffOptionsReal("-pffmg_kcycle_rtol",
+                     "A coarse correction stops when its residual falls by this factor (0: always -pffmg_kcycle steps)",
+                     "PffPressureMG", mg->opt.kcycleRtol, &mg->opt.kcycleRtol, NULL));
   PetscCall(PffOptionsBoundedInt("-pffmg_coarse_max",
                                  "Uniform coarse levels below the block raster until at most this many cells",
                                  "PffPressureMG", mg->opt.coarseMax, &mg->opt.coarseMax, NULL, 1));
@@ -361,6 +369,8 @@ PetscErrorCode PffPressureMGSetFromOptions_Private(PC pc)
   PetscOptionsEnd();
   PetscCheck(mg->opt.omega > 0 && mg->opt.omega < 2, mg->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-pressure_pffmg_omega %g is invalid: must lie in (0, 2)", (double)mg->opt.omega);
+  PetscCheck(mg->opt.kcycleRtol >= 0 && mg->opt.kcycleRtol < 1, mg->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-pressure_pffmg_kcycle_rtol %g is invalid: must lie in [0, 1)", (double)mg->opt.kcycleRtol);
   PetscCall(KSPSetFromOptions(mg->coarse));
   mg->optionsRead = PETSC_TRUE;
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -381,7 +391,7 @@ static PetscErrorCode PffPressureGetMG(PffPressure ps, PffMG **mg)
 PetscErrorCode PffPressureMGGetStats(PffPressure ps, PffMGStats *stats)
 {
   PffMG     *mg;
-  PetscInt64 sum[2];
+  PetscInt64 sum[2], mx;
 
   PetscFunctionBeginUser;
   PetscCall(PffPressureGetMG(ps, &mg));
@@ -389,8 +399,10 @@ PetscErrorCode PffPressureMGGetStats(PffPressure ps, PffMGStats *stats)
   sum[0] = mg->stats.blockRelaxations;
   sum[1] = mg->stats.cellUpdates;
   PetscCallMPI(MPIU_Allreduce(MPI_IN_PLACE, sum, 2, MPIU_INT64, MPI_SUM, mg->comm));
+  PetscCallMPI(MPIU_Allreduce(&mg->stats.cellUpdates, &mx, 1, MPIU_INT64, MPI_MAX, mg->comm));
   stats->blockRelaxations = sum[0];
   stats->cellUpdates      = sum[1];
+  stats->cellUpdatesMax   = mx;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

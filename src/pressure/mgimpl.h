@@ -60,6 +60,7 @@ typedef struct {
   PetscInt          coarseMax;  /* add uniform levels below the raster until at most this many cells */
   PetscReal         correction; /* coarse-grid correction scale */
   PetscInt          kcycleIts;  /* flexible-CG steps per coarse correction, 0: V-cycle */
+  PetscReal         kcycleRtol; /* a coarse correction stops early at this residual reduction; 0: always kcycleIts */
   PetscBool         rescale;    /* rediscretisation-consistent coarse coefficients (mglevels.c) */
   PetscInt          ompMinRows; /* fewest rows per rank for a level's smoothing and products to fork threads */
 } PffMGOptions;

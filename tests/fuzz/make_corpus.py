@@ -113,6 +113,7 @@ OPTIONS = {
     "pressure_pffmg_omega": ("real", "pos"),
     "pressure_pffmg_max_levels": ("int", "pos"),
     "pressure_pffmg_kcycle": ("int", "nonneg"),
+    "pressure_pffmg_kcycle_rtol": ("real", "open_unit"),
     "pressure_pffmg_coarse_max": ("int", "pos"),
     "pressure_pffmg_theta_sigmas": ("real", None),
     "pressure_pffmg_coarse_pc_type": ("enum", ("redundant",)),
@@ -331,7 +332,8 @@ def build(config_dir):
                         ("pressure_ksp_max_it", ("-1",)), ("pressure_pc_type", ("nosuch",)),
                         ("pressure_ksp_type", ("nosuch",)), ("pressure_assembly", ("nosuch",)),
                         ("pressure_operator", ("",)), ("pressure_pffmg_sweeps", ("-1",)),
-                        ("pressure_pffmg_omega", ("nan",)), ("pressure_dirichlet_walls", ("xmin,nosuch",))):
+                        ("pressure_pffmg_omega", ("nan",)), ("pressure_pffmg_kcycle_rtol", ("1", "-0.5")),
+                        ("pressure_dirichlet_walls", ("xmin,nosuch",))):
         for v in values:
             c.opt("dam", key, mutation_name(v), v, "solver")
     # unknown and misspelt keys

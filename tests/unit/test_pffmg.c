@@ -7,6 +7,8 @@
      random error on every level;
    - FCG + pffmg converges at rtol 1e-8 on a bubbly problem (nine bubbles, density ratio 1000), closed
      box, with an iteration count at most 3 above that of a one-rank solve of the same problem;
+   - the conditional K-cycle at ratio 1e5 needs at most the iterations of two fixed steps per coarse correction
+     and stops its coarse corrections early (fewer cell updates per iteration than four fixed steps);
    - adaptive relaxation relaxes fewer blocks than fixed sweeps when the residual is localised;
    - the matrix-free levels (the default) equal the AIJ Galerkin levels of -pressure_pffmg_operator aij.
    Sample run: mpiexec -n 4 ./test_pffmg     prints one line per check on rank 0. */
@@ -404,7 +406,8 @@ static PetscErrorCode TestSweepMatchesAIJ(PetscBool graded)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-static PetscErrorCode Solve(MPI_Comm comm, PetscBool graded, PetscInt *its, PetscReal *rnorm)
+static PetscErrorCode Solve(MPI_Comm comm, PetscBool graded, PetscReal ratio, PetscInt *its, PetscReal *rnorm,
+                            PffMGStats *mst)
 {
   PffTestCtx       t;
   Bubbly           c;
@@ -412,13 +415,14 @@ static PetscErrorCode Solve(MPI_Comm comm, PetscBool graded, PetscInt *its, Pets
   PffPressureStats st;
 
   PetscFunctionBeginUser;
-  PetscCall(CreateCase(comm, 32, 8, graded, 1e3, &t, &c));
+  PetscCall(CreateCase(comm, 32, 8, graded, ratio, &t, &c));
   PetscCall(CreatePressure(&t, &c, 1e-8, &ps));
   PetscCall(PffPressureProject(ps, c.uCh, 1.0, -1, c.pCh, &st));
   PetscCheck(st.reason > 0, comm, PETSC_ERR_NOT_CONVERGED,
              "solve: FCG + pffmg did not converge: %s after %" PetscInt_FMT, KSPConvergedReasons[st.reason], st.its);
   *its   = st.its;
   *rnorm = st.rnorm;
+  if (mst) PetscCall(PffPressureMGGetStats(ps, mst));
   PetscCall(PffPressureDestroy(&ps));
   PetscCall(PffGridDestroy(&t.grid));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -431,8 +435,8 @@ static PetscErrorCode TestSolve(PetscBool graded, PetscBool belowRaster)
 
   PetscFunctionBeginUser;
   PetscCall(PetscOptionsSetValue(NULL, "-pressure_pffmg_coarse_max", belowRaster ? "1" : "4096"));
-  PetscCall(Solve(PETSC_COMM_WORLD, graded, &its, &rn));
-  PetscCall(Solve(PETSC_COMM_SELF, graded, &its1, &rn1));
+  PetscCall(Solve(PETSC_COMM_WORLD, graded, 1e3, &its, &rn, NULL));
+  PetscCall(Solve(PETSC_COMM_SELF, graded, 1e3, &its1, &rn1, NULL));
   PetscCheck(rn <= 1e-8 && rn1 <= 1e-8, PETSC_COMM_WORLD, PETSC_ERR_PLIB, "solve: residual %g / %g above 1e-8",
              (double)rn, (double)rn1);
   /* the rank count changes reduction orders and the ownership of coarse cells below the raster */
@@ -445,6 +449,39 @@ static PetscErrorCode TestSolve(PetscBool graded, PetscBool belowRaster)
                         graded ? "graded " : "uniform", belowRaster ? ", uniform levels below the raster" : "", its,
                         its1));
   PetscCall(PetscOptionsClearValue(NULL, "-pressure_pffmg_coarse_max"));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The conditional K-cycle (the default -pressure_pffmg_kcycle 4 -pressure_pffmg_kcycle_rtol 0.25) at ratio 1e5: at
+   most the iterations of the fixed two-step K-cycle, and fewer cell updates per iteration than four fixed steps,
+   i.e. the coarse corrections do stop early. */
+static PetscErrorCode TestKCycle(void)
+{
+  const char *const set[3][2] = {{"4", "0.25"}, {"2", "0"}, {"4", "0"}};
+  PetscInt          its[3];
+  PetscReal         rn[3], upd[3];
+
+  PetscFunctionBeginUser;
+  for (PetscInt k = 0; k < 3; k++) {
+    PffMGStats mst;
+    PetscCall(PetscOptionsSetValue(NULL, "-pressure_pffmg_kcycle", set[k][0]));
+    PetscCall(PetscOptionsSetValue(NULL, "-pressure_pffmg_kcycle_rtol", set[k][1]));
+    PetscCall(Solve(PETSC_COMM_WORLD, PETSC_FALSE, 1e5, &its[k], &rn[k], &mst));
+    PetscCheck(rn[k] <= 1e-8, PETSC_COMM_WORLD, PETSC_ERR_PLIB, "kcycle %s rtol %s: residual %g above 1e-8", set[k][0],
+               set[k][1], (double)rn[k]);
+    upd[k] = (PetscReal)mst.cellUpdates / (PetscReal)its[k];
+  }
+  PetscCall(PetscOptionsClearValue(NULL, "-pressure_pffmg_kcycle"));
+  PetscCall(PetscOptionsClearValue(NULL, "-pressure_pffmg_kcycle_rtol"));
+  PetscCheck(its[0] <= its[1], PETSC_COMM_WORLD, PETSC_ERR_PLIB,
+             "kcycle: conditional %" PetscInt_FMT " iterations, two fixed steps %" PetscInt_FMT, its[0], its[1]);
+  PetscCheck(upd[0] < upd[2], PETSC_COMM_WORLD, PETSC_ERR_PLIB,
+             "kcycle: conditional %g cell updates per iteration, four fixed steps %g", (double)upd[0], (double)upd[2]);
+  PetscCall(PetscPrintf(PETSC_COMM_WORLD,
+                        "kcycle uniform bubbly 32^3 ratio 1e5: conditional (4, 0.25) %" PetscInt_FMT
+                        " iterations, %.0f cell updates each; two fixed steps %" PetscInt_FMT
+                        " iterations; four fixed steps %" PetscInt_FMT " iterations, %.0f cell updates each\n",
+                        its[0], (double)upd[0], its[1], its[2], (double)upd[2]));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -508,6 +545,7 @@ int main(int argc, char **argv)
   PetscCall(TestSolve(PETSC_FALSE, PETSC_FALSE));
   PetscCall(TestSolve(PETSC_TRUE, PETSC_FALSE));
   PetscCall(TestSolve(PETSC_TRUE, PETSC_TRUE));
+  PetscCall(TestKCycle());
   PetscCall(TestAdaptive());
   PetscCall(TestNewCoefficients());
   PetscCall(PetscFinalize());
