@@ -86,15 +86,22 @@ static PetscErrorCode VCycle(PffMG *mg, PetscInt L, Vec b, Vec x)
   PffMGLevel *c = &mg->lev[L + 1];
   PetscCall(VecSet(x, 0.0));
   PetscCall(PffMGSmooth_Private(mg, L, b, x));
-  PetscCall(MatMult(lv->A, x, lv->r));
-  PetscCall(VecAYPX(lv->r, -1.0, b));
-  PetscCall(MatMultTranspose(lv->P, lv->r, c->b));
+  if (lv->mf)
+    PetscCall(PffMGStencilResidualRestrict_Private(mg, L, b, x, c->b));
+  else {
+    PetscCall(MatMult(lv->A, x, lv->r));
+    PetscCall(VecAYPX(lv->r, -1.0, b));
+    PetscCall(MatMultTranspose(lv->P, lv->r, c->b));
+  }
   if (c->kcycle)
     PetscCall(KSPSolve(c->kcycle, c->b, c->x));
   else
     PetscCall(VCycle(mg, L + 1, c->b, c->x));
   if (mg->opt.correction != 1.0) PetscCall(VecScale(c->x, mg->opt.correction));
-  PetscCall(MatMultAdd(lv->P, c->x, x, x));
+  if (lv->mf)
+    PetscCall(PffMGStencilProlongAdd_Private(mg, L, c->x, x));
+  else
+    PetscCall(MatMultAdd(lv->P, c->x, x, x));
   PetscCall(PffMGSmooth_Private(mg, L, b, x));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -429,6 +436,7 @@ PetscErrorCode PffPressureMGGetLevel(PffPressure ps, PetscInt L, Mat *A, Mat *P)
     *A = mg->lev[L].st->Aview;
   } else if (A)
     *A = mg->lev[L].A;
+  if (P && mg->lev[L].P == NULL && L + 1 < mg->nlevels) PetscCall(PffMGBuildProlongation_Private(mg, L));
   if (P) *P = mg->lev[L].P;
   PetscFunctionReturn(PETSC_SUCCESS);
 }

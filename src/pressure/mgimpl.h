@@ -69,15 +69,16 @@ typedef struct {
    fastest at the block's resolution at this level. */
 typedef struct {
   PetscInt  L;
-  PetscBool uniform;            /* below the block raster: units are uniform coarse cells, not blocks */
-  PetscInt  nblk;               /* units (blocks, or coarse cells on uniform levels) */
-  PetscInt *coord;              /* [3 nblk] unit coordinates on uniform levels (block coordinates >> (L - Lr)) */
-  Mat       A;                  /* level operator: a MATSHELL on matrix-free levels; level 0 with AIJ operators: the
-                                   pressure module's, referenced */
-  PffMGStencil  *st;            /* face coefficients (every block level with stencil operators) */
-  PetscBool      mf;            /* relaxed and applied matrix-free (every block level but the last) */
-  PetscBool      omp;           /* enough rows for OpenMP (nrows >= ompMinRows) */
-  Mat            P;             /* prolongation from level L+1 (piecewise constant), NULL on the coarsest */
+  PetscBool uniform; /* below the block raster: units are uniform coarse cells, not blocks */
+  PetscInt  nblk;    /* units (blocks, or coarse cells on uniform levels) */
+  PetscInt *coord;   /* [3 nblk] unit coordinates on uniform levels (block coordinates >> (L - Lr)) */
+  Mat       A;       /* level operator: a MATSHELL on matrix-free levels; level 0 with AIJ operators: the
+                        pressure module's, referenced */
+  PffMGStencil *st;  /* face coefficients (every block level with stencil operators) */
+  PetscBool     mf;  /* relaxed and applied matrix-free (every block level but the last) */
+  PetscBool     omp; /* enough rows for OpenMP (nrows >= ompMinRows) */
+  Mat P; /* prolongation from level L+1 (piecewise constant), NULL on the coarsest; on matrix-free levels the transfers
+            run block by block and P is assembled only on request (PffPressureMGGetLevel) */
   KSP            kcycle;        /* K-cycle solver of this level's correction, or NULL */
   Vec            x, b, r;       /* work (x, b unused on level 0, which works on the PC's vectors) */
   PetscInt       nrows, rstart; /* owned rows, first global row */
@@ -144,6 +145,9 @@ PETSC_INTERN PetscErrorCode PffMGStencilUpdate_Private(PffMG *, PetscInt);
 PETSC_INTERN PetscErrorCode PffMGStencilAssemble_Private(PffMG *, PetscInt, Mat *);
 PETSC_INTERN PetscErrorCode PffMGStencilCreateShell_Private(PffMG *, PetscInt);
 PETSC_INTERN PetscErrorCode PffMGStencilDestroy_Private(PffMGLevel *);
+PETSC_INTERN PetscErrorCode PffMGStencilResidualRestrict_Private(PffMG *, PetscInt, Vec, Vec, Vec);
+PETSC_INTERN PetscErrorCode PffMGStencilProlongAdd_Private(PffMG *, PetscInt, Vec, Vec);
+PETSC_INTERN PetscErrorCode PffMGBuildProlongation_Private(PffMG *, PetscInt);
 PETSC_INTERN PetscBool      PffMGStencilBlockRhs_Private(const PffMGLevel *, PetscInt, const PetscScalar *,
                                                          const PetscScalar *, const PetscScalar *, PetscScalar *);
 PETSC_INTERN PetscReal      PffMGStencilRelaxBlock_Private(const PffMGLevel *, PetscInt, const PetscScalar *, PetscBool,

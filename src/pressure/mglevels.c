@@ -103,8 +103,18 @@ static PetscErrorCode BuildLevelLayout(PffMG *mg, PetscInt L)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Piecewise-constant prolongation from level L+1 to level L. */
-static PetscErrorCode BuildProlongation(PffMG *mg, PetscInt L)
+/* A work vector of a level: n owned rows, sequential on one rank. */
+static PetscErrorCode LevelVec(MPI_Comm comm, PetscInt n, Vec *v)
+{
+  PetscFunctionBeginUser;
+  PetscCall(VecCreate(comm, v));
+  PetscCall(VecSetSizes(*v, n, PETSC_DETERMINE));
+  PetscCall(VecSetType(*v, VECSTANDARD));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Piecewise-constant prolongation from block level L+1 to level L, assembled (AIJ levels, or on request). */
+PetscErrorCode PffMGBuildProlongation_Private(PffMG *mg, PetscInt L)
 {
   PffMGLevel *f = &mg->lev[L], *c = &mg->lev[L + 1];
 
@@ -488,11 +498,14 @@ PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
     }
   }
   for (PetscInt L = 0; L + 1 < mg->nlevels; L++) {
+    /* the matrix-free levels (stencil operators, every block level but the last) transfer block by block */
+    const PetscBool mf = (PetscBool)(mg->opt.operatorType == PFF_MG_OPERATOR_STENCIL && L + 1 < nblockLevels);
     if (mg->lev[L + 1].uniform)
       PetscCall(BuildUniformProlongation(mg, L, L + 1 - (nblockLevels - 1)));
-    else
-      PetscCall(BuildProlongation(mg, L));
-    PetscCall(MatCreateVecs(mg->lev[L].P, &mg->lev[L + 1].x, &mg->lev[L].r));
+    else if (!mf)
+      PetscCall(PffMGBuildProlongation_Private(mg, L));
+    PetscCall(LevelVec(mg->comm, mg->lev[L + 1].nrows, &mg->lev[L + 1].x));
+    PetscCall(LevelVec(mg->comm, mg->lev[L].nrows, &mg->lev[L].r));
     PetscCall(VecDuplicate(mg->lev[L + 1].x, &mg->lev[L + 1].b));
   }
   if (mg->nlevels > 1) PetscCall(VecDuplicate(mg->lev[mg->nlevels - 1].x, &mg->lev[mg->nlevels - 1].r));
@@ -502,6 +515,9 @@ PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
       mg->lev[L].mf = (PetscBool)(L + 1 < nblockLevels);
       PetscCall(PffMGStencilBuild_Private(mg, L));
       if (mg->lev[L].mf) PetscCall(PffMGStencilCreateShell_Private(mg, L));
+      /* the residual of a matrix-free level never leaves its block (PffMGStencilResidualRestrict_Private); the
+         vector was the layout of the ghost scatter, which keeps it */
+      if (mg->lev[L].mf && mg->opt.smoother != PFF_MG_SMOOTHER_JACOBI) PetscCall(VecDestroy(&mg->lev[L].r));
     }
   for (PetscInt L = 0; L < mg->nlevels; L++) {
     PffMGLevel *lv = &mg->lev[L];

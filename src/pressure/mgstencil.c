@@ -22,6 +22,7 @@
    through a PetscSF, the values of other ranks' cells through a VecScatter. */
 #include "mgimpl.h"
 #include <petscsf.h>
+#include <omp.h>
 #if defined(__AVX512F__) && defined(PETSC_USE_REAL_DOUBLE) && !defined(PETSC_USE_COMPLEX)
 #include <immintrin.h>
 #define PFF_MG_AVX512 1
@@ -802,57 +803,136 @@ PetscReal PffMGStencilRelaxBlock_Private(const PffMGLevel *lv, PetscInt lb, cons
   return rmax;
 }
 
-/* y = A x on a matrix-free level. */
-static PetscErrorCode StencilMult(Mat A, Vec xv, Vec yv)
+/* yb = (A x) over the cells of local block lb, block-local (yb[0] is row start[lb]); g: the ghost values. */
+static inline void BlockProduct(const PffMGLevel *lv, PetscInt lb, const PetscScalar *x, const PetscScalar *g,
+                                PetscScalar *restrict yb)
 {
-  PffMGLevel         *lv;
-  const PffMGStencil *st;
-  const PetscScalar  *x, *g = NULL;
-  PetscScalar        *y;
+  const PffMGStencil *st = lv->st;
+  const PetscInt      nr = lv->nrows, n = lv->n[lb], r0 = lv->start[lb];
+  const PffMGReal *restrict cx = st->cf, *restrict cy = cx + nr, *restrict cz = cy + nr;
+  const PetscReal *restrict ds = st->ds;
+  PffMGRowEnds e;
 
+  RowEnds(n, &e);
+  /* the side couplings first, from the block's rows that have any; the rows add their in-block part */
+  for (PetscInt i = 0; i < n * n * n; i++) yb[i] = 0;
+  for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++)
+    yb[st->side[q] - r0] = SideSum(st, nr, st->side[q], x, g, 0, 0, NULL);
+  for (PetscInt k = 0; k < n; k++)
+    for (PetscInt j = 0; j < n; j++) {
+      const PetscInt     base  = r0 + n * (j + n * k);
+      const PffMGRowMask m     = RowMask(j, k, n);
+      PetscScalar *restrict yr = yb + (base - r0);
+      if (base == 0 || base + n == nr || n < 3) {
+        for (PetscInt i = 0; i < n; i++) yr[i] += RowInBlock(st, nr, base + i, i, j, k, n, x);
+        continue;
+      }
+      for (PetscInt i = 0; i < n; i++) {
+        const PetscInt    r  = base + i;
+        const PetscScalar xc = x[r];
+        const PetscReal c0 = e.lo[i] * cx[r], c1 = e.hi[i] * cx[r + 1], c2 = m.mym * cy[r], c3 = m.myp * cy[r + m.syp],
+                        c4 = m.mzm * cz[r], c5 = m.mzp * cz[r + m.szp];
+        yr[i] += c0 * (xc - x[r - 1]) + c1 * (xc - x[r + 1]) + c2 * (xc - x[r - m.sym]) + c3 * (xc - x[r + m.syp]) +
+                 c4 * (xc - x[r - m.szm]) + c5 * (xc - x[r + m.szp]) + ds[r] * xc;
+      }
+    }
+}
+
+static PetscErrorCode GhostsGet(PffMGLevel *lv, Vec xv, const PetscScalar **g)
+{
   PetscFunctionBeginUser;
-  PetscCall(MatShellGetContext(A, &lv));
-  st = lv->st;
+  *g = NULL;
   if (lv->scatter) {
     PetscCall(VecScatterBegin(lv->scatter, xv, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
     PetscCall(VecScatterEnd(lv->scatter, xv, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
-    PetscCall(VecGetArrayRead(lv->ghost, &g));
+    PetscCall(VecGetArrayRead(lv->ghost, g));
   }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* y = A x on a matrix-free level. */
+static PetscErrorCode StencilMult(Mat A, Vec xv, Vec yv)
+{
+  PffMGLevel        *lv;
+  const PetscScalar *x, *g;
+  PetscScalar       *y;
+
+  PetscFunctionBeginUser;
+  PetscCall(MatShellGetContext(A, &lv));
+  PetscCall(GhostsGet(lv, xv, &g));
   PetscCall(VecGetArrayRead(xv, &x));
   PetscCall(VecGetArrayWrite(yv, &y));
 #pragma omp parallel for schedule(static) if (lv->nblk >= 8 && lv->omp)
-  for (PetscInt lb = 0; lb < lv->nblk; lb++) {
-    const PetscInt nr = lv->nrows, n = lv->n[lb], r0 = lv->start[lb];
-    const PffMGReal *restrict cx = st->cf, *restrict cy = cx + nr, *restrict cz = cy + nr;
-    const PetscReal *restrict ds = st->ds;
-    PetscScalar *restrict yr     = y;
-    PffMGRowEnds e;
-    RowEnds(n, &e);
-    /* the side couplings first, from the block's rows that have any; the rows add their in-block part */
-    for (PetscInt i = 0; i < n * n * n; i++) yr[r0 + i] = 0;
-    for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++)
-      yr[st->side[q]] = SideSum(st, nr, st->side[q], x, g, 0, 0, NULL);
-    for (PetscInt k = 0; k < n; k++)
-      for (PetscInt j = 0; j < n; j++) {
-        const PetscInt     base = r0 + n * (j + n * k);
-        const PffMGRowMask m    = RowMask(j, k, n);
-        if (base == 0 || base + n == nr || n < 3) {
-          for (PetscInt i = 0; i < n; i++) yr[base + i] += RowInBlock(st, nr, base + i, i, j, k, n, x);
-          continue;
-        }
-        for (PetscInt i = 0; i < n; i++) {
-          const PetscInt    r  = base + i;
-          const PetscScalar xc = x[r];
-          const PetscReal   c0 = e.lo[i] * cx[r], c1 = e.hi[i] * cx[r + 1], c2 = m.mym * cy[r],
-                          c3 = m.myp * cy[r + m.syp], c4 = m.mzm * cz[r], c5 = m.mzp * cz[r + m.szp];
-          yr[r] += c0 * (xc - x[r - 1]) + c1 * (xc - x[r + 1]) + c2 * (xc - x[r - m.sym]) + c3 * (xc - x[r + m.syp]) +
-                   c4 * (xc - x[r - m.szm]) + c5 * (xc - x[r + m.szp]) + ds[r] * xc;
-        }
-      }
-  }
+  for (PetscInt lb = 0; lb < lv->nblk; lb++) BlockProduct(lv, lb, x, g, y + lv->start[lb]);
   PetscCall(VecRestoreArrayWrite(yv, &y));
   PetscCall(VecRestoreArrayRead(xv, &x));
   if (g) PetscCall(VecRestoreArrayRead(lv->ghost, &g));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* cb = P^T (b - A x) from matrix-free level L to block level L+1 in one pass: the residual of a block
+   stays in the thread's block buffer, and the piecewise-constant restriction of each block lands in
+   that block's own coarse cells, so the blocks run in parallel without a residual vector, P, or
+   write conflicts. */
+PetscErrorCode PffMGStencilResidualRestrict_Private(PffMG *mg, PetscInt L, Vec bv, Vec xv, Vec cbv)
+{
+  PffMGLevel        *lv = &mg->lev[L];
+  const PffMGLevel  *c  = &mg->lev[L + 1];
+  const PetscScalar *x, *b, *g;
+  PetscScalar       *cb;
+
+  PetscFunctionBeginUser;
+  PetscCall(GhostsGet(lv, xv, &g));
+  PetscCall(VecGetArrayRead(xv, &x));
+  PetscCall(VecGetArrayRead(bv, &b));
+  PetscCall(VecGetArrayWrite(cbv, &cb));
+#pragma omp parallel for schedule(static) if (lv->nblk >= 8 && lv->omp)
+  for (PetscInt lb = 0; lb < lv->nblk; lb++) {
+    PetscScalar *restrict yb = mg->BB + mg->Rsize * (size_t)omp_get_thread_num();
+    const PetscInt nf = lv->n[lb], nc = c->n[lb], r0 = lv->start[lb];
+    PetscScalar *restrict cr = cb + c->start[lb];
+    BlockProduct(lv, lb, x, g, yb);
+    for (PetscInt i = 0; i < nc * nc * nc; i++) cr[i] = 0;
+    if (nf == nc)
+      for (PetscInt i = 0; i < nf * nf * nf; i++) cr[i] = b[r0 + i] - yb[i];
+    else /* 2 x 2 x 2 fine cells per coarse cell: pairs along a fine row share a parent */
+      for (PetscInt q = 0; q < nf * nf; q++) {
+        const PetscInt j = q % nf, k = q / nf, o = nc * (j / 2 + nc * (k / 2));
+        for (PetscInt i = 0; i < nf; i++) cr[o + i / 2] += b[r0 + q * nf + i] - yb[q * nf + i];
+      }
+  }
+  PetscCall(VecRestoreArrayWrite(cbv, &cb));
+  PetscCall(VecRestoreArrayRead(bv, &b));
+  PetscCall(VecRestoreArrayRead(xv, &x));
+  if (g) PetscCall(VecRestoreArrayRead(lv->ghost, &g));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* x += P cx from block level L+1 to matrix-free level L (piecewise constant, block by block). */
+PetscErrorCode PffMGStencilProlongAdd_Private(PffMG *mg, PetscInt L, Vec cxv, Vec xv)
+{
+  const PffMGLevel  *lv = &mg->lev[L], *c = &mg->lev[L + 1];
+  const PetscScalar *cx;
+  PetscScalar       *x;
+
+  PetscFunctionBeginUser;
+  PetscCall(VecGetArrayRead(cxv, &cx));
+  PetscCall(VecGetArray(xv, &x));
+#pragma omp parallel for schedule(static) if (lv->nblk >= 8 && lv->omp)
+  for (PetscInt lb = 0; lb < lv->nblk; lb++) {
+    const PetscInt nf = lv->n[lb], nc = c->n[lb];
+    PetscScalar *restrict xr       = x + lv->start[lb];
+    const PetscScalar *restrict cr = cx + c->start[lb];
+    if (nf == nc)
+      for (PetscInt i = 0; i < nf * nf * nf; i++) xr[i] += cr[i];
+    else
+      for (PetscInt q = 0; q < nf * nf; q++) {
+        const PetscInt j = q % nf, k = q / nf, o = nc * (j / 2 + nc * (k / 2));
+        for (PetscInt i = 0; i < nf; i++) xr[q * nf + i] += cr[o + i / 2];
+      }
+  }
+  PetscCall(VecRestoreArray(xv, &x));
+  PetscCall(VecRestoreArrayRead(cxv, &cx));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
