@@ -79,14 +79,15 @@ typedef struct {
   PetscBool     omp; /* enough rows for OpenMP (nrows >= ompMinRows) */
   Mat P; /* prolongation from level L+1 (piecewise constant), NULL on the coarsest; on matrix-free levels the transfers
             run block by block and P is assembled only on request (PffPressureMGGetLevel) */
-  KSP            kcycle;        /* K-cycle solver of this level's correction, or NULL */
-  Vec            x, b, r;       /* work (x, b unused on level 0, which works on the PC's vectors) */
-  PetscInt       nrows, rstart; /* owned rows, first global row */
-  PetscInt      *n;             /* [nlocal] cells per axis of each block at this level */
-  PetscInt      *start;         /* [nlocal + 1] first local row of each block */
-  PetscInt      *order, *split; /* rows of block lb: order[start[lb] .. split[lb]) red, then black */
-  PetscBool     *relevant;      /* [nlocal] relaxed at this level (resolution L, or L+1 beside a block at L) */
-  unsigned char *remote; /* [nblk] the unit has a face neighbour on another rank (relaxed after the ghost exchange) */
+  KSP       kcycle;        /* K-cycle solver of this level's correction, or NULL */
+  Vec       x, b, r;       /* work (x, b unused on level 0, which works on the PC's vectors) */
+  PetscInt  nrows, rstart; /* owned rows, first global row */
+  PetscInt *n;             /* [nlocal] cells per axis of each block at this level */
+  PetscInt *start;         /* [nlocal + 1] first local row of each block */
+  PetscInt *order, *split; /* rows of block lb: order[start[lb] .. split[lb]) red, then black (AIJ levels; NULL on
+                              matrix-free ones) */
+  PetscBool     *relevant; /* [nlocal] relaxed at this level (resolution L, or L+1 beside a block at L) */
+  unsigned char *remote;   /* [nblk] the unit has a face neighbour on another rank (relaxed after the ghost exchange) */
   unsigned char *merged, *mergedGhost; /* [nrows], [nghost]: the cell was merged from level L-1 (RescaleCoarse) */
   PetscInt       ncolour[2];           /* blocks of each block colour */
   PetscInt      *colourList;           /* [nlocal] relevant blocks: colour 0 first, then colour 1 */

@@ -74,7 +74,8 @@ static PetscErrorCode BuildLevelLayout(PffMG *mg, PetscInt L)
   lv->rstart = rstart;
 
   /* red cells (i + j + k even) first, then black, per block */
-  PetscCall(PetscMalloc2(mg->nlocal, &lv->colourList, lv->nrows, &lv->order));
+  PetscCall(PetscMalloc1(mg->nlocal, &lv->colourList));
+  PetscCall(PetscMalloc1(lv->nrows, &lv->order));
   for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
     const PetscInt n = lv->n[lb];
     PetscInt       q = lv->start[lb];
@@ -217,7 +218,8 @@ static PetscErrorCode BuildUniformLevel(PffMG *mg, PetscInt L, PetscInt k)
   PetscCall(BuildGroups(mg, k, &g, lv));
   PetscCall(PetscFree2(g.key, g.global));
   PetscCall(PetscMalloc4(lv->nblk, &lv->n, lv->nblk + 1, &lv->start, lv->nblk, &lv->split, lv->nblk, &lv->relevant));
-  PetscCall(PetscMalloc2(lv->nblk, &lv->colourList, lv->nrows, &lv->order));
+  PetscCall(PetscMalloc1(lv->nblk, &lv->colourList));
+  PetscCall(PetscMalloc1(lv->nrows, &lv->order));
   PetscCall(PetscMalloc1(lv->nblk, &colour));
   for (PetscInt q = 0; q < lv->nblk; q++) {
     lv->n[q]        = 1;
@@ -518,6 +520,7 @@ PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
       /* the residual of a matrix-free level never leaves its block (PffMGStencilResidualRestrict_Private); the
          vector was the layout of the ghost scatter, which keeps it */
       if (mg->lev[L].mf && mg->opt.smoother != PFF_MG_SMOOTHER_JACOBI) PetscCall(VecDestroy(&mg->lev[L].r));
+      if (mg->lev[L].mf) PetscCall(PetscFree(mg->lev[L].order)); /* the red-black row order of the AIJ smoother */
     }
   for (PetscInt L = 0; L < mg->nlevels; L++) {
     PffMGLevel *lv = &mg->lev[L];
@@ -634,7 +637,8 @@ PetscErrorCode PffMGDestroyLevels_Private(PffMG *mg)
     PetscCall(VecDestroy(&lv->ghost));
     PetscCall(VecScatterDestroy(&lv->scatter));
     PetscCall(PetscFree4(lv->n, lv->start, lv->split, lv->relevant));
-    PetscCall(PetscFree2(lv->colourList, lv->order));
+    PetscCall(PetscFree(lv->colourList));
+    PetscCall(PetscFree(lv->order));
     PetscCall(PetscFree(lv->coord));
     PetscCall(PetscFree(lv->remote));
     PetscCall(PetscFree2(lv->merged, lv->mergedGhost));
