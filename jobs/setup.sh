@@ -2,7 +2,9 @@
 # then apt-get install -y), then configures and builds into build/ (incremental on a second call).
 #   PFF_BUILD_DIR   build directory (default <repo>/build)
 #   PFF_BUILD_TYPE  CMake build type (default Release)
-#   PFF_CMAKE_ARGS  extra CMake arguments, e.g. "-DPFF_NATIVE=OFF"
+#   PFF_CMAKE_ARGS  extra CMake arguments, e.g. "-DPFF_NATIVE=OFF"; with "-DPFF_PETSC64=ON" (PETSc with 64-bit
+#                   indices, past 2^31 cells) Debian's libpetsc64-real-dev is installed too. Use another build
+#                   directory for it: PFF_BUILD_DIR=build64 PFF_CMAKE_ARGS=-DPFF_PETSC64=ON bash jobs/test.sh
 set -euo pipefail
 PFF_ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 PFF_BUILD_DIR=${PFF_BUILD_DIR:-$PFF_ROOT/build}
@@ -10,6 +12,9 @@ PFF_BUILD_TYPE=${PFF_BUILD_TYPE:-Release}
 
 PFF_PACKAGES="gcc make cmake pkg-config git openmpi-bin libopenmpi-dev petsc-dev libhdf5-openmpi-dev libmetis-dev libyaml-dev
   clang-format python3-h5py python3-numpy python3-matplotlib"
+case " ${PFF_CMAKE_ARGS:-} " in
+*-DPFF_PETSC64=ON*) PFF_PACKAGES="$PFF_PACKAGES libpetsc64-real-dev" ;;
+esac
 
 pff_install_packages() {
   local missing=()

@@ -142,7 +142,7 @@ static PetscErrorCode PffHaloPlanBuild(PffGrid g, PffHaloPlan *p)
   p->nghost = nghost;
   p->nhalo  = nghost + nsource;
   PetscCheck(p->nhalo < PETSC_MAX_INT && nc * g->ncells < PETSC_MAX_INT, PETSC_COMM_SELF, PETSC_ERR_SUP,
-             "more than 2^31 halo or owned values on one rank: use more ranks");
+             "more halo or owned values on one rank than PetscInt holds: use more ranks");
 
   /* leaves: same-level ghost cells and cross-level source cells, each naming its owner's cell */
   for (PetscInt e = 0; e < nxfer; e++) {

@@ -42,7 +42,9 @@ PetscErrorCode PffPressureBuildFaces_Private(PffPressure ps)
   /* the matrix-free path numbers cells globally and faces only locally (3 per owned cell), so it reaches
      PetscInt's range in cells; the assembled operator's 3 N face rows are checked where it is built */
   PetscCheck(ntotal < PETSC_MAX_INT && 3 * nowned < PETSC_MAX_INT, ps->comm, PETSC_ERR_SUP,
-             "pressure: %" PetscInt64_FMT " cells exceed PetscInt; configure PETSc with 64-bit indices", ntotal);
+             "pressure: %" PetscInt64_FMT " cells exceed PetscInt; build with PETSc's 64-bit indices (cmake "
+             "-DPFF_PETSC64=ON, docs/pressure.md)",
+             ntotal);
   ps->ncells = (PetscInt)nowned;
   ps->rstart = (PetscInt)rstart;
   ps->ntotal = (PetscInt)ntotal;
@@ -162,7 +164,7 @@ PetscErrorCode PffPressureBuildGradient_Private(PffPressure ps)
   PetscCheck(3 * (PetscInt64)ps->ntotal < PETSC_MAX_INT, ps->comm, PETSC_ERR_SUP,
              "pressure: the assembled operator needs 3 x %" PetscInt_FMT
              " face rows, more than PetscInt holds; use the matrix-free default (-pressure_pc_type pffmg "
-             "-pressure_operator shell) or PETSc with 64-bit indices",
+             "-pressure_operator shell) or PETSc with 64-bit indices (cmake -DPFF_PETSC64=ON)",
              ps->ntotal);
   PetscCall(PetscCalloc1(nrows, &dnz));
   PetscCall(PetscCalloc1(nrows, &onz));
