@@ -51,6 +51,27 @@ static PetscErrorCode PffExtrapolatePass(PffGrid grid, const PetscInt ch[5], Pet
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Whether a layer can reach a face of the block: a valid face (m >= 1/2) inside it or in the ghost cells
+   next to its sides, which are all that the layer reads. Most of the air is not reached, and a layer
+   that skips it does the same work as one that scans it. */
+static PetscBool PffExtrapolateBlockReached(const PffView *vm, const float *m, PetscInt n)
+{
+  PetscInt valid = 0;
+  for (PetscInt c = 0; c < n * n * n; c++) valid += m[c] >= 0.5f;
+  for (PetscInt f = 0; f < 6 && !valid; f++) {
+    const PetscInt ax = f / 2, layer = f % 2 ? n : -1;
+    for (PetscInt v = 0; v < n; v++)
+      for (PetscInt u = 0; u < n; u++) {
+        PetscInt p[3];
+        p[ax]           = layer;
+        p[(ax + 1) % 3] = u;
+        p[(ax + 2) % 3] = v;
+        valid += *PffViewsAt(vm, p[0], p[1], p[2], n) >= 0.5f;
+      }
+  }
+  return (PetscBool)(valid > 0);
+}
+
 /* One layer on component d of local block lb; ghosts of m and ul are current. Returns the faces it
    made valid (marked pending). */
 static PetscErrorCode PffExtrapolateLayerBlock(PffGrid grid, const PetscInt ch[5], PetscInt lb, PetscInt d,
@@ -69,6 +90,7 @@ static PetscErrorCode PffExtrapolateLayerBlock(PffGrid grid, const PetscInt ch[5
   const float   *open = a[2];
   float         *m = a[3], *ul = a[4];
   const PetscInt n = info.n;
+  if (!PffExtrapolateBlockReached(vm, m, n)) PetscFunctionReturn(PETSC_SUCCESS);
   for (PetscInt k = 0; k < n; k++)
     for (PetscInt j = 0; j < n; j++)
       for (PetscInt i = 0; i < n; i++) {
