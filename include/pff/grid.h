@@ -83,6 +83,16 @@ static inline float *PffViewsAt(const PffView *views, PetscInt i, PetscInt j, Pe
   return v->ptr + (v->off + i * v->sx + j * v->sy + k * v->sz);
 }
 
+/* Block-local coordinates p of cell (u, v) of the layer `layer` along axis f / 2, for side f = 0..5 (-x, +x, -y,
+   +y, -z, +z): the block's own side cells with layer 0 or n - 1, the ghost cells next to the side with -1 or n. */
+static inline void PffBlockSideCell(PetscInt f, PetscInt layer, PetscInt u, PetscInt v, PetscInt p[3])
+{
+  const PetscInt a = f / 2;
+  p[a]             = layer;
+  p[(a + 1) % 3]   = u;
+  p[(a + 2) % 3]   = v;
+}
+
 /* Life cycle. Create: collective, duplicates comm. SetFromOptions reads
    -grid_cells nx,ny,nz        finest-level cells per axis (multiples of the block size)
    -grid_block_size n0         cells per block axis at level 0, power of two in [4, 64]

@@ -58,17 +58,13 @@ static PetscBool PffExtrapolateBlockReached(const PffView *vm, const float *m, P
 {
   PetscInt valid = 0;
   for (PetscInt c = 0; c < n * n * n; c++) valid += m[c] >= 0.5f;
-  for (PetscInt f = 0; f < 6 && !valid; f++) {
-    const PetscInt ax = f / 2, layer = f % 2 ? n : -1;
+  for (PetscInt f = 0; f < 6 && !valid; f++)
     for (PetscInt v = 0; v < n; v++)
       for (PetscInt u = 0; u < n; u++) {
         PetscInt p[3];
-        p[ax]           = layer;
-        p[(ax + 1) % 3] = u;
-        p[(ax + 2) % 3] = v;
+        PffBlockSideCell(f, f % 2 ? n : -1, u, v, p);
         valid += *PffViewsAt(vm, p[0], p[1], p[2], n) >= 0.5f;
       }
-  }
   return (PetscBool)(valid > 0);
 }
 

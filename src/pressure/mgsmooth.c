@@ -95,15 +95,12 @@ static inline PetscReal VisitBlock(const PffMG *mg, const PffMGLevel *lv, PetscI
 /* Largest R over the cells of face f (0..5: -x, +x, -y, +y, -z, +z) of an n^3 block. */
 static PetscReal FaceMax(const PetscReal *R, PetscInt n, PetscInt f)
 {
-  const PetscInt a = f / 2, layer = (f % 2) ? n - 1 : 0;
-  PetscReal      m = 0;
+  PetscReal m = 0;
   for (PetscInt v = 0; v < n; v++)
     for (PetscInt u = 0; u < n; u++) {
       PetscInt c[3];
-      c[a]           = layer;
-      c[(a + 1) % 3] = u;
-      c[(a + 2) % 3] = v;
-      m              = PetscMax(m, R[c[0] + n * (c[1] + n * c[2])]);
+      PffBlockSideCell(f, (f % 2) ? n - 1 : 0, u, v, c);
+      m = PetscMax(m, R[c[0] + n * (c[1] + n * c[2])]);
     }
   return m;
 }
