@@ -31,6 +31,17 @@ typedef struct {
   PetscInt64     recvRemote; /* leaves fed by other ranks (floats) */
 } PffHaloPlan;
 
+/* The face layers of a cell channel block that a 7-point stencil reads, taken from its 27 views
+   (PffView) and packed into 64 bytes: a sweep over many small blocks would otherwise stream about
+   1 kB of views per block, more than a 4^3 block's own cells in and out. face[] is the address of
+   the first cell of the layers x-, x+, y-, y+, z-, z+, i.e. of block-local cells (-1,0,0), (n,0,0),
+   (0,-1,0), (0,n,0), (0,0,-1), (0,0,n); sy[] are the j strides of the two x layers, sz[] the k
+   strides of the x and y layers. Rows of the z layers, like the block's own, are n apart. */
+typedef struct {
+  const float *face[6];
+  int16_t      sy[2], sz[4];
+} PffFaceViews;
+
 typedef struct {
   char           name[64];
   PffChannelKind kind;
@@ -39,6 +50,7 @@ typedef struct {
   float         *alloc;  /* data - PFF_CHANNEL_PAD: row kernels may read one value past either end */
   float         *halo;   /* ghost and source boxes of the plan */
   PffView       *views;  /* [nlocal][ncomp][27] */
+  PffFaceViews  *faces;  /* [nlocal], cell channels only (NULL otherwise) */
   PffHaloPlan   *plan;   /* borrowed from the grid */
   PetscBool      output; /* written to frames (PffGridSetChannelOutput); checkpoints write every channel */
 } PffChannel;

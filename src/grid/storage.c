@@ -74,6 +74,28 @@ PetscErrorCode PffGridAllocateChannel_Private(PffGrid g, PffChannel *c)
       }
     }
   }
+  if (c->kind == PFF_CHANNEL_CELL) {
+    PetscCall(PetscMalloc1(g->nlocal, &c->faces));
+    for (PetscInt lb = 0; lb < g->nlocal; lb++) {
+      const PetscInt n = PffGridBlockN_Private(g, g->lgid[lb]);
+      const PffView *v = &c->views[lb * 27];
+      PffFaceViews  *f = &c->faces[lb];
+      f->face[0]       = PffViewsAt(v, -1, 0, 0, n);
+      f->face[1]       = PffViewsAt(v, n, 0, 0, n);
+      f->face[2]       = PffViewsAt(v, 0, -1, 0, n);
+      f->face[3]       = PffViewsAt(v, 0, n, 0, n);
+      f->face[4]       = PffViewsAt(v, 0, 0, -1, n);
+      f->face[5]       = PffViewsAt(v, 0, 0, n, n);
+      /* strides are at most n^2 <= 4096 (storage above), so they fit the packed fields */
+      f->sy[0] = (int16_t)v[12].sy;
+      f->sy[1] = (int16_t)v[14].sy;
+      f->sz[0] = (int16_t)v[12].sz;
+      f->sz[1] = (int16_t)v[14].sz;
+      f->sz[2] = (int16_t)v[10].sz;
+      f->sz[3] = (int16_t)v[16].sz;
+      PetscAssert(v[4].sy == n && v[22].sy == n, PETSC_COMM_SELF, PETSC_ERR_PLIB, "z-face rows must be n apart");
+    }
+  }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -84,6 +106,7 @@ PetscErrorCode PffGridDestroyChannel_Private(PffChannel **c)
   PetscCall(PetscFree((*c)->alloc));
   PetscCall(PetscFree((*c)->halo));
   PetscCall(PetscFree((*c)->views));
+  PetscCall(PetscFree((*c)->faces));
   PetscCall(PetscFree(*c));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
