@@ -136,6 +136,15 @@ typedef struct {
   PffMGStats     stats;
 } PffMG;
 
+/* Piecewise-constant transfer inside block lb: fine row q (cells j = q % nf, k = q / nf) of a block of nf^3 cells
+   at level L lies in the block's coarse row starting at this block-local offset of its nc^3 cells at L+1, and
+   fine cell i in coarse cell offset + (i >> s), s = 1 where the block merges 2x2x2 (nf = 2 nc), 0 where it keeps
+   its resolution. The AIJ P and the matrix-free transfers both use it. */
+static inline PetscInt PffMGCoarseRow_Private(PetscInt q, PetscInt nf, PetscInt nc, PetscInt s)
+{
+  return nc * (((q % nf) >> s) + nc * ((q / nf) >> s));
+}
+
 PETSC_INTERN PetscErrorCode PffMGBuildLevels_Private(PffMG *);
 PETSC_INTERN PetscErrorCode PffMGUpdateOperators_Private(PffMG *, Mat);
 PETSC_INTERN PetscErrorCode PffMGDestroyLevels_Private(PffMG *);

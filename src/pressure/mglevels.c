@@ -73,10 +73,10 @@ static PetscErrorCode BuildLevelLayout(PffMG *mg, PetscInt L)
   PetscCallMPI(MPI_Exscan(&lv->nrows, &rstart, 1, MPIU_INT, MPI_SUM, mg->comm));
   lv->rstart = rstart;
 
-  /* red cells (i + j + k even) first, then black, per block */
+  /* red cells (i + j + k even) first, then black, per block: the row order of the AIJ smoother */
   PetscCall(PetscMalloc1(mg->nlocal, &lv->colourList));
-  PetscCall(PetscMalloc1(lv->nrows, &lv->order));
-  for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
+  if (!lv->mf) PetscCall(PetscMalloc1(lv->nrows, &lv->order));
+  for (PetscInt lb = 0; lb < mg->nlocal && !lv->mf; lb++) {
     const PetscInt n = lv->n[lb];
     PetscInt       q = lv->start[lb];
     for (PetscInt c = 0; c < 2; c++) {
@@ -122,14 +122,13 @@ PetscErrorCode PffMGBuildProlongation_Private(PffMG *mg, PetscInt L)
   PetscFunctionBeginUser;
   PetscCall(MatCreateAIJ(mg->comm, f->nrows, c->nrows, PETSC_DETERMINE, PETSC_DETERMINE, 1, NULL, 0, NULL, &f->P));
   for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
-    const PetscInt nf = f->n[lb], nc = c->n[lb], s = nf / nc; /* s = 1 (shared block) or 2 */
-    for (PetscInt k = 0; k < nf; k++)
-      for (PetscInt j = 0; j < nf; j++)
-        for (PetscInt i = 0; i < nf; i++) {
-          const PetscInt row = f->rstart + f->start[lb] + i + nf * (j + nf * k);
-          const PetscInt col = c->rstart + c->start[lb] + i / s + nc * (j / s + nc * (k / s));
-          PetscCall(MatSetValue(f->P, row, col, 1.0, INSERT_VALUES));
-        }
+    const PetscInt nf = f->n[lb], nc = c->n[lb], s = nf > nc;
+    for (PetscInt q = 0; q < nf * nf; q++)
+      for (PetscInt i = 0; i < nf; i++) {
+        const PetscInt row = f->rstart + f->start[lb] + q * nf + i;
+        const PetscInt col = c->rstart + c->start[lb] + PffMGCoarseRow_Private(q, nf, nc, s) + (i >> s);
+        PetscCall(MatSetValue(f->P, row, col, 1.0, INSERT_VALUES));
+      }
   }
   PetscCall(MatAssemblyBegin(f->P, MAT_FINAL_ASSEMBLY));
   PetscCall(MatAssemblyEnd(f->P, MAT_FINAL_ASSEMBLY));
@@ -486,6 +485,9 @@ PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
   nmax = mg->opt.maxLevels;
   PetscCall(PetscCalloc1(nmax, &mg->lev));
   mg->nlevels = nblockLevels;
+  /* with stencil operators every block level but the last is relaxed, applied and transferred matrix-free */
+  for (PetscInt L = 0; L + 1 < nblockLevels; L++)
+    mg->lev[L].mf = (PetscBool)(mg->opt.operatorType == PFF_MG_OPERATOR_STENCIL);
   for (PetscInt L = 0; L < nblockLevels; L++) PetscCall(BuildLevelLayout(mg, L));
   if ((n0 >> (nblockLevels - 1)) == 1) {
     /* uniform levels below the raster while the coarsest level is too large for the direct solve */
@@ -500,27 +502,23 @@ PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
     }
   }
   for (PetscInt L = 0; L + 1 < mg->nlevels; L++) {
-    /* the matrix-free levels (stencil operators, every block level but the last) transfer block by block */
-    const PetscBool mf = (PetscBool)(mg->opt.operatorType == PFF_MG_OPERATOR_STENCIL && L + 1 < nblockLevels);
+    const PffMGLevel *lv = &mg->lev[L];
+    /* a matrix-free level transfers block by block (no P) and keeps its residual inside the block (no r, but
+       for the Jacobi smoother) */
     if (mg->lev[L + 1].uniform)
       PetscCall(BuildUniformProlongation(mg, L, L + 1 - (nblockLevels - 1)));
-    else if (!mf)
+    else if (!lv->mf)
       PetscCall(PffMGBuildProlongation_Private(mg, L));
     PetscCall(LevelVec(mg->comm, mg->lev[L + 1].nrows, &mg->lev[L + 1].x));
-    PetscCall(LevelVec(mg->comm, mg->lev[L].nrows, &mg->lev[L].r));
+    if (!lv->mf || mg->opt.smoother == PFF_MG_SMOOTHER_JACOBI) PetscCall(LevelVec(mg->comm, lv->nrows, &mg->lev[L].r));
     PetscCall(VecDuplicate(mg->lev[L + 1].x, &mg->lev[L + 1].b));
   }
   if (mg->nlevels > 1) PetscCall(VecDuplicate(mg->lev[mg->nlevels - 1].x, &mg->lev[mg->nlevels - 1].r));
   mg->nblockLevels = nblockLevels;
   if (mg->opt.operatorType == PFF_MG_OPERATOR_STENCIL && nblockLevels > 1)
     for (PetscInt L = 0; L < nblockLevels; L++) {
-      mg->lev[L].mf = (PetscBool)(L + 1 < nblockLevels);
       PetscCall(PffMGStencilBuild_Private(mg, L));
       if (mg->lev[L].mf) PetscCall(PffMGStencilCreateShell_Private(mg, L));
-      /* the residual of a matrix-free level never leaves its block (PffMGStencilResidualRestrict_Private); the
-         vector was the layout of the ghost scatter, which keeps it */
-      if (mg->lev[L].mf && mg->opt.smoother != PFF_MG_SMOOTHER_JACOBI) PetscCall(VecDestroy(&mg->lev[L].r));
-      if (mg->lev[L].mf) PetscCall(PetscFree(mg->lev[L].order)); /* the red-black row order of the AIJ smoother */
     }
   for (PetscInt L = 0; L < mg->nlevels; L++) {
     PffMGLevel *lv = &mg->lev[L];

@@ -362,7 +362,10 @@ PetscErrorCode PffMGStencilBuild_Private(PffMG *mg, PetscInt L)
     IS is;
     PetscCall(ISCreateGeneral(PETSC_COMM_SELF, st->nghost, st->ghostRow, PETSC_USE_POINTER, &is));
     PetscCall(VecCreateSeq(PETSC_COMM_SELF, st->nghost, &lv->ghost));
-    PetscCall(VecScatterCreate(lv->r, is, lv->ghost, NULL, &lv->scatter));
+    Vec layout; /* the level's row layout, no storage: a matrix-free level keeps no residual vector */
+    PetscCall(VecCreateMPIWithArray(mg->comm, 1, lv->nrows, PETSC_DETERMINE, NULL, &layout));
+    PetscCall(VecScatterCreate(layout, is, lv->ghost, NULL, &lv->scatter));
+    PetscCall(VecDestroy(&layout));
     PetscCall(ISDestroy(&is));
     lv->nghost = st->nghost;
   }
@@ -891,15 +894,13 @@ PetscErrorCode PffMGStencilResidualRestrict_Private(PffMG *mg, PetscInt L, Vec b
     PetscScalar *restrict yb = mg->BB + mg->Rsize * (size_t)omp_get_thread_num();
     const PetscInt nf = lv->n[lb], nc = c->n[lb], r0 = lv->start[lb];
     PetscScalar *restrict cr = cb + c->start[lb];
+    const PetscInt s         = nf > nc;
     BlockProduct(lv, lb, x, g, yb);
     for (PetscInt i = 0; i < nc * nc * nc; i++) cr[i] = 0;
-    if (nf == nc)
-      for (PetscInt i = 0; i < nf * nf * nf; i++) cr[i] = b[r0 + i] - yb[i];
-    else /* 2 x 2 x 2 fine cells per coarse cell: pairs along a fine row share a parent */
-      for (PetscInt q = 0; q < nf * nf; q++) {
-        const PetscInt j = q % nf, k = q / nf, o = nc * (j / 2 + nc * (k / 2));
-        for (PetscInt i = 0; i < nf; i++) cr[o + i / 2] += b[r0 + q * nf + i] - yb[q * nf + i];
-      }
+    for (PetscInt q = 0; q < nf * nf; q++) {
+      const PetscInt o = PffMGCoarseRow_Private(q, nf, nc, s);
+      for (PetscInt i = 0; i < nf; i++) cr[o + (i >> s)] += b[r0 + q * nf + i] - yb[q * nf + i];
+    }
   }
   PetscCall(VecRestoreArrayWrite(cbv, &cb));
   PetscCall(VecRestoreArrayRead(bv, &b));
@@ -920,16 +921,13 @@ PetscErrorCode PffMGStencilProlongAdd_Private(PffMG *mg, PetscInt L, Vec cxv, Ve
   PetscCall(VecGetArray(xv, &x));
 #pragma omp parallel for schedule(static) if (lv->nblk >= 8 && lv->omp)
   for (PetscInt lb = 0; lb < lv->nblk; lb++) {
-    const PetscInt nf = lv->n[lb], nc = c->n[lb];
+    const PetscInt nf = lv->n[lb], nc = c->n[lb], s = nf > nc;
     PetscScalar *restrict xr       = x + lv->start[lb];
     const PetscScalar *restrict cr = cx + c->start[lb];
-    if (nf == nc)
-      for (PetscInt i = 0; i < nf * nf * nf; i++) xr[i] += cr[i];
-    else
-      for (PetscInt q = 0; q < nf * nf; q++) {
-        const PetscInt j = q % nf, k = q / nf, o = nc * (j / 2 + nc * (k / 2));
-        for (PetscInt i = 0; i < nf; i++) xr[q * nf + i] += cr[o + i / 2];
-      }
+    for (PetscInt q = 0; q < nf * nf; q++) {
+      const PetscInt o = PffMGCoarseRow_Private(q, nf, nc, s);
+      for (PetscInt i = 0; i < nf; i++) xr[q * nf + i] += cr[o + (i >> s)];
+    }
   }
   PetscCall(VecRestoreArray(xv, &x));
   PetscCall(VecRestoreArrayRead(cxv, &cx));
