@@ -161,11 +161,11 @@ static void PffAdvectChunkSample(const PffSampleBlock *b, PetscInt gw, PetscInt 
 
 /* ok[j] &= every coordinate of point j lies in [lo, hi) (false for NaN); a point outside is replaced by
    the origin, so that the samples' float-to-int conversions stay defined. */
-static void PffAdvectChunkInside(PetscInt m, float pt[3][PFF_CHUNK], float lo, float hi, uint8_t ok[])
+static void PffAdvectChunkInside(PetscInt m, float pt[3][PFF_CHUNK], const float lo[3], const float hi[3], uint8_t ok[])
 {
   float *restrict x = pt[0], *restrict y = pt[1], *restrict z = pt[2];
   for (PetscInt j = 0; j < m; j++) {
-    const int in = (x[j] >= lo) & (x[j] < hi) & (y[j] >= lo) & (y[j] < hi) & (z[j] >= lo) & (z[j] < hi);
+    const int in = (x[j] >= lo[0]) & (x[j] < hi[0]) & (y[j] >= lo[1]) & (y[j] < hi[1]) & (z[j] >= lo[2]) & (z[j] < hi[2]);
     ok[j] &= (uint8_t)in;
     x[j] = in ? x[j] : 0.0f;
     y[j] = in ? y[j] : 0.0f;
@@ -173,9 +173,10 @@ static void PffAdvectChunkInside(PetscInt m, float pt[3][PFF_CHUNK], float lo, f
   }
 }
 
-/* The particles [i0, i1) of local block lb, which has tiles. Chunks run one RK3 step in float in the
-   block's local cell units, vectorised: every stage point within one cell of the block (inside the reach
-   of any velocity halo and inside the tiles) and one sub-step enough. The others take the general path. */
+/* The particles [i0, i1) of local block lb. Chunks run one RK3 step in float in the block's local cell units,
+   vectorised: every stage point within one cell of the block (inside the reach of any velocity halo and inside
+   the tiles), off its sides with a wall or hole by as much as its stencils need (the start point too), and one
+   sub-step enough. The others take the general path. */
 static void PffAdvectBlockChunks(PffParticles p, const PffSampler *s, const PffSampleBlock *tb,
                                  const PffAdvectBlock *blocks, const PetscInt level[], PetscInt lb, PetscReal dt,
                                  PetscInt *maxsub, PetscInt *nclamp)
@@ -186,7 +187,13 @@ static void PffAdvectBlockChunks(PffParticles p, const PffSampler *s, const PffS
   float                 lo[3], ihl;
   PffBlockCorner_Private(p->n0, b->ijk, b->level, lo, &ihl);
   const float   scale = (float)(dt / (p->h0 * (PetscReal)hl)), cfl = (float)p->substepCfl;
-  const float   rlo = -1 + 1e-6f, rhi = (float)b->n + 1 - 1e-6f;
+  float         rlo[3], rhi[3];
+  for (int a = 0; a < 3; a++) {
+    /* a stencil of the half lattice reaches below cell 0 from l < 1/2, one of the normal lattice the last face
+       (the wall's) from l >= n - 1 */
+    rlo[a] = (b->hole >> (2 * a)) & 1 ? 0.5f : -1 + 1e-6f;
+    rhi[a] = (b->hole >> (2 * a + 1)) & 1 ? (float)(b->n - 1) : (float)b->n + 1 - 1e-6f;
+  }
   const int32_t air = (int32_t)(b->tile[kair][0] - b->tile[0][0]); /* tiles are channel-major */
   float        *x   = p->s.x;
 
@@ -200,6 +207,7 @@ static void PffAdvectBlockChunks(PffParticles p, const PffSampler *s, const PffS
       ok[j]   = 1;
       for (int a = 0; a < 3; a++) l0[a][j] = (x[3 * (j0 + j) + a] - lo[a]) * ihl; /* exact */
     }
+    if (b->hole) PffAdvectChunkInside(m, l0, rlo, rhi, ok);
     PffAdvectChunkSample(b, s->gw, m, l0, koff, scale, k1);
     for (PetscInt j = 0; j < m; j++) /* one sub-step: the displacement within -particles_substep_cfl cells */
       ok[j] &= (uint8_t)(k1[0][j] * k1[0][j] + k1[1][j] * k1[1][j] + k1[2][j] * k1[2][j] <= cfl * cfl);
@@ -282,22 +290,12 @@ PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const PetscInt chU[PFF_
     blocks[lb].h     = h;
   }
 
-  /* threads take blocks; blocks with tiles go by chunks, the others particle by particle */
-  const PetscInt kair = sampler.nch - 1;
+  /* threads take blocks, which go by chunks */
 #pragma omp parallel for reduction(max : maxsub) reduction(+ : nclamp) schedule(dynamic, 1)
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
     PffSampleBlock tb;
     if (!PffSamplerBlockTiles_Private(p, &sampler, lb, &tb)) continue;
-    const PffSampleBlock *b = &tb;
-    if (b->tile[0][0] && b->tile[kair][0]) {
-      PffAdvectBlockChunks(p, &sampler, &tb, blocks, level, lb, dt, &maxsub, &nclamp);
-      continue;
-    }
-    for (PetscInt i = p->start[lb]; i < p->start[lb + 1]; i++) {
-      const PetscInt k    = PffParticleWordType(p->s.word[i]) == PFF_PARTICLE_LIQUID ? 0 : kair;
-      const PetscInt nsub = PffAdvectParticle(p, &sampler, &tb, blocks, level, lb, k, dt, &p->s.x[3 * i], &nclamp);
-      maxsub              = PetscMax(maxsub, nsub);
-    }
+    PffAdvectBlockChunks(p, &sampler, &tb, blocks, level, lb, dt, &maxsub, &nclamp);
   }
 
   PetscCall(PffSamplerDestroy_Private(&sampler));

@@ -1,6 +1,7 @@
 /* Cell-channel values at the particles (the escaped-particle stage reads the phase field there):
    block by block in threads, through ghost tiles of one layer and chunks of PFF_CHUNK particles in
-   float, like G2P; blocks beside walls or holes go point by point through the grid's general path. */
+   float, like G2P; particles within a cell of a wall or hole beside their block go point by point
+   through the grid's general path. */
 #include "particlesimpl.h"
 
 PetscErrorCode PffParticlesInterpolateCell(PffParticles p, PetscInt ch, PffParticleCellFn fn, void *ctx)
@@ -26,25 +27,25 @@ PetscErrorCode PffParticlesInterpolateCell(PffParticles p, PetscInt ch, PffParti
     for (PetscInt j0 = p->start[lb]; j0 < i1; j0 += PFF_CHUNK) {
       const PetscInt m = PetscMin(PFF_CHUNK, i1 - j0);
       float          val[PFF_CHUNK];
-      if (b->tile[0][0]) {
-        /* cell centres: the half lattice on every axis */
-        PffChunkLattice L;
-        PffChunkLattice_Private(&x[3 * j0], m, lo, ih, n, &L);
-        const int32_t *restrict cx = L.ih[0], *restrict cy = L.ih[1], *restrict cz = L.ih[2];
-        const float *restrict tx = L.th[0], *restrict ty = L.th[1], *restrict tz = L.th[2], *t = b->tile[0][0];
-        float w[PFF_CHUNK]; /* val's address goes to fn: gathers into it would not vectorise */
-        for (PetscInt j = 0; j < m; j++) {
-          const int32_t o = (cx[j] + 1) + (int32_t)mm * ((cy[j] + 1) + (int32_t)mm * (cz[j] + 1));
-          w[j]            = PffTrilinear_Private(t, o, st, tx[j], ty[j], tz[j]);
-        }
-        memcpy(val, w, sizeof(float) * (size_t)m);
-      } else {
-        for (PetscInt j = 0; j < m; j++) {
-          const PetscReal g[3] = {x[3 * (j0 + j)], x[3 * (j0 + j) + 1], x[3 * (j0 + j) + 2]};
-          PetscReal       lp[3];
-          PffSamplerLocal_Private(p, b, g, lp);
-          val[j] = (float)PffGridInterpolateInBlock(p->grid, ch, lb, 0, lp);
-        }
+      /* cell centres: the half lattice on every axis */
+      PffChunkLattice L;
+      uint8_t         wall[PFF_CHUNK];
+      PffChunkLattice_Private(&x[3 * j0], m, lo, ih, n, &L);
+      PffChunkHoleFlags_Private(&L, m, n, b->hole, wall);
+      const int32_t *restrict cx = L.ih[0], *restrict cy = L.ih[1], *restrict cz = L.ih[2];
+      const float *restrict tx = L.th[0], *restrict ty = L.th[1], *restrict tz = L.th[2], *t = b->tile[0][0];
+      float w[PFF_CHUNK]; /* val's address goes to fn: gathers into it would not vectorise */
+      for (PetscInt j = 0; j < m; j++) {
+        const int32_t o = (cx[j] + 1) + (int32_t)mm * ((cy[j] + 1) + (int32_t)mm * (cz[j] + 1));
+        w[j]            = PffTrilinear_Private(t, o, st, tx[j], ty[j], tz[j]);
+      }
+      memcpy(val, w, sizeof(float) * (size_t)m);
+      for (PetscInt j = 0; b->hole && j < m; j++) {
+        if (!wall[j]) continue;
+        const PetscReal g[3] = {x[3 * (j0 + j)], x[3 * (j0 + j) + 1], x[3 * (j0 + j) + 2]};
+        PetscReal       lp[3];
+        PffSamplerLocal_Private(p, b, g, lp);
+        val[j] = (float)PffGridInterpolateInBlock(p->grid, ch, lb, 0, lp);
       }
       fn(j0, m, val, ctx);
     }

@@ -177,7 +177,8 @@ PETSC_INTERN PetscErrorCode PffParticlesSort_Private(PffParticles);
    threads. */
 typedef struct {
   PetscInt     n, level, ijk[3];
-  PetscBool    tiled;      /* no wall or hole beside it: its stencils may read tiles */
+  unsigned     hole;       /* bit 2a (2a + 1): a wall or an inactive block lies on the lower (upper) side along axis a,
+                              where the grid's general path clamps the stencil and the tile's ghosts must not be read */
   const float *data[2][3]; /* channel k, face component d: the block's own n^3 cells */
   const float *tile[2][3]; /* the same with gw ghost layers, (n + 2 gw)^3 from cell -gw: NULL in the sampler's
                               table, set in the thread's copy by PffSamplerBlockTiles_Private */
@@ -235,6 +236,21 @@ static inline void PffChunkLattice_Private(const float *x, PetscInt m, const flo
   }
 }
 
+/* flag[j] = 1 for the particles of a chunk whose stencil of some face component or cell value reaches a side of the
+   block with a wall or hole (hole bits of PffSampleBlock): those take the point path, whose general path clamps
+   there. Conservative for cell values by half a cell on upper sides. */
+static inline void PffChunkHoleFlags_Private(const PffChunkLattice *L, PetscInt m, PetscInt n, unsigned hole,
+                                             uint8_t flag[])
+{
+  for (PetscInt j = 0; j < m; j++) flag[j] = 0;
+  if (!hole) return;
+  for (int a = 0; a < 3; a++) {
+    const int32_t lower = (int32_t)((hole >> (2 * a)) & 1), upper = (int32_t)((hole >> (2 * a + 1)) & 1);
+    const int32_t *restrict ic = L->ic[a], *restrict ih = L->ih[a];
+    for (PetscInt j = 0; j < m; j++) flag[j] |= (uint8_t)((lower & (ih[j] < 0)) | (upper & (ic[j] >= (int32_t)n - 1)));
+  }
+}
+
 /* Trilinear interpolation of the 2 x 2 x 2 values at t + o + st[q] (st: the corner offsets in a tile)
    with fractions (x1, y1, z1), axis by axis; inlined into loops the compiler vectorises. */
 static inline float PffTrilinear_Private(const float *restrict t, int32_t o, const int32_t st[8], float x1, float y1,
@@ -274,9 +290,8 @@ PETSC_INTERN void PffTileShell_Private(const PffView *views, PetscInt n, PetscIn
 PETSC_INTERN PetscErrorCode PffSamplerCreate_Private(PffParticles, PetscInt nch, const PetscInt ch[], PetscInt gw,
                                                      PffSampler *);
 PETSC_INTERN PetscErrorCode PffSamplerDestroy_Private(PffSampler *);
-/* The calling thread's copy of block lb's table entry, with its tiles built in the thread's buffer when
-   the block is tiled (valid until the thread's next call); PETSC_FALSE, and nothing built, when the
-   block holds no particle. */
+/* The calling thread's copy of block lb's table entry, with its tiles built in the thread's buffer (valid
+   until the thread's next call); PETSC_FALSE, and nothing built, when the block holds no particle. */
 PETSC_INTERN PetscBool PffSamplerBlockTiles_Private(PffParticles, const PffSampler *, PetscInt lb, PffSampleBlock *);
 
 /* Position of grid point g (grid units) in cell units of local block lb's level, from its lower corner,
@@ -299,11 +314,21 @@ static inline void PffSamplerLocal_Private(const PffParticles p, const PffSample
   }
 }
 
+/* Whether a 2 x 2 x 2 stencil from lower index i0 keeps off every side of block b with a wall or hole, so that the
+   tile holds, value for value, what the grid's general path reads. */
+static inline PetscBool PffSampleStencilClear_Private(const PffSampleBlock *b, const PetscInt i0[3])
+{
+  for (int a = 0; a < 3; a++)
+    if ((((b->hole >> (2 * a)) & 1) && i0[a] < 0) || (((b->hole >> (2 * a + 1)) & 1) && i0[a] + 1 >= b->n))
+      return PETSC_FALSE;
+  return PETSC_TRUE;
+}
+
 /* Face component d of channels k0 and (if nk = 2) k0 + 1 at lp in local block lb, with one set of
    trilinear weights (lower lattice index i0 and fraction t per axis): the block's own cells when the
    stencil lies inside them, the block's tile when it reaches no farther than its gw ghost layers and the
    block has one,
-   else the grid's general path (walls, farther ghosts), PffGridInterpolateInBlock(). The fast paths
+   else the grid's general path (stencils reaching a wall or hole, farther ghosts), PffGridInterpolateInBlock(). The fast paths
    interpolate axis by axis and so agree with the general path to rounding. */
 static inline void PffSamplerFaceAt_Private(const PffSampler *s, const PffSampleBlock *b, PetscInt lb, PetscInt k0,
                                             PetscInt nk, PetscInt d, const PetscInt i0[3], const PetscReal t[3],
@@ -317,7 +342,7 @@ static inline void PffSamplerFaceAt_Private(const PffSampler *s, const PffSample
     o = i0[0] + n * (i0[1] + n * i0[2]);
     for (PetscInt k = 0; k < nk; k++) base[k] = b->data[k0 + k][d];
   } else if (b->tile[k0][d] && i0[0] >= -s->gw && i0[0] + 1 < n + s->gw && i0[1] >= -s->gw && i0[1] + 1 < n + s->gw &&
-             i0[2] >= -s->gw && i0[2] + 1 < n + s->gw) {
+             i0[2] >= -s->gw && i0[2] + 1 < n + s->gw && PffSampleStencilClear_Private(b, i0)) {
     const PetscInt gw = s->gw;
     m                 = n + 2 * gw;
     o                 = (i0[0] + gw) + m * ((i0[1] + gw) + m * (i0[2] + gw));

@@ -49,17 +49,25 @@ PetscErrorCode PffSamplerCreate_Private(PffParticles p, PetscInt nch, const Pets
     s->blocks = (PffSampleBlock *)ptrs[0];
     s->views  = (const PffView **)ptrs[1];
   }
-  /* tiles for the blocks without a wall or inactive neighbour (there the grid's general path is a plain
-     trilinear stencil over its views, which the tile holds value for value), built by the thread that
-     works on the block into its own buffer (PffSamplerBlockTiles_Private): scratch per thread, not per
-     block, and cache-hot when used */
+  /* tiles for every block, built by the thread that works on the block into its own buffer
+     (PffSamplerBlockTiles_Private): scratch per thread, not per block, and cache-hot when used. Where a stencil
+     keeps off the block's wall and hole sides, the grid's general path is a plain trilinear stencil over the
+     views, which the tile holds value for value; the stencils that reach such a side take the general path, which
+     clamps there (hole bits). */
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
     PffBlockInfo    info;
     PffSampleBlock *b = &s->blocks[lb];
     PetscCall(PffGridGetBlockInfo(p->grid, lb, &info));
     b->n     = info.n;
     b->level = info.level;
-    b->tiled = (PetscBool)!info.holes;
+    b->hole  = 0;
+    for (PetscInt r = 0; r < 27; r++) {
+      PetscInt d[3];
+      if (!((info.holes >> r) & 1)) continue;
+      PffRegionDirection(r, d);
+      for (int a = 0; a < 3; a++)
+        if (d[a]) b->hole |= 1u << (2 * a + (d[a] > 0));
+    }
     for (int d = 0; d < 3; d++) b->ijk[d] = info.ijk[d];
     for (PetscInt k = 0; k < 2; k++)
       for (int d = 0; d < 3; d++) {
@@ -72,7 +80,7 @@ PetscErrorCode PffSamplerCreate_Private(PffParticles p, PetscInt nch, const Pets
         float *data;
         PetscCall(PffGridGetBlockData(p->grid, ch[k], lb, d, &data));
         b->data[k][d] = data;
-        if (b->tiled) PetscCall(PffGridGetBlockViews(p->grid, ch[k], lb, d, &s->views[6 * lb + 3 * k + d]));
+        PetscCall(PffGridGetBlockViews(p->grid, ch[k], lb, d, &s->views[6 * lb + 3 * k + d]));
       }
   }
   const PetscInt m = p->n0 + 2 * gw;
@@ -87,7 +95,6 @@ PetscBool PffSamplerBlockTiles_Private(PffParticles p, const PffSampler *s, Pets
 
   if (p->start[lb] == p->start[lb + 1]) return PETSC_FALSE;
   *tb = s->blocks[lb];
-  if (!tb->tiled) return PETSC_TRUE;
   const PetscInt n = tb->n, m = n + 2 * gw;
   float         *base = s->tiles + s->tstride * (size_t)omp_get_thread_num();
   for (PetscInt k = 0; k < s->nch; k++)

@@ -15,8 +15,10 @@
    rotation in a walled box keeps every particle inside and the count; zero velocity with a sphere
    solid leaves no particle inside the sphere, and pushed equals the number that were inside.
    Cell values at the particles (PffParticlesInterpolateCell, float tiles in threads) agree with
-   PffGridInterpolate to 2e-6 on a graded periodic grid and on a walled one, and the callback sees
-   every particle once.
+   PffGridInterpolate to 2e-6 on a graded periodic grid and on walled ones, and the callback sees
+   every particle once. Beside walls (whose ghosts hold junk that the grid's general path, clamping
+   there, never reads): G2P with alpha 0 agrees with PffGridInterpolate to 2e-6 relative, and a
+   uniform field along the walls moves every particle by u t to 1e-6 of the box, on 1 and 2 levels.
 
    Sample run:  mpiexec -n 4 ./test_particles_transfer
    Prints the same lines on any number of ranks. */
@@ -136,18 +138,18 @@ static PetscReal Constant(const PetscReal x[3], PetscInt comp, void *ctx)
   return ((const PetscReal *)ctx)[comp];
 }
 
-/* Sets every wall ghost region of a face channel to the constant vector val. */
+/* Sets every wall ghost region of a channel to the constant vector val (one value per component). */
 static PetscErrorCode FillWallGhosts(const PffTestCtx *ctx, PetscInt ch, const PetscReal val[3])
 {
-  PetscInt width;
+  PetscInt width, ncomp;
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridGetChannelInfo(ctx->grid, ch, NULL, NULL, NULL, &width));
+  PetscCall(PffGridGetChannelInfo(ctx->grid, ch, NULL, NULL, &ncomp, &width));
   for (PetscInt lb = 0; lb < ctx->nlocal; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(ctx->grid, lb, &info));
     const PetscInt n = info.n;
-    for (PetscInt comp = 0; comp < 3; comp++) {
+    for (PetscInt comp = 0; comp < ncomp; comp++) {
       const PffView *views;
       PetscCall(PffGridGetBlockViews(ctx->grid, ch, lb, comp, &views));
       for (PetscInt k = -width; k < n + width; k++)
@@ -402,7 +404,8 @@ static void StoreCell(PetscInt i0, PetscInt m, const float val[], void *ctx)
 }
 
 /* PffParticlesInterpolateCell against the grid's PffGridInterpolate at the particles' world positions,
-   on a graded periodic grid (tiles) and on one walled in z (blocks beside the walls go point by point). */
+   on a graded periodic grid and on grids walled in z, whose wall ghosts hold junk (particles within a cell of
+   a wall go point by point). */
 static PetscErrorCode TestCellInterpolation(PetscInt nlevels, PetscBool wallz)
 {
   const PetscInt  nb[3]       = {3, 2, 2};
@@ -421,6 +424,10 @@ static PetscErrorCode TestCellInterpolation(PetscInt nlevels, PetscBool wallz)
   PetscCall(PffGridFillChannel(ctx.grid, ch, Wavy, NULL));
   PetscCall(PffGridHaloBegin(ctx.grid, ch));
   PetscCall(PffGridHaloEnd(ctx.grid, ch));
+  if (wallz) { /* junk that the general path, which clamps at walls, never reads */
+    const PetscReal junk[3] = {1e3, 0, 0};
+    PetscCall(FillWallGhosts(&ctx, ch, junk));
+  }
   PetscCall(CreateParticles(&ctx, "1", SeedLiquid, &part));
   PffParticleArrays a;
   PetscCall(PffParticlesGetArrays(part, &a));
@@ -444,6 +451,103 @@ static PetscErrorCode TestCellInterpolation(PetscInt nlevels, PetscBool wallz)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+static PetscReal WavyFace(const PetscReal x[3], PetscInt comp, void *ctx)
+{
+  return Wavy(x, comp, ctx) + 0.25 * (PetscReal)comp * x[1];
+}
+
+/* G2P (alpha 0: v = I(u)) against the grid's PffGridInterpolate at the particles' world positions, on grids
+   walled in y and z. The wall ghosts hold junk (|u| = 1000): the general path clamps there and reads only the
+   wall face of a normal component, so a tile value read across a wall shows as a large difference. */
+static PetscErrorCode TestG2PMatchesGrid(PetscInt nlevels)
+{
+  const PetscInt  nb[3]       = {3, 2, 2};
+  const PetscBool periodic[3] = {PETSC_TRUE, PETSC_FALSE, PETSC_FALSE};
+  const PetscReal origin[3] = {-0.5, 0.25, 0}, zero[3] = {0, 0, 0}, junk[3] = {1e3, -1e3, 7e2};
+  PetscReal       alpha[2 * PFF_GRID_MAX_LEVELS] = {0}, err = 0, *xw, *ref;
+  PffTestCtx      ctx;
+  PffParticles    part;
+  PetscInt        chU, chDU;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffTestCreateGrid(PETSC_COMM_WORLD, nb, periodic, origin, 1.0 / 16, N0, nlevels, nlevels > 1 ? -1 : 0, 0, 9,
+                              &ctx));
+  PetscCall(PffGridAddChannel(ctx.grid, "u", PFF_CHANNEL_FACE, 2, &chU));
+  PetscCall(PffGridAddChannel(ctx.grid, "du", PFF_CHANNEL_FACE, 2, &chDU));
+  PetscCall(PffGridFillChannel(ctx.grid, chU, WavyFace, NULL));
+  PetscCall(PffGridFillChannel(ctx.grid, chDU, Constant, (void *)zero));
+  PetscCall(PffGridHaloBegin(ctx.grid, chU));
+  PetscCall(PffGridHaloEnd(ctx.grid, chU));
+  PetscCall(PffGridHaloBegin(ctx.grid, chDU));
+  PetscCall(PffGridHaloEnd(ctx.grid, chDU));
+  PetscCall(FillWallGhosts(&ctx, chU, junk));
+  PetscCall(CreateParticles(&ctx, "1", SeedLiquid, &part));
+  PetscCall(PffParticlesG2P(part, chU, chDU, alpha));
+  PffParticleArrays a;
+  PetscCall(PffParticlesGetArrays(part, &a));
+  PetscCall(PetscMalloc2(3 * a.n + 1, &xw, 3 * a.n + 1, &ref));
+  for (PetscInt i = 0; i < a.n; i++) PffParticleArraysWorld(&a, i, &xw[3 * i]);
+  PetscCall(PffGridInterpolate(ctx.grid, chU, a.n, xw, ref));
+  for (PetscInt i = 0; i < 3 * a.n; i++)
+    err = PetscMax(err, PetscAbsReal(a.v[i] - ref[i]) / PetscMax(1.0, PetscAbsReal(ref[i])));
+  PetscCall(PetscFree2(xw, ref));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &err, 1, MPIU_REAL, MPI_MAX, ctx.comm));
+  /* float tiles and the float store against the grid's double path */
+  PetscCheck(err <= 2e-6, ctx.comm, PETSC_ERR_PLIB, "G2P differs from PffGridInterpolate by %g beside walls",
+             (double)err);
+  PetscCall(PetscPrintf(ctx.comm, "G2P against the grid's path (%" PetscInt_FMT " level%s, walls in y and z): max relative difference %.1e\n",
+                        nlevels, nlevels > 1 ? "s" : "", (double)err));
+  PetscCall(PffParticlesDestroy(&part));
+  PetscCall(PffGridDestroy(&ctx.grid));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* A uniform field along the periodic x axis of a box walled in y and z moves every particle by u t, also those
+   beside the walls, whose tangential ghosts hold junk (1000) that the general path never reads. */
+static PetscErrorCode TestWalledUniformAdvection(PetscInt nlevels)
+{
+  const PetscInt   nb[3]       = {3, 2, 2};
+  const PetscBool  periodic[3] = {PETSC_TRUE, PETSC_FALSE, PETSC_FALSE};
+  const PetscReal  origin[3] = {0.125, -0.5, 0}, u[3] = {0.75, 0, 0}, junk[3] = {1e3, 0, 0};
+  const PetscInt   nsteps = 3;
+  PffTestCtx       ctx;
+  PffParticles     part;
+  PffParticleStats st;
+  PetscInt         chU;
+  PetscReal        err = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffTestCreateGrid(PETSC_COMM_WORLD, nb, periodic, origin, 1.0 / 16, N0, nlevels, nlevels > 1 ? -1 : 0, 0, 9,
+                              &ctx));
+  PetscCall(PffGridAddChannel(ctx.grid, "u", PFF_CHANNEL_FACE, 3, &chU));
+  PetscCall(PffGridFillChannel(ctx.grid, chU, Constant, (void *)u));
+  PetscCall(PffGridHaloBegin(ctx.grid, chU));
+  PetscCall(PffGridHaloEnd(ctx.grid, chU));
+  PetscCall(FillWallGhosts(&ctx, chU, junk));
+  PetscCall(CreateParticles(&ctx, "1", SeedRemember, &part));
+  const PetscReal dt = 0.4 * ctx.h0 / u[0]; /* one sub-step: the vectorised chunks */
+  for (PetscInt s = 0; s < nsteps; s++) PetscCall(PffParticlesAdvect(part, chU, dt, NULL, NULL, &st));
+  PffParticleArrays a;
+  PetscCall(PffParticlesGetArrays(part, &a));
+  for (PetscInt i = 0; i < a.n; i++)
+    for (int d = 0; d < 3; d++) {
+      const PetscReal L = ctx.blen * (PetscReal)ctx.nb[d];
+      PetscReal       x[3];
+      PffParticleArraysWorld(&a, i, x);
+      PetscReal e = x[d] - ((PetscReal)a.v[3 * i + d] + u[d] * dt * (PetscReal)nsteps);
+      if (periodic[d]) e -= L * PetscFloorReal(e / L + 0.5);
+      err = PetscMax(err, PetscAbsReal(e) / L);
+    }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &err, 1, MPIU_REAL, MPI_MAX, ctx.comm));
+  PetscCheck(err <= 1e-6, ctx.comm, PETSC_ERR_PLIB, "walled uniform advection error %g (relative to the box)",
+             (double)err);
+  PetscCall(PetscPrintf(ctx.comm, "advect uniform beside walls (%" PetscInt_FMT " level%s): max error %.1e of the box\n",
+                        nlevels, nlevels > 1 ? "s" : "", (double)err));
+  PetscCall(PffParticlesDestroy(&part));
+  PetscCall(PffGridDestroy(&ctx.grid));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 int main(int argc, char **argv)
 {
   PetscCall(PetscInitialize(&argc, &argv, NULL, help));
@@ -459,6 +563,11 @@ int main(int argc, char **argv)
   PetscCall(TestWalledRotationAndSolid());
   PetscCall(TestCellInterpolation(2, PETSC_FALSE));
   PetscCall(TestCellInterpolation(1, PETSC_TRUE));
+  PetscCall(TestCellInterpolation(2, PETSC_TRUE));
+  PetscCall(TestG2PMatchesGrid(1));
+  PetscCall(TestG2PMatchesGrid(2));
+  PetscCall(TestWalledUniformAdvection(1));
+  PetscCall(TestWalledUniformAdvection(2));
   PetscCall(PetscFinalize());
   return 0;
 }
