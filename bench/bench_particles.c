@@ -1,14 +1,16 @@
 /* pff-bench-particles: particle throughput of P2G, G2P and RK3 advection at 1 and 2 OpenMP threads.
 
-   mpiexec -n 1 build/bin/pff-bench-particles [-bench_n 64] [-bench_reps 3]
+   mpiexec -n 1 build/bin/pff-bench-particles [-bench_n 64] [-bench_reps 3] [-bench_walls]
 
    A periodic bench_n^3 grid of 16^3 blocks, seeded with 8 jittered particles per cell; the velocity
-   is a smooth periodic field (a Taylor-Green vortex) with a halo of width 2. Each kernel runs
+   is a smooth periodic field (a Taylor-Green vortex) with a halo of width 2. -bench_walls closes
+   every axis with walls instead (a closed tank, where every block at the boundary touches a wall; the
+   field's normal components vanish there). Each kernel runs
    -bench_reps times per thread count (after one warm-up) and the best time counts. Advection moves
    particles about half a cell per step and migrates them. A streaming copy of 2 x 256 MiB per rank
    (read + write counted) at 1 and 2 threads gives the memory speed the kernels are held to. Prints
      RESULT copy ranks=<r> gb_s_1t=<x> gb_s_2t=<y>
-     RESULT kernel=<p2g|g2p|advect> ranks=<r> particles=<n> mparts_s_1t=<x> mparts_s_2t=<y> bytes=<b>
+     RESULT kernel=<p2g|g2p|advect> ranks=<r> walls=<0|1> particles=<n> mparts_s_1t=<x> mparts_s_2t=<y> bytes=<b>
             copy_share_1t=<s> copy_share_2t=<s>
    bytes is the particle state a kernel must move at least in the compact store (float positions and
    velocities, a 4-byte word): P2G reads x, v, word = 28 B; G2P reads x, v, word and writes v = 40 B;
@@ -43,7 +45,7 @@ int main(int argc, char **argv)
   PffParticles part;
   PetscInt     n = 64, reps = 3, chMass, chMom, chU, chDU;
   PetscMPIInt  size;
-  PetscBool    periodic[3] = {PETSC_TRUE, PETSC_TRUE, PETSC_TRUE};
+  PetscBool    walls     = PETSC_FALSE;
   PetscReal    origin[3] = {0, 0, 0}, density[2] = {1000, 1}, alpha[2 * PFF_GRID_MAX_LEVELS];
   double       rate[3][2];
   PetscInt64   count[2];
@@ -52,6 +54,8 @@ int main(int argc, char **argv)
   PetscCall(PffInitializePackage());
   PetscCall(PetscOptionsGetInt(NULL, NULL, "-bench_n", &n, NULL));
   PetscCall(PetscOptionsGetInt(NULL, NULL, "-bench_reps", &reps, NULL));
+  PetscCall(PetscOptionsGetBool(NULL, NULL, "-bench_walls", &walls, NULL));
+  const PetscBool periodic[3] = {!walls, !walls, !walls};
   PetscCallMPI(MPI_Comm_size(PETSC_COMM_WORLD, &size));
   const PetscInt cells[3] = {n, n, n};
   PetscCall(PffGridCreate(PETSC_COMM_WORLD, &grid));
@@ -125,9 +129,9 @@ int main(int argc, char **argv)
   const double bytes[3] = {28, 40, 28};
   for (int k = 0; k < 3; k++)
     PetscCall(PetscPrintf(PETSC_COMM_WORLD,
-                          "RESULT kernel=%s ranks=%d particles=%.0f mparts_s_1t=%.2f mparts_s_2t=%.2f bytes=%.0f "
-                          "copy_share_1t=%.3f copy_share_2t=%.3f\n",
-                          names[k], (int)size, np, rate[k][0], rate[k][1], bytes[k],
+                          "RESULT kernel=%s ranks=%d walls=%d particles=%.0f mparts_s_1t=%.2f mparts_s_2t=%.2f "
+                          "bytes=%.0f copy_share_1t=%.3f copy_share_2t=%.3f\n",
+                          names[k], (int)size, (int)walls, np, rate[k][0], rate[k][1], bytes[k],
                           rate[k][0] * 1e6 * bytes[k] / (gbs[0] * 1e9), rate[k][1] * 1e6 * bytes[k] / (gbs[1] * 1e9)));
   PetscCall(PffParticlesDestroy(&part));
   PetscCall(PffGridDestroy(&grid));

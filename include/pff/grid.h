@@ -76,6 +76,48 @@ static inline void PffRegionDirection(PetscInt r, PetscInt d[3])
   d[1] = (r / 3) % 3 - 1;
   d[2] = r / 9 - 1;
 }
+/* The 2 x 2 x 2 stencil of the grid's trilinear interpolation (PffGridInterpolate) at lp, the position in cell units
+   of a block of n cells per axis from its lower corner, for a lattice offset o per axis (0.5 at cell centres and
+   across a face, 0 along its normal): lower and upper index per axis and fraction. Each region of the holes mask (bit
+   r: neighbour region r across a wall or facing an inactive block) that the stencil reaches clamps every axis it
+   steps across to the block's last cell (constant extrapolation), except the wall face itself (index n) of a
+   staggered component. Returns whether the stencil leaves the block's own cells. */
+static inline PetscBool PffStencilClamped(PetscInt n, PetscInt holes, const PetscReal o[3], const PetscReal lp[3],
+                                          PetscInt i0[3], PetscInt i1[3], PetscReal t[3])
+{
+  PetscInt  side[3];
+  PetscBool clamp[3][2] = {{PETSC_FALSE, PETSC_FALSE}, {PETSC_FALSE, PETSC_FALSE}, {PETSC_FALSE, PETSC_FALSE}};
+
+  for (int a = 0; a < 3; a++) {
+    const PetscReal s = lp[a] - o[a];
+    i0[a]             = (PetscInt)PetscFloorReal(s);
+    t[a]              = s - (PetscReal)i0[a];
+    i1[a]             = i0[a] + 1;
+    side[a]           = i0[a] < 0 ? -1 : (i1[a] >= n ? 1 : 0);
+  }
+  if (!side[0] && !side[1] && !side[2]) return PETSC_FALSE;
+  for (int q = 1; q < 8; q++) {
+    PetscInt r = 13;
+    for (int a = 0, m = 1; a < 3; a++, m *= 3)
+      if ((q >> a) & 1) r += side[a] * m;
+    if (r == 13 || !((holes >> r) & 1)) continue;
+    for (int a = 0; a < 3; a++)
+      if (((q >> a) & 1) && side[a]) clamp[a][side[a] > 0] = PETSC_TRUE;
+  }
+  for (int a = 0; a < 3; a++) {
+    if (i0[a] < 0 && clamp[a][0]) {
+      i0[a] = 0;
+      if (i1[a] < 0) i1[a] = 0;
+      t[a] = 0;
+    }
+    if (i1[a] >= n && clamp[a][1] && !(o[a] == 0.0 && i1[a] == n)) {
+      i1[a] = n - 1;
+      if (i0[a] > n - 1) i0[a] = n - 1;
+      if (i0[a] == i1[a]) t[a] = 0;
+    }
+  }
+  return PETSC_TRUE;
+}
 /* Address of block-local cell (i, j, k), -width <= i,j,k < n + width, through the block's 27 views. */
 static inline float *PffViewsAt(const PffView *views, PetscInt i, PetscInt j, PetscInt k, PetscInt n)
 {

@@ -18,7 +18,7 @@
    u, the FLIP update or the particle velocities. */
 #include "flowimpl.h"
 #if defined(__GLIBC__)
-  #include <malloc.h>
+#include <malloc.h>
 #endif
 
 static PetscErrorCode PffReferenceSeed(const PetscReal x[3], PetscInt *type, PetscReal v[3], void *ctx)

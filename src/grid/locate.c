@@ -59,19 +59,11 @@ static PetscReal PffInterpolateInBlock(const PffChannel *c, PetscInt lb, PetscIn
                                        const PetscReal lp[3], PetscInt comp)
 {
   const PffView *views = &c->views[(lb * c->ncomp + comp) * 27];
-  PetscInt       i0[3], i1[3], side[3];
+  PetscInt       i0[3], i1[3];
   PetscReal      t[3], o[3];
-  PetscBool      clamp[3][2] = {{PETSC_FALSE, PETSC_FALSE}, {PETSC_FALSE, PETSC_FALSE}, {PETSC_FALSE, PETSC_FALSE}};
 
-  for (int a = 0; a < 3; a++) {
-    o[a]              = PffChannelOffset_Private(c->kind, comp, a);
-    const PetscReal s = lp[a] - o[a];
-    i0[a]             = (PetscInt)PetscFloorReal(s);
-    t[a]              = s - (PetscReal)i0[a];
-    i1[a]             = i0[a] + 1;
-    side[a]           = i0[a] < 0 ? -1 : (i1[a] >= n ? 1 : 0);
-  }
-  if (!side[0] && !side[1] && !side[2]) {
+  for (int a = 0; a < 3; a++) o[a] = PffChannelOffset_Private(c->kind, comp, a);
+  if (!PffStencilClamped(n, holes, o, lp, i0, i1, t)) {
     /* the whole stencil in the block's own cells (most samples): one view, fixed strides, no hole
        test; the same weights and summation order as below, so the value is bit-identical */
     const PffView *v     = &views[13];
@@ -84,28 +76,6 @@ static PetscReal PffInterpolateInBlock(const PffChannel *c, PetscInt lb, PetscIn
       if (w != 0) val += w * (PetscReal)base[st[q]];
     }
     return val;
-  }
-  /* each hole region the stencil reaches clamps every axis it steps across (face, edge or corner) */
-  for (int q = 1; q < 8; q++) {
-    PetscInt r = 13;
-    for (int a = 0, m = 1; a < 3; a++, m *= 3)
-      if ((q >> a) & 1) r += side[a] * m;
-    if (r == 13 || !((holes >> r) & 1)) continue;
-    for (int a = 0; a < 3; a++)
-      if (((q >> a) & 1) && side[a]) clamp[a][side[a] > 0] = PETSC_TRUE;
-  }
-  for (int a = 0; a < 3; a++) {
-    /* constant extrapolation to the last cell; a staggered component keeps its wall face (index n) */
-    if (i0[a] < 0 && clamp[a][0]) {
-      i0[a] = 0;
-      if (i1[a] < 0) i1[a] = 0;
-      t[a] = 0;
-    }
-    if (i1[a] >= n && clamp[a][1] && !(o[a] == 0.0 && i1[a] == n)) {
-      i1[a] = n - 1;
-      if (i0[a] > n - 1) i0[a] = n - 1;
-      if (i0[a] == i1[a]) t[a] = 0;
-    }
   }
   PetscReal v = 0;
   for (int q = 0; q < 8; q++) {

@@ -165,7 +165,8 @@ static void PffAdvectChunkInside(PetscInt m, float pt[3][PFF_CHUNK], const float
 {
   float *restrict x = pt[0], *restrict y = pt[1], *restrict z = pt[2];
   for (PetscInt j = 0; j < m; j++) {
-    const int in = (x[j] >= lo[0]) & (x[j] < hi[0]) & (y[j] >= lo[1]) & (y[j] < hi[1]) & (z[j] >= lo[2]) & (z[j] < hi[2]);
+    const int in =
+        (x[j] >= lo[0]) & (x[j] < hi[0]) & (y[j] >= lo[1]) & (y[j] < hi[1]) & (z[j] >= lo[2]) & (z[j] < hi[2]);
     ok[j] &= (uint8_t)in;
     x[j] = in ? x[j] : 0.0f;
     y[j] = in ? y[j] : 0.0f;
@@ -186,8 +187,8 @@ static void PffAdvectBlockChunks(PffParticles p, const PffSampler *s, const PffS
   const float           hl = (float)((PetscInt)1 << b->level);
   float                 lo[3], ihl;
   PffBlockCorner_Private(p->n0, b->ijk, b->level, lo, &ihl);
-  const float   scale = (float)(dt / (p->h0 * (PetscReal)hl)), cfl = (float)p->substepCfl;
-  float         rlo[3], rhi[3];
+  const float scale = (float)(dt / (p->h0 * (PetscReal)hl)), cfl = (float)p->substepCfl;
+  float       rlo[3], rhi[3];
   for (int a = 0; a < 3; a++) {
     /* a stencil of the half lattice reaches below cell 0 from l < 1/2, one of the normal lattice the last face
        (the wall's) from l >= n - 1 */

@@ -1,7 +1,7 @@
 /* Cell-channel values at the particles (the escaped-particle stage reads the phase field there):
    block by block in threads, through ghost tiles of one layer and chunks of PFF_CHUNK particles in
    float, like G2P; particles within a cell of a wall or hole beside their block go point by point
-   through the grid's general path. */
+   through the grid's general path, on the tile. */
 #include "particlesimpl.h"
 
 PetscErrorCode PffParticlesInterpolateCell(PffParticles p, PetscInt ch, PffParticleCellFn fn, void *ctx)
@@ -42,10 +42,12 @@ PetscErrorCode PffParticlesInterpolateCell(PffParticles p, PetscInt ch, PffParti
       memcpy(val, w, sizeof(float) * (size_t)m);
       for (PetscInt j = 0; b->hole && j < m; j++) {
         if (!wall[j]) continue;
-        const PetscReal g[3] = {x[3 * (j0 + j)], x[3 * (j0 + j) + 1], x[3 * (j0 + j) + 2]};
-        PetscReal       lp[3];
+        const PetscReal g[3] = {x[3 * (j0 + j)], x[3 * (j0 + j) + 1], x[3 * (j0 + j) + 2]}, half[3] = {0.5, 0.5, 0.5};
+        PetscReal       lp[3], cv;
         PffSamplerLocal_Private(p, b, g, lp);
-        val[j] = (float)PffGridInterpolateInBlock(p->grid, ch, lb, 0, lp);
+        if (!PffSamplerTileClamped_Private(b, 1, t, half, lp, &cv))
+          cv = PffGridInterpolateInBlock(p->grid, ch, lb, 0, lp);
+        val[j] = (float)cv;
       }
       fn(j0, m, val, ctx);
     }

@@ -43,7 +43,7 @@ PetscErrorCode PffParticlesG2P(PffParticles p, PetscInt chU, PetscInt chDU, cons
       float           a[PFF_CHUNK];
       PffChunkLattice L;
       for (PetscInt j = 0; j < m; j++) a[j] = (float)alpha[PffParticleWordType(word[j0 + j]) * nlevels + b->level];
-      uint8_t         wall[PFF_CHUNK];
+      uint8_t wall[PFF_CHUNK];
       PffChunkLattice_Private(&x[3 * j0], m, lo, ih, n, &L);
       PffChunkHoleFlags_Private(&L, m, n, b->hole, wall);
       for (int d = 0; d < 3; d++) {
@@ -59,7 +59,11 @@ PetscErrorCode PffParticlesG2P(PffParticles p, PetscInt chU, PetscInt chDU, cons
           dr[j]           = PffTrilinear_Private(tdu, o, st, tx[j], ty[j], tz[j]);
         }
         float *vd = &v[3 * j0 + d];
-        for (PetscInt j = 0; j < m; j++) vd[3 * j] = wall[j] ? vd[3 * j] : a[j] * (vd[3 * j] + dr[j]) + (1 - a[j]) * ur[j];
+        if (!b->hole)
+          for (PetscInt j = 0; j < m; j++) vd[3 * j] = a[j] * (vd[3 * j] + dr[j]) + (1 - a[j]) * ur[j];
+        else
+          for (PetscInt j = 0; j < m; j++)
+            vd[3 * j] = wall[j] ? vd[3 * j] : a[j] * (vd[3 * j] + dr[j]) + (1 - a[j]) * ur[j];
       }
       if (!b->hole) continue;
       for (PetscInt j = 0; j < m; j++) {

@@ -176,9 +176,10 @@ PETSC_INTERN PetscErrorCode PffParticlesSort_Private(PffParticles);
    to two channels, so that the per-point work needs no lookup, no check and no log call and runs in
    threads. */
 typedef struct {
-  PetscInt     n, level, ijk[3];
-  unsigned     hole;       /* bit 2a (2a + 1): a wall or an inactive block lies on the lower (upper) side along axis a,
-                              where the grid's general path clamps the stencil and the tile's ghosts must not be read */
+  PetscInt n, level, ijk[3];
+  unsigned hole;           /* bit 2a (2a + 1): a wall or an inactive block lies on the lower (upper) side along axis a,
+                              where the grid's general path clamps the stencil and a plain tile stencil must not go */
+  PetscInt     holes;      /* the grid's mask of neighbour regions across a wall or facing an inactive block */
   const float *data[2][3]; /* channel k, face component d: the block's own n^3 cells */
   const float *tile[2][3]; /* the same with gw ghost layers, (n + 2 gw)^3 from cell -gw: NULL in the sampler's
                               table, set in the thread's copy by PffSamplerBlockTiles_Private */
@@ -238,12 +239,13 @@ static inline void PffChunkLattice_Private(const float *x, PetscInt m, const flo
 
 /* flag[j] = 1 for the particles of a chunk whose stencil of some face component or cell value reaches a side of the
    block with a wall or hole (hole bits of PffSampleBlock): those take the point path, whose general path clamps
-   there. Conservative for cell values by half a cell on upper sides. */
+   there. Conservative for cell values by half a cell on upper sides. Without hole bits nothing is written, and the
+   callers do not read flag. */
 static inline void PffChunkHoleFlags_Private(const PffChunkLattice *L, PetscInt m, PetscInt n, unsigned hole,
                                              uint8_t flag[])
 {
+  if (!hole) return; /* flag is not read then */
   for (PetscInt j = 0; j < m; j++) flag[j] = 0;
-  if (!hole) return;
   for (int a = 0; a < 3; a++) {
     const int32_t lower = (int32_t)((hole >> (2 * a)) & 1), upper = (int32_t)((hole >> (2 * a + 1)) & 1);
     const int32_t *restrict ic = L->ic[a], *restrict ih = L->ih[a];
@@ -324,11 +326,33 @@ static inline PetscBool PffSampleStencilClear_Private(const PffSampleBlock *b, c
   return PETSC_TRUE;
 }
 
+/* The grid's general path (PffStencilClamped: clamped at walls and holes, the same weights and summation order as
+   PffGridInterpolate) on a tile of block b with gw ghost layers, for lattice offsets o; PETSC_FALSE, and nothing
+   computed, when the stencil leaves the tile. */
+static inline PetscBool PffSamplerTileClamped_Private(const PffSampleBlock *b, PetscInt gw, const float *tile,
+                                                      const PetscReal o[3], const PetscReal lp[3], PetscReal *val)
+{
+  const PetscInt n = b->n, m = n + 2 * gw;
+  PetscInt       i0[3], i1[3];
+  PetscReal      t[3], v = 0;
+
+  (void)PffStencilClamped(n, b->holes, o, lp, i0, i1, t);
+  for (int a = 0; a < 3; a++)
+    if (i0[a] < -gw || i1[a] >= n + gw) return PETSC_FALSE;
+  for (int q = 0; q < 8; q++) {
+    const PetscInt  ii = (q & 1) ? i1[0] : i0[0], jj = (q & 2) ? i1[1] : i0[1], kk = (q & 4) ? i1[2] : i0[2];
+    const PetscReal w = ((q & 1) ? t[0] : 1 - t[0]) * ((q & 2) ? t[1] : 1 - t[1]) * ((q & 4) ? t[2] : 1 - t[2]);
+    if (w != 0) v += w * (PetscReal)tile[(ii + gw) + m * ((jj + gw) + m * (kk + gw))];
+  }
+  *val = v;
+  return PETSC_TRUE;
+}
+
 /* Face component d of channels k0 and (if nk = 2) k0 + 1 at lp in local block lb, with one set of
    trilinear weights (lower lattice index i0 and fraction t per axis): the block's own cells when the
    stencil lies inside them, the block's tile when it reaches no farther than its gw ghost layers and the
-   block has one,
-   else the grid's general path (stencils reaching a wall or hole, farther ghosts), PffGridInterpolateInBlock(). The fast paths
+   block has one and it keeps off the block's wall and hole sides, else the grid's general path: on the tile
+   (PffSamplerTileClamped_Private) when the clamped stencil lies in it, else PffGridInterpolateInBlock(). The fast paths
    interpolate axis by axis and so agree with the general path to rounding. */
 static inline void PffSamplerFaceAt_Private(const PffSampler *s, const PffSampleBlock *b, PetscInt lb, PetscInt k0,
                                             PetscInt nk, PetscInt d, const PetscInt i0[3], const PetscReal t[3],
@@ -348,7 +372,10 @@ static inline void PffSamplerFaceAt_Private(const PffSampler *s, const PffSample
     o                 = (i0[0] + gw) + m * ((i0[1] + gw) + m * (i0[2] + gw));
     for (PetscInt k = 0; k < nk; k++) base[k] = b->tile[k0 + k][d];
   } else {
-    for (PetscInt k = 0; k < nk; k++) val[k] = PffGridInterpolateInBlock(s->grid, s->ch[k0 + k], lb, d, lp);
+    const PetscReal off[3] = {d == 0 ? 0.0 : 0.5, d == 1 ? 0.0 : 0.5, d == 2 ? 0.0 : 0.5};
+    for (PetscInt k = 0; k < nk; k++)
+      if (!b->tile[k0 + k][d] || !PffSamplerTileClamped_Private(b, s->gw, b->tile[k0 + k][d], off, lp, &val[k]))
+        val[k] = PffGridInterpolateInBlock(s->grid, s->ch[k0 + k], lb, d, lp);
     return;
   }
   const PetscReal wx0 = 1 - t[0], wy0 = 1 - t[1], wz0 = 1 - t[2];

@@ -61,6 +61,7 @@ PetscErrorCode PffSamplerCreate_Private(PffParticles p, PetscInt nch, const Pets
     b->n     = info.n;
     b->level = info.level;
     b->hole  = 0;
+    b->holes = info.holes;
     for (PetscInt r = 0; r < 27; r++) {
       PetscInt d[3];
       if (!((info.holes >> r) & 1)) continue;
@@ -94,7 +95,7 @@ PetscBool PffSamplerBlockTiles_Private(PffParticles p, const PffSampler *s, Pets
   const PetscInt gw = s->gw;
 
   if (p->start[lb] == p->start[lb + 1]) return PETSC_FALSE;
-  *tb = s->blocks[lb];
+  *tb              = s->blocks[lb];
   const PetscInt n = tb->n, m = n + 2 * gw;
   float         *base = s->tiles + s->tstride * (size_t)omp_get_thread_num();
   for (PetscInt k = 0; k < s->nch; k++)

@@ -495,7 +495,9 @@ static PetscErrorCode TestG2PMatchesGrid(PetscInt nlevels)
   /* float tiles and the float store against the grid's double path */
   PetscCheck(err <= 2e-6, ctx.comm, PETSC_ERR_PLIB, "G2P differs from PffGridInterpolate by %g beside walls",
              (double)err);
-  PetscCall(PetscPrintf(ctx.comm, "G2P against the grid's path (%" PetscInt_FMT " level%s, walls in y and z): max relative difference %.1e\n",
+  PetscCall(PetscPrintf(ctx.comm,
+                        "G2P against the grid's path (%" PetscInt_FMT
+                        " level%s, walls in y and z): max relative difference %.1e\n",
                         nlevels, nlevels > 1 ? "s" : "", (double)err));
   PetscCall(PffParticlesDestroy(&part));
   PetscCall(PffGridDestroy(&ctx.grid));
@@ -541,8 +543,9 @@ static PetscErrorCode TestWalledUniformAdvection(PetscInt nlevels)
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &err, 1, MPIU_REAL, MPI_MAX, ctx.comm));
   PetscCheck(err <= 1e-6, ctx.comm, PETSC_ERR_PLIB, "walled uniform advection error %g (relative to the box)",
              (double)err);
-  PetscCall(PetscPrintf(ctx.comm, "advect uniform beside walls (%" PetscInt_FMT " level%s): max error %.1e of the box\n",
-                        nlevels, nlevels > 1 ? "s" : "", (double)err));
+  PetscCall(PetscPrintf(ctx.comm,
+                        "advect uniform beside walls (%" PetscInt_FMT " level%s): max error %.1e of the box\n", nlevels,
+                        nlevels > 1 ? "s" : "", (double)err));
   PetscCall(PffParticlesDestroy(&part));
   PetscCall(PffGridDestroy(&ctx.grid));
   PetscFunctionReturn(PETSC_SUCCESS);
