@@ -122,25 +122,35 @@ static inline void PffAdvectAxis(float v, int32_t gw, int32_t n, int32_t *i0, fl
   *t            = v - f;
 }
 
-/* Face component with lattice offsets off of the chunk's points (px, py, pz) from a tile of gw ghost
-   layers, times scale, into od; restrict parameters let the gathers vectorise. */
-static void PffAdvectChunkComponent(PetscInt m, const float *restrict px, const float *restrict py,
-                                    const float *restrict pz, const float off[3], const float *restrict tile,
-                                    const int32_t *restrict koff, int32_t gw, int32_t n, float scale,
+/* Face component d (lattice offsets off) of the chunk's points (px, py, pz) from a tile of gw ghost layers of block
+   b, times scale, into od; beside a wall or hole the lattice is clamped there as the grid's general path does.
+   restrict parameters let the gathers vectorise. */
+static void PffAdvectChunkComponent(const PffSampleBlock *b, int d, PetscInt m, const float *restrict px,
+                                    const float *restrict py, const float *restrict pz, const float   off[3],
+                                    const float *restrict tile, const int32_t *restrict koff, int32_t gw, float scale,
                                     float *restrict od)
 {
-  const int32_t mm = n + 2 * gw;
-  int32_t       st[8];
-  float         val[PFF_CHUNK]; /* a local target: the gathers cannot alias it */
+  const int32_t n = (int32_t)b->n, mm = n + 2 * gw;
+  int32_t       st[8], ci[3][PFF_CHUNK];
+  float         val[PFF_CHUNK], ti[3][PFF_CHUNK]; /* local targets: the gathers cannot alias them */
   PffTileCorners_Private(mm, st);
   for (PetscInt j = 0; j < m; j++) {
-    int32_t ix, iy, iz;
-    float   x1, y1, z1;
-    PffAdvectAxis(px[j] - off[0], gw, n, &ix, &x1);
-    PffAdvectAxis(py[j] - off[1], gw, n, &iy, &y1);
-    PffAdvectAxis(pz[j] - off[2], gw, n, &iz, &z1);
-    const int32_t o = (ix + gw) + mm * ((iy + gw) + mm * (iz + gw)) + koff[j];
-    val[j]          = PffTrilinear_Private(tile, o, st, x1, y1, z1);
+    PffAdvectAxis(px[j] - off[0], gw, n, &ci[0][j], &ti[0][j]);
+    PffAdvectAxis(py[j] - off[1], gw, n, &ci[1][j], &ti[1][j]);
+    PffAdvectAxis(pz[j] - off[2], gw, n, &ci[2][j], &ti[2][j]);
+  }
+  if (b->hole) {
+    const int32_t *c[3] = {ci[0], ci[1], ci[2]};
+    const float   *t[3] = {ti[0], ti[1], ti[2]};
+    int32_t        cc[3][PFF_CHUNK];
+    float          tc[3][PFF_CHUNK];
+    PffChunkClamp_Private(b, m, d, c, t, cc, tc);
+    memcpy(ci, cc, sizeof(ci));
+    memcpy(ti, tc, sizeof(ti));
+  }
+  for (PetscInt j = 0; j < m; j++) {
+    const int32_t o = (ci[0][j] + gw) + mm * ((ci[1][j] + gw) + mm * (ci[2][j] + gw)) + koff[j];
+    val[j]          = PffTrilinear_Private(tile, o, st, ti[0][j], ti[1][j], ti[2][j]);
   }
   for (PetscInt j = 0; j < m; j++) od[j] = scale * val[j];
 }
@@ -154,8 +164,7 @@ static void PffAdvectChunkSample(const PffSampleBlock *b, PetscInt gw, PetscInt 
 {
   for (int d = 0; d < 3; d++) {
     const float off[3] = {d == 0 ? 0.0f : 0.5f, d == 1 ? 0.0f : 0.5f, d == 2 ? 0.0f : 0.5f};
-    PffAdvectChunkComponent(m, lp[0], lp[1], lp[2], off, b->tile[0][d], koff, (int32_t)gw, (int32_t)b->n, scale,
-                            out[d]);
+    PffAdvectChunkComponent(b, d, m, lp[0], lp[1], lp[2], off, b->tile[0][d], koff, (int32_t)gw, scale, out[d]);
   }
 }
 
@@ -176,8 +185,8 @@ static void PffAdvectChunkInside(PetscInt m, float pt[3][PFF_CHUNK], const float
 
 /* The particles [i0, i1) of local block lb. Chunks run one RK3 step in float in the block's local cell units,
    vectorised: every stage point within one cell of the block (inside the reach of any velocity halo and inside
-   the tiles), off its sides with a wall or hole by as much as its stencils need (the start point too), and one
-   sub-step enough. The others take the general path. */
+   the tiles; beside a wall or hole the samples are clamped there as in the general path) and one sub-step
+   enough. The others take the general path. */
 static void PffAdvectBlockChunks(PffParticles p, const PffSampler *s, const PffSampleBlock *tb,
                                  const PffAdvectBlock *blocks, const PetscInt level[], PetscInt lb, PetscReal dt,
                                  PetscInt *maxsub, PetscInt *nclamp)
@@ -187,14 +196,8 @@ static void PffAdvectBlockChunks(PffParticles p, const PffSampler *s, const PffS
   const float           hl = (float)((PetscInt)1 << b->level);
   float                 lo[3], ihl;
   PffBlockCorner_Private(p->n0, b->ijk, b->level, lo, &ihl);
-  const float scale = (float)(dt / (p->h0 * (PetscReal)hl)), cfl = (float)p->substepCfl;
-  float       rlo[3], rhi[3];
-  for (int a = 0; a < 3; a++) {
-    /* a stencil of the half lattice reaches below cell 0 from l < 1/2, one of the normal lattice the last face
-       (the wall's) from l >= n - 1 */
-    rlo[a] = (b->hole >> (2 * a)) & 1 ? 0.5f : -1 + 1e-6f;
-    rhi[a] = (b->hole >> (2 * a + 1)) & 1 ? (float)(b->n - 1) : (float)b->n + 1 - 1e-6f;
-  }
+  const float   scale = (float)(dt / (p->h0 * (PetscReal)hl)), cfl = (float)p->substepCfl;
+  const float   rn = (float)b->n + 1 - 1e-6f, rlo[3] = {-1 + 1e-6f, -1 + 1e-6f, -1 + 1e-6f}, rhi[3] = {rn, rn, rn};
   const int32_t air = (int32_t)(b->tile[kair][0] - b->tile[0][0]); /* tiles are channel-major */
   float        *x   = p->s.x;
 
@@ -208,7 +211,6 @@ static void PffAdvectBlockChunks(PffParticles p, const PffSampler *s, const PffS
       ok[j]   = 1;
       for (int a = 0; a < 3; a++) l0[a][j] = (x[3 * (j0 + j) + a] - lo[a]) * ihl; /* exact */
     }
-    if (b->hole) PffAdvectChunkInside(m, l0, rlo, rhi, ok);
     PffAdvectChunkSample(b, s->gw, m, l0, koff, scale, k1);
     for (PetscInt j = 0; j < m; j++) /* one sub-step: the displacement within -particles_substep_cfl cells */
       ok[j] &= (uint8_t)(k1[0][j] * k1[0][j] + k1[1][j] * k1[1][j] + k1[2][j] * k1[2][j] <= cfl * cfl);

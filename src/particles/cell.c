@@ -1,7 +1,6 @@
 /* Cell-channel values at the particles (the escaped-particle stage reads the phase field there):
    block by block in threads, through ghost tiles of one layer and chunks of PFF_CHUNK particles in
-   float, like G2P; particles within a cell of a wall or hole beside their block go point by point
-   through the grid's general path, on the tile. */
+   float, like G2P, clamped at walls and holes as the grid's general path does. */
 #include "particlesimpl.h"
 
 PetscErrorCode PffParticlesInterpolateCell(PffParticles p, PetscInt ch, PffParticleCellFn fn, void *ctx)
@@ -29,26 +28,26 @@ PetscErrorCode PffParticlesInterpolateCell(PffParticles p, PetscInt ch, PffParti
       float          val[PFF_CHUNK];
       /* cell centres: the half lattice on every axis */
       PffChunkLattice L;
-      uint8_t         wall[PFF_CHUNK];
       PffChunkLattice_Private(&x[3 * j0], m, lo, ih, n, &L);
-      PffChunkHoleFlags_Private(&L, m, n, b->hole, wall);
-      const int32_t *restrict cx = L.ih[0], *restrict cy = L.ih[1], *restrict cz = L.ih[2];
-      const float *restrict tx = L.th[0], *restrict ty = L.th[1], *restrict tz = L.th[2], *t = b->tile[0][0];
+      const int32_t *c[3]  = {L.ih[0], L.ih[1], L.ih[2]};
+      const float   *tt[3] = {L.th[0], L.th[1], L.th[2]};
+      int32_t        cc[3][PFF_CHUNK];
+      float          tc[3][PFF_CHUNK];
+      if (b->hole) { /* the grid's clamping at walls and holes */
+        PffChunkClamp_Private(b, m, -1, c, tt, cc, tc);
+        for (int e = 0; e < 3; e++) {
+          c[e]  = cc[e];
+          tt[e] = tc[e];
+        }
+      }
+      const int32_t *restrict cx = c[0], *restrict cy = c[1], *restrict cz = c[2];
+      const float *restrict tx = tt[0], *restrict ty = tt[1], *restrict tz = tt[2], *t = b->tile[0][0];
       float w[PFF_CHUNK]; /* val's address goes to fn: gathers into it would not vectorise */
       for (PetscInt j = 0; j < m; j++) {
         const int32_t o = (cx[j] + 1) + (int32_t)mm * ((cy[j] + 1) + (int32_t)mm * (cz[j] + 1));
         w[j]            = PffTrilinear_Private(t, o, st, tx[j], ty[j], tz[j]);
       }
       memcpy(val, w, sizeof(float) * (size_t)m);
-      for (PetscInt j = 0; b->hole && j < m; j++) {
-        if (!wall[j]) continue;
-        const PetscReal g[3] = {x[3 * (j0 + j)], x[3 * (j0 + j) + 1], x[3 * (j0 + j) + 2]}, half[3] = {0.5, 0.5, 0.5};
-        PetscReal       lp[3], cv;
-        PffSamplerLocal_Private(p, b, g, lp);
-        if (!PffSamplerTileClamped_Private(b, 1, t, half, lp, &cv))
-          cv = PffGridInterpolateInBlock(p->grid, ch, lb, 0, lp);
-        val[j] = (float)cv;
-      }
       fn(j0, m, val, ctx);
     }
   }

@@ -6,9 +6,9 @@
 
    Block-batched (issue 12): threads take whole blocks, and every stencil of a block's particles lies in
    its ghost tiles, so chunks of particles are interpolated in float without a branch
-   (PffChunkLattice_Private locates the lattices once per chunk and serves u and du). The few particles
-   whose stencil reaches a wall or hole beside the block (within a cell of it) then go point by point
-   through PffSamplerVector_Private, in double, whose general path clamps there. */
+   (PffChunkLattice_Private locates the lattices once per chunk and serves u and du). In a block beside
+   a wall or hole the lattices are first clamped there as the grid's general path does
+   (PffChunkClamp_Private). */
 #include "particlesimpl.h"
 
 PetscErrorCode PffParticlesG2P(PffParticles p, PetscInt chU, PetscInt chDU, const PetscReal alpha[])
@@ -31,8 +31,7 @@ PetscErrorCode PffParticlesG2P(PffParticles p, PetscInt chU, PetscInt chDU, cons
     if (!PffSamplerBlockTiles_Private(p, &s, lb, &tb)) continue;
     const PffSampleBlock *b  = &tb;
     const PetscInt        i0 = p->start[lb], i1 = p->start[lb + 1];
-    /* every stencil of a binned particle lies in the tiles: chunks of particles, float weights, no branch; those
-       beside a wall or hole are redone point by point */
+    /* every stencil of a binned particle lies in the tiles: chunks of particles, float weights, no branch */
     const PetscInt n = b->n, mm = n + 2;
     int32_t        st[8];
     float          lo[3], ih;
@@ -43,13 +42,20 @@ PetscErrorCode PffParticlesG2P(PffParticles p, PetscInt chU, PetscInt chDU, cons
       float           a[PFF_CHUNK];
       PffChunkLattice L;
       for (PetscInt j = 0; j < m; j++) a[j] = (float)alpha[PffParticleWordType(word[j0 + j]) * nlevels + b->level];
-      uint8_t wall[PFF_CHUNK];
       PffChunkLattice_Private(&x[3 * j0], m, lo, ih, n, &L);
-      PffChunkHoleFlags_Private(&L, m, n, b->hole, wall);
       for (int d = 0; d < 3; d++) {
         const int32_t *c[3];
         const float   *t[3], *tu = b->tile[0][d], *tdu = b->tile[1][d];
+        int32_t        cc[3][PFF_CHUNK];
+        float          tc[3][PFF_CHUNK];
         PffChunkLatticeOf_Private(&L, d, c, t);
+        if (b->hole) { /* the grid's clamping at walls and holes */
+          PffChunkClamp_Private(b, m, d, c, t, cc, tc);
+          for (int e = 0; e < 3; e++) {
+            c[e] = cc[e];
+            t[e] = tc[e];
+          }
+        }
         const int32_t *restrict cx = c[0], *restrict cy = c[1], *restrict cz = c[2];
         const float *restrict tx = t[0], *restrict ty = t[1], *restrict tz = t[2];
         float ur[PFF_CHUNK], dr[PFF_CHUNK];
@@ -59,23 +65,7 @@ PetscErrorCode PffParticlesG2P(PffParticles p, PetscInt chU, PetscInt chDU, cons
           dr[j]           = PffTrilinear_Private(tdu, o, st, tx[j], ty[j], tz[j]);
         }
         float *vd = &v[3 * j0 + d];
-        if (!b->hole)
-          for (PetscInt j = 0; j < m; j++) vd[3 * j] = a[j] * (vd[3 * j] + dr[j]) + (1 - a[j]) * ur[j];
-        else
-          for (PetscInt j = 0; j < m; j++)
-            vd[3 * j] = wall[j] ? vd[3 * j] : a[j] * (vd[3 * j] + dr[j]) + (1 - a[j]) * ur[j];
-      }
-      if (!b->hole) continue;
-      for (PetscInt j = 0; j < m; j++) {
-        if (!wall[j]) continue;
-        const PetscInt  i    = j0 + j;
-        const PetscReal ad   = alpha[PffParticleWordType(word[i]) * nlevels + b->level];
-        const PetscReal g[3] = {x[3 * i], x[3 * i + 1], x[3 * i + 2]};
-        PetscReal       lp[3], uv[2][3];
-        PffSamplerLocal_Private(p, b, g, lp);
-        PffSamplerVector_Private(&s, b, lb, 0, 2, lp, uv);
-        for (PetscInt d = 0; d < 3; d++)
-          v[3 * i + d] = (float)(ad * ((PetscReal)v[3 * i + d] + uv[1][d]) + (1 - ad) * uv[0][d]);
+        for (PetscInt j = 0; j < m; j++) vd[3 * j] = a[j] * (vd[3 * j] + dr[j]) + (1 - a[j]) * ur[j];
       }
     }
   }

@@ -179,7 +179,9 @@ typedef struct {
   PetscInt n, level, ijk[3];
   unsigned hole;           /* bit 2a (2a + 1): a wall or an inactive block lies on the lower (upper) side along axis a,
                               where the grid's general path clamps the stencil and a plain tile stencil must not go */
-  PetscInt     holes;      /* the grid's mask of neighbour regions across a wall or facing an inactive block */
+  PetscInt holes;          /* the grid's mask of neighbour regions across a wall or facing an inactive block */
+  int32_t  clamp[27];      /* per crossing pattern of a stencil (region index of its sides), the sides it clamps:
+                              bit 2a (2a + 1) the lower (upper) side along axis a (PffStencilClamped) */
   const float *data[2][3]; /* channel k, face component d: the block's own n^3 cells */
   const float *tile[2][3]; /* the same with gw ghost layers, (n + 2 gw)^3 from cell -gw: NULL in the sampler's
                               table, set in the thread's copy by PffSamplerBlockTiles_Private */
@@ -237,19 +239,26 @@ static inline void PffChunkLattice_Private(const float *x, PetscInt m, const flo
   }
 }
 
-/* flag[j] = 1 for the particles of a chunk whose stencil of some face component or cell value reaches a side of the
-   block with a wall or hole (hole bits of PffSampleBlock): those take the point path, whose general path clamps
-   there. Conservative for cell values by half a cell on upper sides. Without hole bits nothing is written, and the
-   callers do not read flag. */
-static inline void PffChunkHoleFlags_Private(const PffChunkLattice *L, PetscInt m, PetscInt n, unsigned hole,
-                                             uint8_t flag[])
+/* The grid's clamping at walls and holes (PffStencilClamped) on a chunk's lattice of one component: lower index c and
+   fraction t per axis into cc and tc; normal is the axis with the normal lattice (whose wall face, index n, is read,
+   not clamped), -1 for cell values. b->clamp gives the sides to clamp for the stencil's crossing pattern. A clamped
+   axis reads one plane with weight 1 and the other with weight 0, so the tile's values across walls and holes never
+   count. */
+static inline void PffChunkClamp_Private(const PffSampleBlock *b, PetscInt m, int normal, const int32_t *const c[3],
+                                         const float *const t[3], int32_t cc[3][PFF_CHUNK], float tc[3][PFF_CHUNK])
 {
-  if (!hole) return; /* flag is not read then */
-  for (PetscInt j = 0; j < m; j++) flag[j] = 0;
-  for (int a = 0; a < 3; a++) {
-    const int32_t lower = (int32_t)((hole >> (2 * a)) & 1), upper = (int32_t)((hole >> (2 * a + 1)) & 1);
-    const int32_t *restrict ic = L->ic[a], *restrict ih = L->ih[a];
-    for (PetscInt j = 0; j < m; j++) flag[j] |= (uint8_t)((lower & (ih[j] < 0)) | (upper & (ic[j] >= (int32_t)n - 1)));
+  const int32_t n = (int32_t)b->n;
+  for (PetscInt j = 0; j < m; j++) {
+    const int32_t ci[3] = {c[0][j], c[1][j], c[2][j]};
+    int32_t       p     = 0;
+    for (int a = 0, w = 1; a < 3; a++, w *= 3) p += w * (ci[a] < 0 ? 0 : (ci[a] + 1 >= n ? 2 : 1));
+    const int32_t mask = b->clamp[p];
+    for (int a = 0; a < 3; a++) {
+      const int32_t lower = (mask >> (2 * a)) & (ci[a] < 0);
+      const int32_t upper = (mask >> (2 * a + 1)) & (ci[a] + 1 >= n) & !(a == normal && ci[a] + 1 == n);
+      cc[a][j]            = lower ? 0 : (upper ? PetscMin(ci[a], n - 1) : ci[a]);
+      tc[a][j]            = (lower | upper) ? 0.0f : t[a][j];
+    }
   }
 }
 

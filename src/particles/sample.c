@@ -64,8 +64,19 @@ PetscErrorCode PffSamplerCreate_Private(PffParticles p, PetscInt nch, const Pets
     b->holes = info.holes;
     for (PetscInt r = 0; r < 27; r++) {
       PetscInt d[3];
-      if (!((info.holes >> r) & 1)) continue;
       PffRegionDirection(r, d);
+      /* the clamps of PffStencilClamped for a stencil that crosses the sides d: every hole region among the
+         regions it reaches clamps the axes it steps across */
+      b->clamp[r] = 0;
+      for (int q = 1; q < 8; q++) {
+        PetscInt rq = 13;
+        for (int a = 0, w = 1; a < 3; a++, w *= 3)
+          if ((q >> a) & 1) rq += d[a] * w;
+        if (rq == 13 || !((info.holes >> rq) & 1)) continue;
+        for (int a = 0; a < 3; a++)
+          if (((q >> a) & 1) && d[a]) b->clamp[r] |= 1 << (2 * a + (d[a] > 0));
+      }
+      if (!((info.holes >> r) & 1)) continue;
       for (int a = 0; a < 3; a++)
         if (d[a]) b->hole |= 1u << (2 * a + (d[a] > 0));
     }
