@@ -68,7 +68,10 @@ static inline void PffParticleArraysWorld(const PffParticleArrays *a, PetscInt i
    particle, e.g. inside a solid) and its initial velocity v. Must be deterministic. */
 typedef PetscErrorCode (*PffSeedFn)(const PetscReal x[3], PetscInt *type, PetscReal v[3], void *ctx);
 
-/* Signed distance to the solid boundary, negative inside a solid; grad receives its gradient. */
+/* Signed distance to the solid boundary, negative inside a solid; grad receives its gradient. It must be
+   1-Lipschitz (|phi(x) - phi(y)| <= |x - y|, as an exact signed distance or a union of them is), since the
+   push-out skips whole blocks whose centre lies farther from the solids than their half diagonal, and
+   thread-safe: it is called from OpenMP threads. */
 typedef PetscReal (*PffSolidFn)(const PetscReal x[3], PetscReal grad[3], void *ctx);
 
 /* Counters of one PffParticlesMigrate/Advect call, summed over ranks. */

@@ -304,14 +304,40 @@ PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const PetscInt chU[PFF_
   PetscCall(PffSamplerDestroy_Private(&sampler));
   if (nclamp) PetscCall(PetscInfo(NULL, "%" PetscInt_FMT " advection stages clamped to the halo reach\n", nclamp));
 
-  /* push out of solids along the distance gradient (a few Newton-like steps), in world units */
+  /* push out of solids along the distance gradient (a few Newton-like steps), in world units. The distance is
+     1-Lipschitz (PffSolidFn), so a raster block whose centre lies farther from the solids than its half diagonal
+     holds no point inside them: only particles in the other blocks (or outside the raster) are tested. */
   if (solid != NULL) {
     float          *x = p->s.x;
     const PetscReal ulp4 =
         4 * p->h0 * (PetscReal)PetscMax(p->cells[0], PetscMax(p->cells[1], p->cells[2])) / 16777216.0;
+    const PetscInt  nraster = p->nb[0] * p->nb[1] * p->nb[2];
+    const PetscReal half = 0.5 * (PetscReal)p->n0 * p->h0, reach = PetscSqrtReal(3.0) * half * (1 + 1e-6) + ulp4;
+    uint8_t        *near;
+    {
+      const size_t bytes = (size_t)nraster;
+      void        *ptr;
+      PetscCall(PffParticlesGetScratch_Private(p, PFF_SCRATCH_SOLID, 1, &bytes, &ptr));
+      near = (uint8_t *)ptr;
+    }
+#pragma omp parallel for schedule(static)
+    for (PetscInt r = 0; r < nraster; r++) {
+      const PetscInt ijk[3] = {r % p->nb[0], (r / p->nb[0]) % p->nb[1], r / (p->nb[0] * p->nb[1])};
+      PetscReal      c[3], gr[3];
+      for (int a = 0; a < 3; a++) c[a] = p->origin[a] + p->h0 * (PetscReal)p->n0 * ((PetscReal)ijk[a] + 0.5);
+      near[r] = (uint8_t) !(solid(c, gr, solidctx) > reach);
+    }
+#pragma omp parallel for reduction(+ : pushed) schedule(static)
     for (PetscInt i = 0; i < p->n; i++) {
-      PetscBool moved = PETSC_FALSE;
+      PetscBool moved = PETSC_FALSE, inside = PETSC_TRUE;
       PetscReal xw[3];
+      PetscInt  r = 0;
+      for (int a = 2; a >= 0; a--) {
+        const PetscReal b = PetscFloorReal((PetscReal)x[3 * i + a] / (PetscReal)p->n0);
+        if (!(b >= 0 && b < (PetscReal)p->nb[a])) inside = PETSC_FALSE;
+        r = r * p->nb[a] + (inside ? (PetscInt)b : 0);
+      }
+      if (inside && !near[r]) continue;
       for (int a = 0; a < 3; a++) xw[a] = p->origin[a] + p->h0 * (PetscReal)x[3 * i + a];
       for (int it = 0; it < 4; it++) {
         PetscReal       gr[3];
@@ -319,8 +345,8 @@ PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const PetscInt chU[PFF_
         if (!(phi < 0)) break;
         const PetscReal gn = PetscSqrtReal(gr[0] * gr[0] + gr[1] * gr[1] + gr[2] * gr[2]);
         if (!(gn > 0)) break;
-        /* phi < 0 is the (approximate) distance to the surface: step just beyond it, by more than the
-           float store's rounding (4 steps of the largest grid coordinate) */
+        /* phi < 0 is the distance to the surface: step just beyond it, by more than the float store's
+           rounding (4 steps of the largest grid coordinate) */
         const PetscReal step = -phi * (1 + 1e-3) + ulp4;
         for (int a = 0; a < 3; a++) xw[a] += step * gr[a] / gn;
         moved = PETSC_TRUE;
