@@ -199,7 +199,13 @@ void PffParticlesWrapClamp_Private(PffParticles p, float g[3], PetscBool *wrappe
       g[d]     = t;
       *wrapped = PETSC_TRUE;
     } else {
-      const float lo = 1e-6f, hi = nextafterf(nc, 0);
+      /* nextafterf(nc, 0) for the positive normal nc, without a libm call per particle and axis */
+      uint32_t bits;
+      float    hi;
+      memcpy(&bits, &nc, sizeof(bits));
+      bits--;
+      memcpy(&hi, &bits, sizeof(hi));
+      const float lo = 1e-6f;
       if (!(g[d] >= lo)) {
         g[d]     = lo;
         *clamped = PETSC_TRUE;
