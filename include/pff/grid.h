@@ -215,6 +215,48 @@ PETSC_EXTERN PetscErrorCode PffGridGetBlockData(PffGrid grid, PetscInt ch, Petsc
 PETSC_EXTERN PetscErrorCode PffGridGetBlockViews(PffGrid grid, PetscInt ch, PetscInt lb, PetscInt comp,
                                                  const PffView **views);
 
+/* How a channel's values follow their block when PffGridAdapt changes its level (blocks keep their place
+   and size; only their cells per axis change):
+     linear    restriction by the mean of the fine samples (8 cells, or the 4 coplanar faces); prolongation
+               by limited slopes (MC) inside the coarse block, one-sided at its edges. Both conserve the
+               integral of a cell channel and the flux through every coarse face, are exact for linear
+               fields, and restricting a prolonged block returns it to rounding. The default.
+     constant  the same restriction; a fine sample takes the value of the coarse sample at or below it.
+     none      not transferred: zero after an adapt (scratch that is recomputed before it is read).
+   Blocks that become active start at zero in every channel. */
+typedef enum { PFF_TRANSFER_LINEAR, PFF_TRANSFER_CONSTANT, PFF_TRANSFER_NONE } PffTransferType;
+PETSC_EXTERN const char *const PffTransferTypes[];
+/* Not collective, but every rank must set the same type. */
+PETSC_EXTERN PetscErrorCode PffGridSetChannelTransfer(PffGrid grid, PetscInt ch, PffTransferType type);
+PETSC_EXTERN PetscErrorCode PffGridGetChannelTransfer(PffGrid grid, PetscInt ch, PffTransferType *type);
+
+/* What the last PffGridAdapt did, summed over ranks (imbalance and cut faces: PffGridGetPartitionQuality). */
+typedef struct {
+  PetscInt   refined, coarsened, activated, deactivated; /* blocks whose level changed, or that appeared or went */
+  PetscInt   moved;                                      /* blocks that changed owner */
+  PetscInt64 bytesMoved;                                 /* channel bytes received from other ranks */
+  PetscReal  seconds;                                    /* wall time of the adapt on the slowest rank */
+} PffAdaptInfo;
+
+/* Topology change (PF-FLIP Sec. 5.4): level[] is the new requested level of every raster block (-1
+   inactive; NULL keeps the current levels and only re-partitions). The map is graded 2:1 as at set-up and
+   partitioned again with the grid's partitioner; every channel's values move to the block's new owner
+   and level (PffTransferType), views and halo plans are rebuilt, and the topology state increases.
+   Collective; every rank passes the same map. Halos are not current afterwards. */
+PETSC_EXTERN PetscErrorCode PffGridAdapt(PffGrid grid, const PetscInt level[]);
+PETSC_EXTERN PetscErrorCode PffGridGetAdaptInfo(PffGrid grid, PffAdaptInfo *info);
+/* A counter that each PffGridAdapt increases. An object that caches anything derived from the raster
+   (block lists, halo plans, operators, particle bins) keeps the value it was built at and rebuilds when
+   it differs. Not collective. */
+PETSC_EXTERN PetscErrorCode PffGridGetTopologyState(PffGrid grid, PetscObjectState *state);
+
+/* Pure per-block kernels of the transfer, exposed for tests: component comp of a channel of the given kind
+   (staggered along comp for faces) from a block of nf cells per axis to one of nf / 2 (restrict), and from
+   nc to 2 nc (prolong). */
+PETSC_EXTERN void PffBlockRestrict(PffChannelKind kind, PetscInt comp, PetscInt nf, const float fine[], float coarse[]);
+PETSC_EXTERN void PffBlockProlong(PffChannelKind kind, PetscInt comp, PffTransferType type, PetscInt nc,
+                                  const float coarse[], float fine[]);
+
 /* Halo exchange of block face, edge and corner layers of width w (the channel's), across ranks and
    levels: same level copies, a coarser neighbour is interpolated (trilinear, linear extrapolation
    inside the neighbour), a finer neighbour is averaged. Split phase: work that does not read ghosts

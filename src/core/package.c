@@ -3,11 +3,11 @@
 #include <pff.h>
 
 PetscClassId  PFF_CLASSID;
-PetscLogEvent PFF_GridSetUp, PFF_GridRefine, PFF_GridPartition, PFF_HaloSetUp, PFF_HaloBegin, PFF_HaloEnd,
-    PFF_HaloRevBegin, PFF_HaloRevEnd, PFF_GridInterp, PFF_GridLaplacian, PFF_IOWrite, PFF_IORead, PFF_PartSeed,
-    PFF_PartBin, PFF_PartMigrate, PFF_P2G, PFF_G2P, PFF_Advect, PFF_PressSetUp, PFF_PressAssemble, PFF_PressSolve,
-    PFF_PhaseField, PFF_Forces, PFF_FlowExtrap, PFF_CkptWrite, PFF_CkptRead, PFF_MGSetUp, PFF_MGApply, PFF_MGSmooth,
-    PFF_MGCoarse;
+PetscLogEvent PFF_GridSetUp, PFF_GridAdapt, PFF_GridRefine, PFF_GridPartition, PFF_HaloSetUp, PFF_HaloBegin,
+    PFF_HaloEnd, PFF_HaloRevBegin, PFF_HaloRevEnd, PFF_GridInterp, PFF_GridLaplacian, PFF_IOWrite, PFF_IORead,
+    PFF_PartSeed, PFF_PartBin, PFF_PartMigrate, PFF_P2G, PFF_G2P, PFF_Advect, PFF_PressSetUp, PFF_PressAssemble,
+    PFF_PressSolve, PFF_PhaseField, PFF_Forces, PFF_FlowExtrap, PFF_CkptWrite, PFF_CkptRead, PFF_MGSetUp, PFF_MGApply,
+    PFF_MGSmooth, PFF_MGCoarse;
 
 static PetscBool PffPackageInitialized = PETSC_FALSE;
 
@@ -18,6 +18,7 @@ PetscErrorCode PffInitializePackage(void)
   PffPackageInitialized = PETSC_TRUE;
   PetscCall(PetscClassIdRegister("PFF", &PFF_CLASSID));
   PetscCall(PetscLogEventRegister("GridSetUp", PFF_CLASSID, &PFF_GridSetUp));
+  PetscCall(PetscLogEventRegister("GridAdapt", PFF_CLASSID, &PFF_GridAdapt));
   PetscCall(PetscLogEventRegister("GridRefine", PFF_CLASSID, &PFF_GridRefine));
   PetscCall(PetscLogEventRegister("GridPartition", PFF_CLASSID, &PFF_GridPartition));
   PetscCall(PetscLogEventRegister("HaloSetUp", PFF_CLASSID, &PFF_HaloSetUp));

@@ -43,16 +43,17 @@ typedef struct {
 } PffFaceViews;
 
 typedef struct {
-  char           name[64];
-  PffChannelKind kind;
-  PetscInt       ncomp, width;
-  float         *data;   /* owned values, [local block][comp][n^3] */
-  float         *alloc;  /* data - PFF_CHANNEL_PAD: row kernels may read one value past either end */
-  float         *halo;   /* ghost and source boxes of the plan */
-  PffView       *views;  /* [nlocal][ncomp][27] */
-  PffFaceViews  *faces;  /* [nlocal], cell channels only (NULL otherwise) */
-  PffHaloPlan   *plan;   /* borrowed from the grid */
-  PetscBool      output; /* written to frames (PffGridSetChannelOutput); checkpoints write every channel */
+  char            name[64];
+  PffChannelKind  kind;
+  PetscInt        ncomp, width;
+  float          *data;     /* owned values, [local block][comp][n^3] */
+  float          *alloc;    /* data - PFF_CHANNEL_PAD: row kernels may read one value past either end */
+  float          *halo;     /* ghost and source boxes of the plan */
+  PffView        *views;    /* [nlocal][ncomp][27] */
+  PffFaceViews   *faces;    /* [nlocal], cell channels only (NULL otherwise) */
+  PffHaloPlan    *plan;     /* borrowed from the grid */
+  PetscBool       output;   /* written to frames (PffGridSetChannelOutput); checkpoints write every channel */
+  PffTransferType transfer; /* how the values follow an adapt (PffGridSetChannelTransfer) */
 } PffChannel;
 
 struct _n_PffGrid {
@@ -94,6 +95,8 @@ struct _n_PffGrid {
   PffHaloPlan *plans[2 * PFF_GRID_MAX_WIDTH];
 
   PffPartitionQuality quality;
+  PetscObjectState    topology; /* increased by every PffGridAdapt */
+  PffAdaptInfo        adaptInfo;
 };
 
 #define PFF_CHANNEL_PAD 16

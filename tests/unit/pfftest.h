@@ -72,18 +72,14 @@ static inline PetscErrorCode PffTestCreateGridFromMap(MPI_Comm comm, const Petsc
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* A grid of nb blocks of n0 cells. With uniform >= 0 every block has that level; otherwise levels grow
-   with the distance from a random block, with random jumps, so every level and every kind of level
-   step occurs and grading has work to do. inactive: percentage of blocks requested inactive. */
-static inline PetscErrorCode PffTestCreateGrid(MPI_Comm comm, const PetscInt nb[3], const PetscBool periodic[3],
-                                               const PetscReal origin[3], PetscReal h0, PetscInt n0, PetscInt nlevels,
-                                               PetscInt uniform, PetscInt inactive, uint64_t seed, PffTestCtx *ctx)
+/* A requested level per block of an nb raster. With uniform >= 0 every block has that level; otherwise
+   levels grow with the distance from a random block, with random jumps, so every level and every kind of
+   level step occurs and grading has work to do. inactive: percentage of blocks requested inactive. */
+static inline void PffTestRandomMap(const PetscInt nb[3], PetscInt nlevels, PetscInt uniform, PetscInt inactive,
+                                    uint64_t seed, PetscInt request[])
 {
   const PetscInt nblocks = nb[0] * nb[1] * nb[2];
-  PetscInt      *request;
 
-  PetscFunctionBeginUser;
-  PetscCall(PetscMalloc1(nblocks, &request));
   for (PetscInt b = 0; b < nblocks; b++) {
     const uint64_t h  = PffTestKey(seed, 1, (uint64_t)b, 0);
     PetscReal      d2 = 0;
@@ -95,6 +91,18 @@ static inline PetscErrorCode PffTestCreateGrid(MPI_Comm comm, const PetscInt nb[
     request[b]       = uniform >= 0 ? uniform : PetscMax(0, PetscMin(nlevels - 1, l));
     if ((PetscInt)((h >> 32) % 100) < inactive) request[b] = -1;
   }
+}
+
+/* A grid of nb blocks of n0 cells with the levels of PffTestRandomMap. */
+static inline PetscErrorCode PffTestCreateGrid(MPI_Comm comm, const PetscInt nb[3], const PetscBool periodic[3],
+                                               const PetscReal origin[3], PetscReal h0, PetscInt n0, PetscInt nlevels,
+                                               PetscInt uniform, PetscInt inactive, uint64_t seed, PffTestCtx *ctx)
+{
+  PetscInt *request;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc1(nb[0] * nb[1] * nb[2], &request));
+  PffTestRandomMap(nb, nlevels, uniform, inactive, seed, request);
   PetscCall(
       PffTestCreateGridFromMap(comm, nb, periodic, origin, h0, n0, uniform >= 0 ? uniform + 1 : nlevels, request, ctx));
   PetscCall(PetscFree(request));
