@@ -56,6 +56,11 @@ PETSC_EXTERN PetscErrorCode PffFlowSetPrescribedVelocity(PffFlow flow, PffVeloci
 /* Allocates channels, particle store and pressure solver (the grid must be set up). Collective. */
 PETSC_EXTERN PetscErrorCode PffFlowSetUp(PffFlow flow);
 PETSC_EXTERN PetscErrorCode PffFlowDestroy(PffFlow *flow);
+/* Rebuilds what the flow derives from the grid's topology: the open faces (walls and solids) and the
+   reference lattice of Eq. 6-7 and of the volume correction. PffFlowStep and PffFlowUpdateFields call it
+   when the grid's topology state (PffGridAdapt) changed; the particles and the pressure reset
+   themselves. Collective. */
+PETSC_EXTERN PetscErrorCode PffFlowReset(PffFlow flow);
 
 /* Seeds the particles (see PffParticlesSeed) and computes the initial phase field. Collective. */
 PETSC_EXTERN PetscErrorCode PffFlowSeed(PffFlow flow, PffSeedFn fn, void *ctx);

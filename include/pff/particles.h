@@ -103,6 +103,11 @@ PETSC_EXTERN PetscErrorCode PffParticlesBin(PffParticles p);
 /* Wraps periodic axes, clamps into walled axes, sends every particle to the owner of its block, bins.
    Nothing is lost: a particle in an inactive block is an error. Collective. */
 PETSC_EXTERN PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats);
+/* Follows a change of the grid's topology (PffGridAdapt): every particle goes to the new owner of its
+   block and the bins are rebuilt. The particle operations call it themselves when the grid's topology
+   state differs from the one their bins were built at. Every particle must lie in an active block.
+   Collective. */
+PETSC_EXTERN PetscErrorCode PffParticlesReset(PffParticles p);
 /* Removes the particles flagged PFF_PARTICLE_FLAG_REMOVE (keeps the order of the others, rebins). Not
    collective. */
 PETSC_EXTERN PetscErrorCode PffParticlesRemove(PffParticles p);

@@ -81,6 +81,11 @@ PETSC_EXTERN PetscErrorCode PffPressureGetOperatorType(PffPressure ps, PffPressu
 /* Builds the numbering, the face list and the gradient once per grid topology (and the shell's
    communication plan when the operator type is shell). Collective. */
 PETSC_EXTERN PetscErrorCode PffPressureSetUp(PffPressure ps);
+/* Frees everything derived from the grid's topology (numbering, face lists, operators, vectors, the
+   preconditioner's set-up); the KSP keeps its type and options. The pressure calls it and sets itself
+   up again when the grid's topology state (PffGridAdapt) differs from the one it was set up at; the
+   coefficients must then be set again. Collective. */
+PETSC_EXTERN PetscErrorCode PffPressureReset(PffPressure ps);
 PETSC_EXTERN PetscErrorCode PffPressureDestroy(PffPressure *ps);
 
 /* Dirichlet walls: walls[w] = PETSC_TRUE sets p = 0 on domain wall w, in the order -x, +x, -y, +y,

@@ -185,11 +185,37 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
   const PetscInt hidden[] = {f->chMass, f->chMassRef, f->chUt, f->chPhiF, f->chBeta, f->chOpen};
   for (size_t k = 0; k < PETSC_STATIC_ARRAY_LENGTH(hidden); k++)
     PetscCall(PffGridSetChannelOutput(f->grid, hidden[k], PETSC_FALSE));
+  /* what an adapt need not move: every step recomputes it from the particles, or PffFlowReset does */
+  const PetscInt scratch[] = {f->chMass, f->chUt,     f->chPhiF, f->chMassRef, f->chBeta,  f->chOpen,
+                              f->chVol,  f->chVolRef, f->chCdiv, f->chQ,       f->chUlMask};
+  for (size_t k = 0; k < PETSC_STATIC_ARRAY_LENGTH(scratch); k++)
+    if (scratch[k] >= 0) PetscCall(PffGridSetChannelTransfer(f->grid, scratch[k], PFF_TRANSFER_NONE));
   PetscCall(PffParticlesGetKernelSum(f->part, &f->rho0));
-  PetscCall(PffFlowOpenFaces_Private(f));
-  PetscCall(PffFlowReferenceVolume_Private(f));
+  PetscCall(PffFlowReset(f));
   if (!f->prescribed && f->usePressure) PetscCall(PffPressureSetUp(f->press));
   f->setupcalled = PETSC_TRUE;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowReset(PffFlow f)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffFlowOpenFaces_Private(f));
+  PetscCall(PffFlowReferenceVolume_Private(f));
+  PetscCall(PffGridGetTopologyState(f->grid, &f->topology));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Collective: every rank sees the same topology state. */
+PetscErrorCode PffFlowCheckTopology_Private(PffFlow f)
+{
+  PetscObjectState state;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetTopologyState(f->grid, &state));
+  if (state == f->topology) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PetscInfo(NULL, "flow: open faces and reference lattice rebuilt after a grid topology change\n"));
+  PetscCall(PffFlowReset(f));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -31,8 +31,9 @@ struct _n_PffFlow {
   PetscInt extrapLayers;               /* -flow_extrapolate_layers (Sec. 3.7) */
   PetscInt uWidth;
 
-  PetscReal t, dtPrev;
-  PetscInt  step;
+  PetscObjectState topology; /* the grid's topology state of the open faces and the reference lattice */
+  PetscReal        t, dtPrev;
+  PetscInt         step;
 };
 
 /* Component d of nch channels on local block lb of grid (n^3 floats each, x fastest); n3 may be NULL. */
@@ -66,6 +67,8 @@ static inline void PffFlowFaceTags_Private(const PffView *vphi, PetscInt i, Pets
   *lo = (PetscBool)(*PffViewsAt(vphi, i - (d == 0), j - (d == 1), k - (d == 2), n) >= 0.5);
 }
 
+/* flow.c */
+PETSC_INTERN PetscErrorCode PffFlowCheckTopology_Private(PffFlow);
 /* phase.c */
 PETSC_INTERN PetscErrorCode PffFlowPhaseField_Private(PffFlow);
 /* correction.c */

@@ -67,6 +67,7 @@ PetscErrorCode PffFlowUpdateFields(PffFlow f, PetscBool vorticity)
   PetscFunctionBeginUser;
   PetscCall(PffFlowRegisterStages());
   PetscCall(PetscMemzero(&st, sizeof(st)));
+  PetscCall(PffFlowCheckTopology_Private(f));
   PetscCall(PffFlowTransfer(f, &st));
   if (vorticity) {
     PetscCall(PffGridHaloBegin(f->grid, f->chU));
@@ -182,6 +183,7 @@ PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
   PetscCheck(f->setupcalled, f->comm, PETSC_ERR_ORDER, "PffFlowSetUp() must come before PffFlowStep()");
   PetscCall(PffFlowRegisterStages());
   PetscCall(PetscMemzero(st, sizeof(*st)));
+  PetscCall(PffFlowCheckTopology_Private(f));
   PetscCall(PffGridGetSizes(f->grid, NULL, NULL, NULL, &h0, NULL));
   if (f->prescribed)
     PetscCall(PffFlowPrescribedDt(f, dtmax, &umax, &dt));

@@ -191,5 +191,6 @@ PetscErrorCode PffParticlesSort_Private(PffParticles p)
 #undef PFF_PARTICLE_FIELD_SORT
   }
   p->binned = PETSC_TRUE;
+  PetscCall(PffGridGetTopologyState(p->grid, &p->topology));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

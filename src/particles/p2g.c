@@ -177,10 +177,10 @@ PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTI
   const PffView **views;
   float         **data;
   PetscInt       *order, cstart[28] = {0};
-  const PetscInt  nlocal = p->nlocal;
 
   PetscFunctionBeginUser;
-  PetscCall(PffParticlesCheckBinned_Private(p, "PffParticlesP2G"));
+  PetscCall(PffParticlesCheckBinned_Private(p, "PffParticlesP2G")); /* may rebin after an adapt */
+  const PetscInt nlocal = p->nlocal;
   PetscCheck(chMass != chMom && chVolume != chMass && chVolume != chMom, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG,
              "P2G needs different channels for mass, momentum and volume");
   PetscCall(PffCheckFaceChannel(p->grid, chMass, "P2G mass"));

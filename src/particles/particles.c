@@ -174,9 +174,23 @@ PetscErrorCode PffParticlesGetFloatWork_Private(PffParticles p, size_t n, float 
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode PffParticlesCheckBinned_Private(PffParticles p, const char caller[])
+PetscErrorCode PffParticlesReset(PffParticles p)
 {
   PetscFunctionBeginUser;
+  p->binned = PETSC_FALSE;
+  PetscCall(PffParticlesMigrate(p, NULL));
+  PetscCall(PetscInfo(NULL, "particles: rebinned after a grid topology change\n"));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Every caller is collective, so all ranks see the same topology state and reset together. */
+PetscErrorCode PffParticlesCheckBinned_Private(PffParticles p, const char caller[])
+{
+  PetscObjectState state;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetTopologyState(p->grid, &state));
+  if (p->binned && state != p->topology) PetscCall(PffParticlesReset(p));
   PetscCheck(p->binned, PETSC_COMM_SELF, PETSC_ERR_ORDER,
              "%s needs binned particles: call PffParticlesMigrate (or PffParticlesBin) after adding or removing",
              caller);

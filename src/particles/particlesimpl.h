@@ -58,10 +58,11 @@ struct _n_PffParticles {
   PffParticleSoA s;
 
   /* bins: particles of local block lb are [start[lb], start[lb + 1]) */
-  PetscBool binned;
-  PetscInt  nlocal, *start, *lgid;
-  PetscInt *local; /* [nblocks] local index of global block or -1; rebuilt by every Bin */
-  PetscInt  nblocksCache;
+  PetscBool        binned;
+  PetscObjectState topology; /* the grid's topology state when the bins were built (PffGridGetTopologyState) */
+  PetscInt         nlocal, *start, *lgid;
+  PetscInt        *local; /* [nblocks] local index of global block or -1; rebuilt by every Bin */
+  PetscInt         nblocksCache;
 
   /* grid geometry, cached at Create (fixed for the grid's life) */
   PetscInt  n0, log2n0, nlevels, nb[3], cells[3];

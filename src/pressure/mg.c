@@ -178,8 +178,9 @@ static PetscErrorCode PffMGApply(PC pc, Vec b, Vec x)
 
 static PetscErrorCode PffMGSetUp(PC pc)
 {
-  PffMG *mg;
-  Mat    A;
+  PffMG           *mg;
+  Mat              A;
+  PetscObjectState state = 0;
 
   PetscFunctionBeginUser;
   PetscCall(PCShellGetContext(pc, &mg));
@@ -187,7 +188,9 @@ static PetscErrorCode PffMGSetUp(PC pc)
   if (!mg->optionsRead) PetscCall(PffPressureMGSetFromOptions_Private(pc));
   PetscCall(PetscLogEventBegin(PFF_MGSetUp, 0, 0, 0, 0));
   PetscCall(PCGetOperators(pc, NULL, &A));
-  if (mg->built && mg->Apc != A) PetscCall(PffMGDestroyLevels_Private(mg));
+  /* a new operator, or one of a new topology: a freed Mat's address can come back for the next one */
+  if (mg->built) PetscCall(PffGridGetTopologyState(mg->grid, &state));
+  if (mg->built && (mg->Apc != A || mg->topology != state)) PetscCall(PffMGDestroyLevels_Private(mg));
   if (!mg->built) PetscCall(PffMGBuildLevels_Private(mg));
   PetscCall(PffMGUpdateOperators_Private(mg, A));
   for (PetscInt L = 1; L + 1 < mg->nlevels; L++)

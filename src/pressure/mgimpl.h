@@ -103,20 +103,21 @@ typedef struct {
 } PffMGLevel;
 
 typedef struct {
-  PffGrid      grid;
-  PffPressure  ps; /* the coefficients of level 0 (stencil operators) */
-  MPI_Comm     comm;
-  PffMGOptions opt;
-  PetscInt     nlevels, nlocal;
-  PetscInt     nblockLevels; /* levels with blocks; the last of them is AIJ, the others matrix-free (stencil) */
-  Mat          Apc;          /* the operator the hierarchy was built for (the PC's Pmat), referenced */
-  PffMGLevel  *lev;
-  KSP          coarse;    /* coarsest-level solver, options prefix pressure_pffmg_coarse_ */
-  MatNullSpace constants; /* the constants, null space of the singular coarse levels */
-  Mat          Apinned;   /* the coarsest operator with its first diagonal entry doubled, when A is singular */
-  PetscBool    singular;  /* A has the constants as null space: the coarsest operator is pinned */
-  PetscBool    built;     /* hierarchy structure exists (coefficients are refreshed each set-up) */
-  PetscBool    optionsRead;
+  PffGrid          grid;
+  PffPressure      ps; /* the coefficients of level 0 (stencil operators) */
+  MPI_Comm         comm;
+  PffMGOptions     opt;
+  PetscInt         nlevels, nlocal;
+  PetscInt         nblockLevels; /* levels with blocks; the last of them is AIJ, the others matrix-free (stencil) */
+  Mat              Apc;          /* the operator the hierarchy was built for (the PC's Pmat), referenced */
+  PffMGLevel      *lev;
+  KSP              coarse;    /* coarsest-level solver, options prefix pressure_pffmg_coarse_ */
+  MatNullSpace     constants; /* the constants, null space of the singular coarse levels */
+  Mat              Apinned;   /* the coarsest operator with its first diagonal entry doubled, when A is singular */
+  PetscBool        singular;  /* A has the constants as null space: the coarsest operator is pinned */
+  PetscBool        built;     /* hierarchy structure exists (coefficients are refreshed each set-up) */
+  PetscObjectState topology;  /* the grid's topology state the hierarchy was built at */
+  PetscBool        optionsRead;
   /* per-block scratch for adaptive relaxation */
   PetscInt      *nbr;               /* [6 nlocal] local face neighbour (or -1: none, wall, or remote -2 - gid) */
   PetscInt      *actLeafOf;         /* [6 nlocal] SF leaf of each face with an off-rank neighbour, or -1 */

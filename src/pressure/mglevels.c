@@ -532,6 +532,7 @@ PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
     }
   }
   mg->built = PETSC_TRUE;
+  PetscCall(PffGridGetTopologyState(mg->grid, &mg->topology));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -644,6 +645,7 @@ PetscErrorCode PffMGDestroyLevels_Private(PffMG *mg)
     PetscCall(PffMGStencilDestroy_Private(lv));
   }
   PetscCall(PetscFree(mg->lev));
+  if (mg->coarse) PetscCall(KSPReset(mg->coarse)); /* the next hierarchy's coarsest level may differ in size */
   PetscCall(MatDestroy(&mg->Apc));
   PetscCall(MatDestroy(&mg->Apinned));
   PetscCall(MatNullSpaceDestroy(&mg->constants));

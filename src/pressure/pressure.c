@@ -165,6 +165,7 @@ PetscErrorCode PffPressureSetUp(PffPressure ps)
   /* the shell holds the face coefficients and the face lists of the divergence and gradient */
   PetscCall(PffPressureShellCreate_Private(ps, &ps->S));
   PetscCall(PffPressureShellGetCoefficients_Private(ps->S, &ps->cf));
+  PetscCall(PffGridGetTopologyState(ps->grid, &ps->topology));
   ps->setup = PETSC_TRUE;
   PetscCall(PetscLogEventEnd(PFF_PressSetUp, 0, 0, 0, 0));
   PetscCall(PetscInfo(NULL,
@@ -175,14 +176,10 @@ PetscErrorCode PffPressureSetUp(PffPressure ps)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode PffPressureDestroy(PffPressure *ps)
+/* Everything derived from the grid's topology; the KSP keeps its type and options. */
+static PetscErrorCode PffPressureFreeTopology(PffPressure p)
 {
-  PffPressure p;
-
   PetscFunctionBeginUser;
-  if (ps == NULL || *ps == NULL) PetscFunctionReturn(PETSC_SUCCESS);
-  p = *ps;
-  PetscCall(KSPDestroy(&p->ksp));
   PetscCall(MatNullSpaceDestroy(&p->nullsp));
   PetscCall(MatDestroy(&p->A));
   PetscCall(MatDestroy(&p->S));
@@ -200,14 +197,63 @@ PetscErrorCode PffPressureDestroy(PffPressure *ps)
   PetscCall(PetscFree(p->lower));
   PetscCall(PetscFree(p->lower4));
   PetscCall(PetscFree(p->hblock));
+  p->cf = NULL; /* the shell's */
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureReset(PffPressure ps)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(ps != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL object");
+  if (!ps->setup) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(KSPReset(ps->ksp)); /* operators of another size follow; pffmg rebuilds its levels (mg.c) */
+  {
+    /* PETSc 3.18's FCG has no reset: its direction vectors keep the old size. A fresh implementation,
+       with the settings of the old one, drops them. */
+    PetscBool isfcg;
+    PetscCall(PetscObjectTypeCompare((PetscObject)ps->ksp, KSPFCG, &isfcg));
+    if (isfcg) {
+      PetscInt             mmax, nprealloc;
+      KSPFCDTruncationType trunc;
+      PetscCall(KSPFCGGetMmax(ps->ksp, &mmax));
+      PetscCall(KSPFCGGetNprealloc(ps->ksp, &nprealloc));
+      PetscCall(KSPFCGGetTruncationType(ps->ksp, &trunc));
+      PetscCall(KSPSetType(ps->ksp, KSPCG));
+      PetscCall(KSPSetType(ps->ksp, KSPFCG));
+      PetscCall(KSPFCGSetMmax(ps->ksp, mmax));
+      PetscCall(KSPFCGSetNprealloc(ps->ksp, nprealloc));
+      PetscCall(KSPFCGSetTruncationType(ps->ksp, trunc));
+    }
+  }
+  PetscCall(PffPressureFreeTopology(ps));
+  ps->setup = ps->coefficientsSet = ps->subPCDefaultApplied = PETSC_FALSE;
+  PetscCall(PetscInfo(NULL, "pressure: reset after a grid topology change\n"));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureDestroy(PffPressure *ps)
+{
+  PetscFunctionBeginUser;
+  if (ps == NULL || *ps == NULL) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(KSPDestroy(&(*ps)->ksp));
+  PetscCall(PffPressureFreeTopology(*ps));
   PetscCall(PetscFree(*ps));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* After a topology change the pressure sets itself up again (the coefficients are then to be set again).
+   Every caller is collective. */
 static PetscErrorCode PffPressureCheckSetUp(PffPressure ps, PetscBool coefficients)
 {
+  PetscObjectState state;
+
   PetscFunctionBeginUser;
   PetscCheck(ps != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL object");
+  PetscCall(PffGridGetTopologyState(ps->grid, &state));
+  if (ps->setup && state != ps->topology) {
+    PetscCall(PffPressureReset(ps));
+    PetscCall(PffPressureSetUp(ps));
+  }
   PetscCheck(ps->setup, ps->comm, PETSC_ERR_ORDER, "pressure: call PffPressureSetUp() first");
   PetscCheck(!coefficients || ps->coefficientsSet, ps->comm, PETSC_ERR_ORDER,
              "pressure: call PffPressureSetCoefficients() first");

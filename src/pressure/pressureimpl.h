@@ -21,9 +21,10 @@ typedef enum { PFF_PRESSURE_ASSEMBLY_PTAP, PFF_PRESSURE_ASSEMBLY_DIRECT } PffPre
 PETSC_INTERN const char *const PffPressureAssemblyTypes[];
 
 struct _n_PffPressure {
-  PffGrid   grid;
-  MPI_Comm  comm; /* the grid's, borrowed */
-  PetscBool setup, coefficientsSet;
+  PffGrid          grid;
+  MPI_Comm         comm; /* the grid's, borrowed */
+  PetscBool        setup, coefficientsSet;
+  PetscObjectState topology; /* the grid's topology state at SetUp; a different one resets (PffPressureReset) */
 
   /* cell numbering: owned cells are global rows rstart .. rstart + ncells - 1 */
   PetscInt  nlocal, ncells, rstart, ntotal;

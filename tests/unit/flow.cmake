@@ -6,3 +6,7 @@ pff_add_unit(test_flow_extrapolate RANKS 1 2 4)
 # flow: liquid and gas volumes of the fluid cells (PffFlowGetPhaseVolumes, issue 10): closed box half full, with a
 # solid cube and on two levels.
 pff_add_unit(test_flow_volumes RANKS 1 2 4)
+# flow: particles, pressure, pffmg and flow follow a grid adapt (topology state), against a grid set up on the new
+# map; also threaded.
+pff_add_unit(test_adapt_flow RANKS 1 2 4)
+pff_add_unit(test_adapt_flow RANKS 2 THREADS 2)
