@@ -11,7 +11,8 @@ typedef struct _n_PffParticles *PffParticles;
 typedef enum { PFF_PARTICLE_LIQUID, PFF_PARTICLE_AIR, PFF_PARTICLE_NTYPES } PffParticleType;
 PETSC_EXTERN const char *const PffParticleTypes[];
 
-/* The packed word of a particle: type in bits 0-3, level in bits 4-7, flags from bit 8. */
+/* The packed word of a particle: type in bits 0-3, level in bits 4-7, flags in bits 8-27, the
+   deferred-coarsening counter D_p of PF-FLIP Sec. 5.4 in bits 28-31. */
 #define PFF_PARTICLE_FLAG_SHIFT 8
 #define PFF_PARTICLE_FLAG_DROPLET 0x1 /* liquid particle found in air (Sec. 3.4): droplet candidate */
 #define PFF_PARTICLE_FLAG_REMOVE 0x2  /* marked for PffParticlesRemove */
@@ -30,7 +31,16 @@ static inline PetscInt PffParticleWordLevel(uint32_t w)
 }
 static inline uint32_t PffParticleWordFlags(uint32_t w)
 {
-  return w >> PFF_PARTICLE_FLAG_SHIFT;
+  return (w >> PFF_PARTICLE_FLAG_SHIFT) & 0xfffffu;
+}
+static inline PetscInt PffParticleWordCoarsen(uint32_t w)
+{
+  return (PetscInt)(w >> 28);
+}
+/* w with level l and the deferred-coarsening counter c (saturated at 15) */
+static inline uint32_t PffParticleWordSetLevel(uint32_t w, PetscInt l, PetscInt c)
+{
+  return (w & 0x0fffff0fu) | (uint32_t)l << 4 | (uint32_t)PetscMin(c, 15) << 28;
 }
 /* w with the flag bits set (on true) or cleared (on false) */
 static inline uint32_t PffParticleWordSetFlags(uint32_t w, uint32_t flags, PetscBool on)
@@ -111,6 +121,28 @@ PETSC_EXTERN PetscErrorCode PffParticlesReset(PffParticles p);
 /* Removes the particles flagged PFF_PARTICLE_FLAG_REMOVE (keeps the order of the others, rebins). Not
    collective. */
 PETSC_EXTERN PetscErrorCode PffParticlesRemove(PffParticles p);
+/* What one PffParticlesAdaptLevels did, summed over ranks. */
+typedef struct {
+  PetscInt64 split, children;                   /* particles split, and the children that replaced them */
+  PetscInt64 marked, removed;                   /* marked for coarsening (D_p reached the delay), removed of them */
+  PetscReal  volumeBefore[PFF_PARTICLE_NTYPES]; /* particle volume per type (sum 8^l_p, in finest cells / 8) */
+  PetscReal  volumeAfter[PFF_PARTICLE_NTYPES];
+} PffParticleAdaptStats;
+
+/* Particle adaptivity (PF-FLIP Sec. 5.1 and Sec. 5.4 step 6). target[i] is the level the refinement
+   criterion asks of local particle i (clamped to the grid's levels).
+   - target < l_p: the particle splits into 8^(l_p - target) children of level target, one level at a
+     time into 8 children, each placed at random in one octant of the cell of the child's level that
+     contains its parent; velocity and type are the parent's, so mass and momentum are exact.
+   - target > l_p: the deferred-coarsening counter D_p grows; at D_p >= delay the particle is removed
+     with probability 1 - 8^-(target - l_p), and otherwise takes level target (and the volume of the
+     removed ones: mass is conserved in expectation). D_p returns to 0 then, and whenever target <= l_p.
+   The randomness is the counter-based RNG keyed by (seed, id, purpose, key): pass the step number as key,
+   so that the result is the same on any number of ranks and threads. Children get ids hashed from their
+   parent's with the top bit set (unique with probability 1 - n^2 2^-64). Particles stay in their blocks;
+   the store is binned again. Collective (the statistics). */
+PETSC_EXTERN PetscErrorCode PffParticlesAdaptLevels(PffParticles p, const int8_t target[], PetscInt delay, uint64_t key,
+                                                    PffParticleAdaptStats *stats);
 /* Global count and mass per type (mass = density[type] * particle volume). Collective. */
 PETSC_EXTERN PetscErrorCode PffParticlesGetTotals(PffParticles p, const PetscReal density[PFF_PARTICLE_NTYPES],
                                                   PetscInt64 count[PFF_PARTICLE_NTYPES],

@@ -9,7 +9,7 @@
 #define PFF_PARTICLES_MAX_SUBSTEPS 16
 
 /* Purposes of the counter-based RNG (the third key besides the seed and the particle id). */
-enum { PFF_RNG_SEED_JITTER = 1 };
+enum { PFF_RNG_SEED_JITTER = 1, PFF_RNG_SPLIT = 2, PFF_RNG_COARSEN = 3 };
 
 /* The particle fields, declared once: X(name, C type, values per particle). Growth, compaction, the
    binning's lane sort and the migration record are generated from this list, so a new per-particle

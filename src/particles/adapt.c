@@ -1,0 +1,114 @@
+/* Particle split and probabilistic coarsening (PF-FLIP Sec. 5.1, 5.4 step 6; docs/particles.md,
+   "Adaptive particles").
+
+   A split goes one level at a time: a particle of level l becomes 8 particles of level l - 1, one in
+   each octant of the level-(l - 1) cell that contains it, at a uniformly random place inside its octant.
+   Seeding puts 8 particles per cell at their sub-cell centres, so a split particle's children sample
+   its cell of the finer level as seeding at that level would (with jitter 1). Further levels repeat
+   this per child. Splits only append, and the parent's slot is reused by its first child, so particles
+   keep their block and the store is binned again without a migration. */
+#include "particlesimpl.h"
+
+/* Children of the parent at g (grid units, level l) down to level t, appended at out; returns the count. */
+static PetscInt SplitParticle(PffParticles p, const float g[3], uint64_t id, PetscInt l, PetscInt t, float *xout,
+                              uint64_t *idout)
+{
+  if (l == t) {
+    for (int a = 0; a < 3; a++) xout[a] = g[a];
+    idout[0] = id;
+    return 1;
+  }
+  const PetscReal s = (PetscReal)((PetscInt)1 << (l - 1)); /* cell size of the children's level */
+  PetscInt        m = 0;
+  for (PetscInt oct = 0; oct < 8; oct++) {
+    const uint64_t cid = PffHash64_Private(id ^ (0x9e3779b97f4a7c15ULL * (uint64_t)(oct + 1))) | (1ULL << 63);
+    float          c[3];
+    for (int a = 0; a < 3; a++) {
+      const PetscReal lo = PetscFloorReal((PetscReal)g[a] / s) * s, half = 0.5 * s;
+      const PetscReal u = PffRandom01_Private(p->seed, cid, PFF_RNG_SPLIT, (uint64_t)a);
+      const PetscReal x = lo + half * ((PetscReal)((oct >> a) & 1) + u);
+      /* rounding must not carry a child into the next cell (or block) */
+      c[a] = PetscMin((float)x, nextafterf((float)(lo + s), 0));
+    }
+    m += SplitParticle(p, c, cid, l - 1, t, xout + 3 * m, idout + m);
+  }
+  return m;
+}
+
+static PetscErrorCode Volumes(PffParticles p, PetscReal vol[PFF_PARTICLE_NTYPES])
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffParticlesGetTotals(p, NULL, NULL, vol));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffParticlesAdaptLevels(PffParticles p, const int8_t target[], PetscInt delay, uint64_t key,
+                                       PffParticleAdaptStats *stats)
+{
+  PffParticleAdaptStats st = {0};
+  const PetscInt        n = p->n, lmax = p->nlevels - 1;
+  PetscInt64            extra = 0;
+  const uint32_t        rm    = PffParticleWordSetFlags(0, PFF_PARTICLE_FLAG_REMOVE, PETSC_TRUE);
+  float                *cx;
+  uint64_t             *cid;
+
+  PetscFunctionBeginUser;
+  PetscCheck(delay >= 1 && delay <= 15, p->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "PffParticlesAdaptLevels: the coarsening delay %" PetscInt_FMT " must be in [1, 15]", delay);
+  PetscCall(PetscLogEventBegin(PFF_PartAdapt, 0, 0, 0, 0));
+  PetscCall(Volumes(p, st.volumeBefore));
+  /* room for the children first: the store may move */
+#pragma omp parallel for reduction(+ : extra) schedule(static)
+  for (PetscInt i = 0; i < n; i++) {
+    const PetscInt l = PffParticleWordLevel(p->s.word[i]), t = PetscClipInterval((PetscInt)target[i], 0, lmax);
+    if (t < l) extra += ((PetscInt64)1 << (3 * (l - t))) - 1;
+  }
+  PetscCheck(n + extra < PETSC_MAX_INT, PETSC_COMM_SELF, PETSC_ERR_SUP,
+             "the split would give %" PetscInt64_FMT " particles on one rank", (PetscInt64)n + extra);
+  PetscCall(PffParticlesReserve_Private(p, n + (PetscInt)extra));
+  PetscCall(PetscMalloc2(3 * ((size_t)1 << (3 * lmax)), &cx, (size_t)1 << (3 * lmax), &cid));
+  PetscInt m = n;
+  for (PetscInt i = 0; i < n; i++) {
+    uint32_t       w = p->s.word[i];
+    const PetscInt l = PffParticleWordLevel(w), t = PetscClipInterval((PetscInt)target[i], 0, lmax);
+    if (t < l) {
+      const PetscInt nc = SplitParticle(p, &p->s.x[3 * i], p->s.id[i], l, t, cx, cid);
+      w                 = PffParticleWordSetLevel(w, t, 0);
+      for (PetscInt c = 0; c < nc; c++) {
+        const PetscInt j = c == 0 ? i : m++;
+        for (int a = 0; a < 3; a++) {
+          p->s.x[3 * j + a] = cx[3 * c + a];
+          p->s.v[3 * j + a] = p->s.v[3 * i + a];
+        }
+        p->s.id[j]   = cid[c];
+        p->s.word[j] = w;
+      }
+      st.split++;
+      st.children += nc;
+    } else if (t > l) {
+      const PetscInt d = PffParticleWordCoarsen(w) + 1;
+      if (d < delay)
+        p->s.word[i] = PffParticleWordSetLevel(w, l, d);
+      else {
+        const PetscReal keep = 1.0 / (PetscReal)((PetscInt64)1 << (3 * (t - l)));
+        st.marked++;
+        if (PffRandom01_Private(p->seed, p->s.id[i], PFF_RNG_COARSEN, key) >= keep) {
+          p->s.word[i] = w | rm;
+          st.removed++;
+        } else
+          p->s.word[i] = PffParticleWordSetLevel(w, t, 0);
+      }
+    } else if (PffParticleWordCoarsen(w))
+      p->s.word[i] = PffParticleWordSetLevel(w, l, 0);
+  }
+  PetscCall(PetscFree2(cx, cid));
+  p->n      = m;
+  p->binned = PETSC_FALSE;
+  PetscCall(PffParticlesRemove(p));
+  PetscCall(PffParticlesBin(p));
+  PetscCall(Volumes(p, st.volumeAfter));
+  PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &st.split, 4, MPIU_INT64, MPI_SUM, p->comm));
+  PetscCall(PetscLogEventEnd(PFF_PartAdapt, 0, 0, 0, 0));
+  if (stats) *stats = st;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
