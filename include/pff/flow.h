@@ -17,26 +17,36 @@ typedef struct _n_PffFlow *PffFlow;
 #define PFF_FLOW_VOLCORR_MAXDISP_DEFAULT 0.5  /* -flow_volume_correction_max_displacement, in cells */
 #define PFF_FLOW_VOLCORR_RTOL_DEFAULT 1e-3    /* -flow_volume_correction_rtol of its solve */
 #define PFF_FLOW_EXTRAPOLATE_LAYERS_DEFAULT 3 /* -flow_extrapolate_layers: the paper's "a few cells" (Sec. 3.7) */
+#define PFF_FLOW_ADAPT_BAND_DEFAULT 1.0       /* -adapt_band: beta_bw of Sec. 5.4 step 6 */
+#define PFF_FLOW_ADAPT_DELAY_DEFAULT 3        /* -adapt_coarsen_delay: D_p >= 3 (Sec. 5.4) */
 
 /* Prescribed face velocity (e.g. the shear benchmark): component comp at x and time t. */
 typedef PetscReal (*PffVelocityFn)(const PetscReal x[3], PetscInt comp, PetscReal t, void *ctx);
 
-#define PFF_FLOW_NSTAGES 8
+#define PFF_FLOW_NSTAGES 9
+
+/* What one adaptation did (PF-FLIP Sec. 5.4, -adapt_levels). */
+typedef struct {
+  PetscBool             adapted;   /* the grid changed */
+  PffAdaptInfo          grid;      /* PffGridAdapt's counts, bytes and time (when adapted) */
+  PffParticleAdaptStats particles; /* splits and coarsening */
+} PffFlowAdaptStats;
 
 /* What one step did; the scene prints it in the progress line. */
 typedef struct {
-  PetscReal        dt, cfl; /* time step and the CFL number it realised (max |u| dt / h0) */
-  PetscReal        umax;    /* max particle speed at the start of the step */
-  PetscInt64       particles;
-  PetscInt64       bubblesDeleted, dropletCandidates; /* escaped particles this step (Sec. 3.4) */
-  PffPressureStats pressure;                          /* its = 0 when the solve is off */
-  PffPressureStats correction;                        /* the volume-correction solve (its = 0 when off) */
-  PffParticleStats advect;
-  PetscLogDouble   stageTime[PFF_FLOW_NSTAGES]; /* wall seconds per stage, see PffFlowStageNames */
+  PetscReal         dt, cfl; /* time step and the CFL number it realised (max |u| dt / h0) */
+  PetscReal         umax;    /* max particle speed at the start of the step */
+  PetscInt64        particles;
+  PetscInt64        bubblesDeleted, dropletCandidates; /* escaped particles this step (Sec. 3.4) */
+  PffPressureStats  pressure;                          /* its = 0 when the solve is off */
+  PffPressureStats  correction;                        /* the volume-correction solve (its = 0 when off) */
+  PffParticleStats  advect;
+  PffFlowAdaptStats adapt;                       /* zero when no adaptation ran this step */
+  PetscLogDouble    stageTime[PFF_FLOW_NSTAGES]; /* wall seconds per stage, see PffFlowStageNames */
 } PffFlowStepStats;
 
 PETSC_EXTERN const char
-    *const PffFlowStageNames[]; /* P2G, PhaseField, Forces, Pressure, G2P, Advect, Escaped, Correction */
+    *const PffFlowStageNames[]; /* P2G, PhaseField, Forces, Pressure, G2P, Advect, Escaped, Correction, Adapt */
 
 /* Life cycle. Create borrows the grid, which must be set up (the flow adds its channels in SetUp).
    SetFromOptions reads
@@ -73,6 +83,8 @@ PETSC_EXTERN PetscErrorCode PffFlowUpdateFields(PffFlow flow, PetscBool vorticit
 PETSC_EXTERN PetscErrorCode PffFlowGetTime(PffFlow flow, PetscReal *t, PetscInt *step);
 PETSC_EXTERN PetscErrorCode PffFlowSetTime(PffFlow flow, PetscReal t, PetscInt step);
 PETSC_EXTERN PetscErrorCode PffFlowGetParticles(PffFlow flow, PffParticles *p);
+/* The levels of dynamic adaptivity (-adapt_levels; 0: off). Not collective. */
+PETSC_EXTERN PetscErrorCode PffFlowGetAdaptLevels(PffFlow flow, PetscInt *levels);
 PETSC_EXTERN PetscErrorCode PffFlowGetGrid(PffFlow flow, PffGrid *grid);
 PETSC_EXTERN PetscErrorCode PffFlowGetDensities(PffFlow flow, PetscReal rho[PFF_PARTICLE_NTYPES]);
 /* Whether escaped gas particles are deleted (-flow_delete_bubbles); without deletion the

@@ -121,6 +121,8 @@ PETSC_EXTERN PetscErrorCode PffParticlesReset(PffParticles p);
 /* Removes the particles flagged PFF_PARTICLE_FLAG_REMOVE (keeps the order of the others, rebins). Not
    collective. */
 PETSC_EXTERN PetscErrorCode PffParticlesRemove(PffParticles p);
+/* Removes every particle (the store keeps its capacity). Not collective. */
+PETSC_EXTERN PetscErrorCode PffParticlesClear(PffParticles p);
 /* What one PffParticlesAdaptLevels did, summed over ranks. */
 typedef struct {
   PetscInt64 split, children;                   /* particles split, and the children that replaced them */

@@ -47,6 +47,7 @@ static const struct {
     {"particles", PFF_YAML_SECTION},
     {"partition", PFF_YAML_SECTION},
     {"fluid", PFF_YAML_SECTION},
+    {"adapt", PFF_YAML_SECTION},
     {"demo", PFF_YAML_SECTION},
     {"rt", PFF_YAML_SECTION},
     {"still", PFF_YAML_SECTION},

@@ -2,7 +2,7 @@
 #include "flowimpl.h"
 
 const char *const PffFlowStageNames[] = {"P2G",    "PhaseField", "Forces",     "Pressure", "G2P",
-                                         "Advect", "Escaped",    "Correction", NULL};
+                                         "Advect", "Escaped",    "Correction", "Adapt",    NULL};
 
 PetscErrorCode PffFlowCreate(PffGrid grid, PffFlow *flow)
 {
@@ -27,6 +27,10 @@ PetscErrorCode PffFlowCreate(PffGrid grid, PffFlow *flow)
   f->usePressure              = PETSC_TRUE;
   f->deleteBubbles            = PETSC_TRUE;
   f->extrapLayers             = PFF_FLOW_EXTRAPOLATE_LAYERS_DEFAULT;
+  f->adapt.band               = PFF_FLOW_ADAPT_BAND_DEFAULT;
+  f->adapt.interval           = 1;
+  f->adapt.delay              = PFF_FLOW_ADAPT_DELAY_DEFAULT;
+  f->adapt.margin             = -1; /* ceil(CFL) */
   f->chMass = f->chMassRef = f->chUt = f->chU = f->chPhiF = f->chBeta = f->chOpen = f->chPhi = f->chP = f->chCdiv =
       f->chVort                                                                                       = -1;
   f->chUl = f->chUlMask = f->chVol = f->chVolRef = f->chQ = f->chUa = -1;
@@ -78,6 +82,18 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
                           "Face layers the liquid velocity is extrapolated into the air for liquid particles (Sec. "
                           "3.7; 0: off)",
                           "PffFlowSetFromOptions", f->extrapLayers, &f->extrapLayers, NULL));
+  PetscCall(PffOptionsInt("-adapt_levels",
+                          "Dynamic adaptivity (Sec. 5.4) over this many grid levels (0: off; at most -grid_levels)",
+                          "PffFlowSetFromOptions", f->adapt.levels, &f->adapt.levels, NULL));
+  PetscCall(PffOptionsReal("-adapt_band", "Refinement band factor beta_bw: level floor(beta_bw d / block size)",
+                           "PffFlowSetFromOptions", f->adapt.band, &f->adapt.band, NULL));
+  PetscCall(PffOptionsInt("-adapt_interval", "Steps between adaptations", "PffFlowSetFromOptions", f->adapt.interval,
+                          &f->adapt.interval, NULL));
+  PetscCall(PffOptionsInt("-adapt_coarsen_delay", "Steps a particle must ask for a coarser level before it coarsens",
+                          "PffFlowSetFromOptions", f->adapt.delay, &f->adapt.delay, NULL));
+  PetscCall(PffOptionsReal("-adapt_margin",
+                           "Finest cells added to each particle's radius for the block map (default: ceil(-flow_cfl))",
+                           "PffFlowSetFromOptions", f->adapt.margin, &f->adapt.margin, NULL));
   PetscOptionsEnd();
   for (int t = 0; t < PFF_PARTICLE_NTYPES; t++) {
     const char *key = t == PFF_PARTICLE_LIQUID ? "liquid" : "gas";
@@ -111,6 +127,17 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
              "-flow_volume_correction_rtol %g is invalid: must be in (0, 1)", (double)f->volCorrRtol);
   PetscCheck(f->extrapLayers >= 0, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-flow_extrapolate_layers %" PetscInt_FMT " is invalid: must be >= 0", f->extrapLayers);
+  PetscCheck(f->adapt.levels >= 0, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-adapt_levels %" PetscInt_FMT " is invalid: must be >= 0", f->adapt.levels);
+  PetscCheck(f->adapt.band > 0 && PetscIsNormalReal(f->adapt.band), f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-adapt_band %g is invalid: must be positive", (double)f->adapt.band);
+  PetscCheck(f->adapt.interval >= 1, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-adapt_interval %" PetscInt_FMT " is invalid: must be >= 1", f->adapt.interval);
+  PetscCheck(f->adapt.delay >= 1 && f->adapt.delay <= 15, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-adapt_coarsen_delay %" PetscInt_FMT " is invalid: must be in [1, 15]", f->adapt.delay);
+  if (f->adapt.margin < 0 && f->adapt.margin != -1)
+    SETERRQ(f->comm, PETSC_ERR_ARG_OUTOFRANGE, "-adapt_margin %g is invalid: must be >= 0", (double)f->adapt.margin);
+  if (f->adapt.margin == -1) f->adapt.margin = PetscCeilReal(f->cfl);
   PetscCall(PffParticlesSetFromOptions(f->part));
   PetscCall(PffPressureSetFromOptions(f->press));
   /* the advection stages read velocity up to about CFL cells beyond a particle's block, plus one cell
@@ -192,6 +219,7 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
     if (scratch[k] >= 0) PetscCall(PffGridSetChannelTransfer(f->grid, scratch[k], PFF_TRANSFER_NONE));
   PetscCall(PffParticlesGetKernelSum(f->part, &f->rho0));
   PetscCall(PffFlowReset(f));
+  PetscCall(PffFlowAdaptSetUp_Private(f));
   if (!f->prescribed && f->usePressure) PetscCall(PffPressureSetUp(f->press));
   f->setupcalled = PETSC_TRUE;
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -225,6 +253,7 @@ PetscErrorCode PffFlowDestroy(PffFlow *flow)
   if (!flow || !*flow) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PffParticlesDestroy(&(*flow)->part));
   PetscCall(PffPressureDestroy(&(*flow)->press));
+  PetscCall(PffFlowAdaptDestroy_Private(*flow));
   PetscCall(PetscFree(*flow));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -233,8 +262,19 @@ PetscErrorCode PffFlowSeed(PffFlow f, PffSeedFn fn, void *ctx)
 {
   PetscFunctionBeginUser;
   PetscCheck(f->setupcalled, f->comm, PETSC_ERR_ORDER, "PffFlowSetUp() must come before PffFlowSeed()");
-  PetscCall(PffParticlesSeed(f->part, fn, ctx));
-  PetscCall(PffFlowUpdateFields(f, PETSC_FALSE));
+  if (f->adapt.levels > 0)
+    PetscCall(PffFlowAdaptSeed_Private(f, fn, ctx));
+  else {
+    PetscCall(PffParticlesSeed(f->part, fn, ctx));
+    PetscCall(PffFlowUpdateFields(f, PETSC_FALSE));
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowGetAdaptLevels(PffFlow f, PetscInt *levels)
+{
+  PetscFunctionBeginUser;
+  *levels = f->adapt.levels;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

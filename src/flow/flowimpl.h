@@ -4,6 +4,19 @@
 #include <pff.h>
 #include <pff/flow.h>
 
+/* Dynamic adaptivity (adapt.c). */
+typedef struct {
+  PetscInt  levels, interval, delay; /* -adapt_levels (0: off), -adapt_interval, -adapt_coarsen_delay */
+  PetscReal band, margin;            /* -adapt_band (beta_bw), -adapt_margin (finest cells) */
+  PetscInt  n0, s, m, C[3];          /* block size; lattice cell size s = 2^(levels-1), m per block, C per axis */
+  PetscBool periodic[3];
+  PetscInt *base;        /* [nblocks] -1: inactive at set-up */
+  PetscInt *request;     /* [nblocks] the map the grid last followed */
+  float    *dist, *work; /* [C] distance lattice (finest cells) and the coarse phase field */
+  int8_t   *target;      /* per particle */
+  size_t    ntarget;
+} PffFlowAdaptCtx;
+
 struct _n_PffFlow {
   MPI_Comm     comm;
   PffGrid      grid;
@@ -31,6 +44,7 @@ struct _n_PffFlow {
   PetscInt extrapLayers;               /* -flow_extrapolate_layers (Sec. 3.7) */
   PetscInt uWidth;
 
+  PffFlowAdaptCtx  adapt;
   PetscObjectState topology; /* the grid's topology state of the open faces and the reference lattice */
   PetscReal        t, dtPrev;
   PetscInt         step;
@@ -67,6 +81,11 @@ static inline void PffFlowFaceTags_Private(const PffView *vphi, PetscInt i, Pets
   *lo = (PetscBool)(*PffViewsAt(vphi, i - (d == 0), j - (d == 1), k - (d == 2), n) >= 0.5);
 }
 
+/* adapt.c */
+PETSC_INTERN PetscErrorCode PffFlowAdaptSetUp_Private(PffFlow);
+PETSC_INTERN PetscErrorCode PffFlowAdaptDestroy_Private(PffFlow);
+PETSC_INTERN PetscErrorCode PffFlowAdapt_Private(PffFlow, PffFlowAdaptStats *);
+PETSC_INTERN PetscErrorCode PffFlowAdaptSeed_Private(PffFlow, PffSeedFn, void *);
 /* flow.c */
 PETSC_INTERN PetscErrorCode PffFlowCheckTopology_Private(PffFlow);
 /* phase.c */

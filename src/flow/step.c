@@ -23,7 +23,8 @@ enum {
   PFF_STAGE_G2P,
   PFF_STAGE_ADVECT,
   PFF_STAGE_ESCAPED,
-  PFF_STAGE_CORRECTION
+  PFF_STAGE_CORRECTION,
+  PFF_STAGE_ADAPT
 };
 
 static PetscErrorCode PffStageBegin(PetscInt s, PetscLogDouble *t0)
@@ -183,6 +184,11 @@ PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
   PetscCheck(f->setupcalled, f->comm, PETSC_ERR_ORDER, "PffFlowSetUp() must come before PffFlowStep()");
   PetscCall(PffFlowRegisterStages());
   PetscCall(PetscMemzero(st, sizeof(*st)));
+  if (f->adapt.levels > 0 && f->step % f->adapt.interval == 0) {
+    PetscCall(PffStageBegin(PFF_STAGE_ADAPT, &t0));
+    PetscCall(PffFlowAdapt_Private(f, &st->adapt));
+    PetscCall(PffStageEnd(st, PFF_STAGE_ADAPT, t0));
+  }
   PetscCall(PffFlowCheckTopology_Private(f));
   PetscCall(PffGridGetSizes(f->grid, NULL, NULL, NULL, &h0, NULL));
   if (f->prescribed)

@@ -274,6 +274,14 @@ PetscErrorCode PffParticlesAdd(PffParticles p, PetscInt m, const PetscReal x[], 
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+PetscErrorCode PffParticlesClear(PffParticles p)
+{
+  PetscFunctionBeginUser;
+  p->n      = 0;
+  p->binned = PETSC_FALSE;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffParticlesRemove(PffParticles p)
 {
   PetscInt       m   = 0;

@@ -44,6 +44,7 @@ struct _PffFlowScene {
   /* particle bookkeeping of this run (since the seed or the restart): counts per type at the start
      and at the end, and the gas particles deleted as bubbles in between; set before ops.finish */
   PetscInt64 countStart[PFF_PARTICLE_NTYPES], countEnd[PFF_PARTICLE_NTYPES], bubblesDeletedRun;
+  PetscReal  massStart[PFF_PARTICLE_NTYPES], massEnd[PFF_PARTICLE_NTYPES]; /* particle mass per type */
   /* volume bookkeeping per phase (index PFF_PARTICLE_LIQUID, PFF_PARTICLE_AIR), since the seed: the
      reference volumes V0 (after the seed; carried through checkpoints), the relative drift (V - V0) / V0
      of the latest row, its max |.| over the rows so far (also carried through checkpoints) and the
