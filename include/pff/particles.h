@@ -118,8 +118,8 @@ PETSC_EXTERN PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats
    state differs from the one their bins were built at. Every particle must lie in an active block.
    Collective. */
 PETSC_EXTERN PetscErrorCode PffParticlesReset(PffParticles p);
-/* Removes the particles flagged PFF_PARTICLE_FLAG_REMOVE (keeps the order of the others, rebins). Not
-   collective. */
+/* Removes the particles flagged PFF_PARTICLE_FLAG_REMOVE (keeps the order of the others; binned particles
+   stay binned, with their bins shrunk). Not collective. */
 PETSC_EXTERN PetscErrorCode PffParticlesRemove(PffParticles p);
 /* Removes every particle (the store keeps its capacity). Not collective. */
 PETSC_EXTERN PetscErrorCode PffParticlesClear(PffParticles p);

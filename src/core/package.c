@@ -5,9 +5,9 @@
 PetscClassId  PFF_CLASSID;
 PetscLogEvent PFF_GridSetUp, PFF_GridAdapt, PFF_GridRefine, PFF_GridPartition, PFF_HaloSetUp, PFF_HaloBegin,
     PFF_HaloEnd, PFF_HaloRevBegin, PFF_HaloRevEnd, PFF_GridInterp, PFF_GridLaplacian, PFF_IOWrite, PFF_IORead,
-    PFF_PartSeed, PFF_PartAdapt, PFF_PartBin, PFF_PartMigrate, PFF_P2G, PFF_G2P, PFF_Advect, PFF_PressSetUp,
-    PFF_PressAssemble, PFF_PressSolve, PFF_PhaseField, PFF_Forces, PFF_FlowExtrap, PFF_CkptWrite, PFF_CkptRead,
-    PFF_MGSetUp, PFF_MGApply, PFF_MGSmooth, PFF_MGCoarse;
+    PFF_PartSeed, PFF_PartAdapt, PFF_FlowAdaptDist, PFF_FlowAdaptMap, PFF_PartBin, PFF_PartMigrate, PFF_P2G, PFF_G2P,
+    PFF_Advect, PFF_PressSetUp, PFF_PressAssemble, PFF_PressSolve, PFF_PhaseField, PFF_Forces, PFF_FlowExtrap,
+    PFF_CkptWrite, PFF_CkptRead, PFF_MGSetUp, PFF_MGApply, PFF_MGSmooth, PFF_MGCoarse;
 
 static PetscBool PffPackageInitialized = PETSC_FALSE;
 
@@ -32,6 +32,8 @@ PetscErrorCode PffInitializePackage(void)
   PetscCall(PetscLogEventRegister("IORead", PFF_CLASSID, &PFF_IORead));
   PetscCall(PetscLogEventRegister("PartSeed", PFF_CLASSID, &PFF_PartSeed));
   PetscCall(PetscLogEventRegister("PartAdapt", PFF_CLASSID, &PFF_PartAdapt));
+  PetscCall(PetscLogEventRegister("FlowAdaptDist", PFF_CLASSID, &PFF_FlowAdaptDist));
+  PetscCall(PetscLogEventRegister("FlowAdaptMap", PFF_CLASSID, &PFF_FlowAdaptMap));
   PetscCall(PetscLogEventRegister("PartBin", PFF_CLASSID, &PFF_PartBin));
   PetscCall(PetscLogEventRegister("PartMigrate", PFF_CLASSID, &PFF_PartMigrate));
   PetscCall(PetscLogEventRegister("P2G", PFF_CLASSID, &PFF_P2G));

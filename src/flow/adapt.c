@@ -72,6 +72,78 @@ static inline PetscInt LatticeNeighbour(const PffFlowAdaptCtx *a, const PetscInt
   return q[0] + a->C[0] * (q[1] + a->C[1] * q[2]);
 }
 
+/* d at grid position g (finest cells, inside the domain), trilinear between lattice cell centres,
+   wrapped on periodic axes and constant beyond the outer centres on walled ones. */
+static inline float DistanceAt(const PffFlowAdaptCtx *a, const float g[3])
+{
+  PetscInt i0[3], i1[3];
+  float    t[3];
+  for (int d = 0; d < 3; d++) {
+    const PetscInt c = a->C[d];
+    const float    u = g[d] * a->is - 0.5f;
+    const PetscInt b = (PetscInt)(u + 1.0f) - 1; /* floor for u >= -1 */
+    t[d]             = u - (float)b;
+    i0[d]            = b;
+    i1[d]            = b + 1;
+    if (b < 0) i0[d] = a->periodic[d] ? c - 1 : 0;
+    if (b + 1 >= c) i1[d] = a->periodic[d] ? 0 : c - 1;
+  }
+  const PetscInt sy = a->C[0], sz = a->C[0] * a->C[1];
+  const float   *D  = a->dist;
+  const float    x0 = D[i0[0] + sy * i0[1] + sz * i0[2]] * (1 - t[0]) + D[i1[0] + sy * i0[1] + sz * i0[2]] * t[0];
+  const float    x1 = D[i0[0] + sy * i1[1] + sz * i0[2]] * (1 - t[0]) + D[i1[0] + sy * i1[1] + sz * i0[2]] * t[0];
+  const float    x2 = D[i0[0] + sy * i0[1] + sz * i1[2]] * (1 - t[0]) + D[i1[0] + sy * i0[1] + sz * i1[2]] * t[0];
+  const float    x3 = D[i0[0] + sy * i1[1] + sz * i1[2]] * (1 - t[0]) + D[i1[0] + sy * i1[1] + sz * i1[2]] * t[0];
+  return (x0 * (1 - t[1]) + x1 * t[1]) * (1 - t[2]) + (x2 * (1 - t[1]) + x3 * t[1]) * t[2];
+}
+
+/* Cells of the dual lattice: the boxes between 2 x 2 x 2 lattice cell centres, indexed by their lower
+   centre b in [-1, C - 1] per axis (b = -1 and C - 1 are the half cells beside a wall, or the wrap). */
+static inline PetscInt DualIndex(const PffFlowAdaptCtx *a, const PetscInt b[3])
+{
+  return (b[0] + 1) + (a->C[0] + 1) * ((b[1] + 1) + (a->C[1] + 1) * (b[2] + 1));
+}
+
+static inline PetscInt LevelOf(const PffFlowAdaptCtx *a, float d)
+{
+  const float l = (float)(a->band / (PetscReal)a->n0) * d; /* >= 0: the cast floors */
+  return l >= (float)(a->levels - 1) ? a->levels - 1 : (PetscInt)l;
+}
+
+/* The level of every dual cell whose 8 corners ask for one level (then so does every point inside:
+   the interpolant lies between the corners' values, and the level is monotone in d), or 0xff. Most
+   particles then need one byte instead of 8 lattice values. */
+static void LevelLattice(PffFlowAdaptCtx *a)
+{
+  for (PetscInt bz = -1; bz < a->C[2]; bz++)
+    for (PetscInt by = -1; by < a->C[1]; by++)
+      for (PetscInt bx = -1; bx < a->C[0]; bx++) {
+        const PetscInt b[3] = {bx, by, bz};
+        PetscInt       lo = PETSC_MAX_INT, hi = -1;
+        for (PetscInt q = 0; q < 8; q++) {
+          PetscInt c[3];
+          for (int d = 0; d < 3; d++) {
+            c[d] = b[d] + ((q >> d) & 1);
+            if (c[d] < 0) c[d] = a->periodic[d] ? a->C[d] - 1 : 0;
+            if (c[d] >= a->C[d]) c[d] = a->periodic[d] ? 0 : a->C[d] - 1;
+          }
+          const PetscInt l = LevelOf(a, a->dist[c[0] + a->C[0] * (c[1] + a->C[1] * c[2])]);
+          lo               = PetscMin(lo, l);
+          hi               = PetscMax(hi, l);
+        }
+        a->lev[DualIndex(a, b)] = (uint8_t)(lo == hi ? lo : 0xff);
+      }
+}
+
+/* The level particle position g asks for (step 6). */
+static inline PetscInt LevelAt(const PffFlowAdaptCtx *a, const float g[3])
+{
+  PetscInt b[3];
+  for (int d = 0; d < 3; d++) b[d] = (PetscInt)(g[d] * a->is + 0.5f) - 1; /* floor(g / s - 1/2) for g >= 0 */
+  const uint8_t l = a->lev[DualIndex(a, b)];
+  return l != 0xff ? (PetscInt)l : LevelOf(a, DistanceAt(a, g));
+}
+
 /* Step 5: the distance to the thresholded interface in finest cells, a->dist. */
 static PetscErrorCode Distance(PffFlow f)
 {
@@ -81,6 +153,7 @@ static PetscErrorCode Distance(PffFlow f)
   const float      big = 1e30f;
 
   PetscFunctionBeginUser;
+  PetscCall(PetscLogEventBegin(PFF_FlowAdaptDist, 0, 0, 0, 0));
   PetscCall(CoarsePhase(f, phi));
   for (PetscInt k = 0, c = 0; k < a->C[2]; k++)
     for (PetscInt j = 0; j < a->C[1]; j++)
@@ -117,83 +190,22 @@ static PetscErrorCode Distance(PffFlow f)
     }
   }
   for (PetscInt c = 0; c < ntot; c++) d[c] *= (float)a->s;
+  LevelLattice(a);
+  PetscCall(PetscLogEventEnd(PFF_FlowAdaptDist, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* d at grid position g (finest cells), trilinear between lattice cell centres, clamped at walls. */
-static inline float DistanceAt(const PffFlowAdaptCtx *a, const float g[3])
-{
-  PetscInt i0[3], i1[3];
-  float    t[3];
-  for (int d = 0; d < 3; d++) {
-    const float u = g[d] / (float)a->s - 0.5f;
-    PetscInt    b = (PetscInt)PetscFloorReal(u);
-    t[d]          = u - (float)b;
-    i0[d]         = b;
-    i1[d]         = b + 1;
-    if (a->periodic[d]) {
-      i0[d] = (i0[d] + a->C[d]) % a->C[d];
-      i1[d] = i1[d] % a->C[d];
-    } else {
-      if (i0[d] < 0) {
-        i0[d] = 0;
-        t[d]  = 0;
-      }
-      if (i1[d] > a->C[d] - 1) {
-        i1[d] = a->C[d] - 1;
-        t[d]  = i0[d] == i1[d] ? 0 : t[d];
-      }
-    }
-  }
-  float v = 0;
-  for (PetscInt q = 0; q < 8; q++) {
-    float    w   = 1;
-    PetscInt idx = 0, st = 1;
-    for (int d = 0; d < 3; d++) {
-      const PetscInt bit = (q >> d) & 1;
-      w *= bit ? t[d] : 1 - t[d];
-      idx += (bit ? i1[d] : i0[d]) * st;
-      st *= a->C[d];
-    }
-    v += w * a->dist[idx];
-  }
-  return v;
-}
-
-/* Step 6's criterion per local particle. */
-static PetscErrorCode Targets(PffFlow f, int8_t **target)
+/* Steps 6 and 1 in one pass over the binned particles: the level each particle asks for,
+   l = min(L - 1, floor(beta d / n0)), into a->target, and per block the finest level asked by the
+   particles whose box x_p +- (2^l + margin) touches it, merged over ranks into map; blocks no particle
+   touches take L - 1, blocks inactive at set-up stay inactive. */
+static PetscErrorCode TargetsAndMap(PffFlow f, PetscInt map[])
 {
   PffFlowAdaptCtx  *a = &f->adapt;
   PffParticleArrays pa;
-
-  PetscFunctionBeginUser;
-  PetscCall(PffParticlesGetArrays(f->part, &pa));
-  if ((size_t)pa.n + 1 > a->ntarget) {
-    PetscCall(PetscFree(a->target));
-    a->ntarget = (size_t)pa.n + (size_t)pa.n / 4 + 1;
-    PetscCall(PetscMalloc1(a->ntarget, &a->target));
-  }
-  const float scale = (float)(a->band / (PetscReal)a->n0);
-  const int   lmax  = (int)(a->levels - 1);
-  int8_t     *t     = a->target;
-#pragma omp parallel for schedule(static)
-  for (PetscInt i = 0; i < pa.n; i++) {
-    const float l = PetscFloorReal(scale * DistanceAt(a, &pa.x[3 * i]));
-    t[i]          = (int8_t)(l >= (float)lmax ? lmax : (int)l);
-  }
-  *target = t;
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-/* Step 1: per block the finest level of the particles whose box touches it (their own levels, or
-   level[] per particle), merged over ranks; blocks inactive at set-up stay so. */
-static PetscErrorCode MapFromParticles(PffFlow f, const int8_t level[], PetscInt map[])
-{
-  PffFlowAdaptCtx  *a = &f->adapt;
-  PffParticleArrays pa;
-  PetscInt          nlocal, nb[3], nblocks;
-  PetscInt         *reach;
+  PetscInt          nlocal, nb[3], nblocks, *reach;
   const PetscInt    lmax = a->levels - 1, none = PETSC_MAX_INT;
+  PetscBool         ok = PETSC_TRUE;
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetRaster(f->grid, nb, NULL, NULL));
@@ -201,8 +213,14 @@ static PetscErrorCode MapFromParticles(PffFlow f, const int8_t level[], PetscInt
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
   PetscCall(PffParticlesGetArrays(f->part, &pa));
   PetscCheck(pa.start, PETSC_COMM_SELF, PETSC_ERR_ORDER, "adapt: the particles must be binned");
+  if ((size_t)pa.n + 1 > a->ntarget) {
+    PetscCall(PetscFree(a->target));
+    a->ntarget = (size_t)pa.n + (size_t)pa.n / 4 + 1;
+    PetscCall(PetscMalloc1(a->ntarget, &a->target));
+  }
   PetscCall(PetscMalloc1(27 * (size_t)PetscMax(nlocal, 1), &reach));
-  PetscBool ok = PETSC_TRUE;
+  const float n0f    = (float)a->n0;
+  int8_t     *target = a->target;
 #pragma omp parallel for schedule(dynamic, 1) reduction(&& : ok)
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo info;
@@ -212,22 +230,39 @@ static PetscErrorCode MapFromParticles(PffFlow f, const int8_t level[], PetscInt
       ok = PETSC_FALSE;
       continue;
     }
-    const float lo[3] = {(float)(info.ijk[0] * a->n0), (float)(info.ijk[1] * a->n0), (float)(info.ijk[2] * a->n0)};
-    for (PetscInt i = pa.start[lb]; i < pa.start[lb + 1]; i++) {
-      const PetscInt l  = level ? (PetscInt)level[i] : PffParticleWordLevel(pa.word[i]);
-      const float    rp = (float)((PetscInt)1 << l) + (float)a->margin;
-      PetscInt       rlo[3], rhi[3];
+    const float lo[3] = {(float)info.ijk[0] * n0f, (float)info.ijk[1] * n0f, (float)info.ijk[2] * n0f};
+    /* per level the bounding box of the block's particles that ask for it; a level's boxes reach a
+       neighbour region when that box, grown by the radius, does. This marks a corner or edge region also
+       when two particles reach its two faces but none reaches it, which refines at most a few more blocks
+       than the per-particle boxes (conservative) for a single pass of min/max per particle. */
+    float                 mn[PFF_GRID_MAX_LEVELS][3], mx[PFF_GRID_MAX_LEVELS][3];
+    const PffFlowAdaptCtx ac = *a;
+    const float *const    x  = pa.x;
+    const PetscInt        i0 = pa.start[lb], i1 = pa.start[lb + 1];
+    for (PetscInt l = 0; l <= lmax; l++)
       for (int d = 0; d < 3; d++) {
-        const float x = pa.x[3 * i + d] - lo[d];
-        rlo[d]        = x - rp < 0 ? 0 : 1;
-        rhi[d]        = x + rp >= (float)a->n0 ? 2 : 1;
+        mn[l][d] = PETSC_MAX_REAL;
+        mx[l][d] = -PETSC_MAX_REAL;
+      }
+    for (PetscInt i = i0; i < i1; i++) {
+      const PetscInt l = LevelAt(&ac, &x[3 * i]);
+      target[i]        = (int8_t)l;
+      for (int d = 0; d < 3; d++) {
+        mn[l][d] = PetscMin(mn[l][d], x[3 * i + d]);
+        mx[l][d] = PetscMax(mx[l][d], x[3 * i + d]);
+      }
+    }
+    for (PetscInt l = 0; l <= lmax; l++) {
+      const float rp = (float)((PetscInt)1 << l) + (float)ac.margin;
+      PetscInt    rlo[3], rhi[3];
+      if (mn[l][0] > mx[l][0]) continue; /* no particle asks for l */
+      for (int d = 0; d < 3; d++) {
+        rlo[d] = mn[l][d] - lo[d] - rp < 0 ? 0 : 1;
+        rhi[d] = mx[l][d] - lo[d] + rp >= n0f ? 2 : 1;
       }
       for (PetscInt z = rlo[2]; z <= rhi[2]; z++)
         for (PetscInt y = rlo[1]; y <= rhi[1]; y++)
-          for (PetscInt x = rlo[0]; x <= rhi[0]; x++) {
-            const PetscInt q = x + 3 * (y + 3 * z);
-            if (l < r[q]) r[q] = l;
-          }
+          for (PetscInt q = rlo[0]; q <= rhi[0]; q++) r[q + 3 * (y + 3 * z)] = PetscMin(r[q + 3 * (y + 3 * z)], l);
     }
   }
   PetscCheck(ok, PETSC_COMM_SELF, PETSC_ERR_PLIB, "adapt: bad local block");
@@ -288,11 +323,13 @@ PetscErrorCode PffFlowAdaptSetUp_Private(PffFlow f)
              a->levels, nlevels);
   PetscCall(PffGridGetRaster(f->grid, nb, &level, NULL));
   PetscCall(PffGridGetCells(f->grid, cells));
-  a->s = (PetscInt)1 << (a->levels - 1);
-  a->m = a->n0 / a->s;
+  a->s  = (PetscInt)1 << (a->levels - 1);
+  a->is = 1.0f / (float)a->s;
+  a->m  = a->n0 / a->s;
   for (int d = 0; d < 3; d++) a->C[d] = nb[d] * a->m;
   const PetscInt nblocks = nb[0] * nb[1] * nb[2], ntot = a->C[0] * a->C[1] * a->C[2];
   PetscCall(PetscMalloc4(nblocks, &a->base, nblocks, &a->request, ntot, &a->dist, ntot, &a->work));
+  PetscCall(PetscMalloc1((a->C[0] + 1) * (a->C[1] + 1) * (a->C[2] + 1), &a->lev));
   for (PetscInt b = 0; b < nblocks; b++) {
     a->base[b]    = level[b] < 0 ? -1 : 0;
     a->request[b] = level[b];
@@ -307,6 +344,7 @@ PetscErrorCode PffFlowAdaptDestroy_Private(PffFlow f)
   PetscFunctionBeginUser;
   PetscCall(PetscFree4(a->base, a->request, a->dist, a->work));
   PetscCall(PetscFree(a->target));
+  PetscCall(PetscFree(a->lev));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -314,14 +352,15 @@ PetscErrorCode PffFlowAdaptDestroy_Private(PffFlow f)
    particle never stays coarser than its block (P2G splats with the block's radius, which would leave a
    coarse particle's mass in too few faces), and a coarsening never outruns the grid, which would split
    the particle again at the next adaptation. */
-static PetscErrorCode GradedTargets(PffFlow f, int8_t target[], PetscInt map[])
+static PetscErrorCode GradedTargets(PffFlow f, PetscInt map[])
 {
   PffFlowAdaptCtx  *a = &f->adapt;
   PffParticleArrays pa;
   PetscInt          nlocal, nb[3];
 
   PetscFunctionBeginUser;
-  PetscCall(MapFromParticles(f, target, map));
+  PetscCall(PetscLogEventBegin(PFF_FlowAdaptMap, 0, 0, 0, 0));
+  PetscCall(TargetsAndMap(f, map));
   PetscCall(PffGridGetRaster(f->grid, nb, NULL, NULL));
   PetscCall(PffGradeLevels(nb, a->periodic, map));
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
@@ -330,15 +369,15 @@ static PetscErrorCode GradedTargets(PffFlow f, int8_t target[], PetscInt map[])
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
     const int8_t cap = (int8_t)map[info.gid];
-    for (PetscInt i = pa.start[lb]; i < pa.start[lb + 1]; i++) target[i] = PetscMin(target[i], cap);
+    for (PetscInt i = pa.start[lb]; i < pa.start[lb + 1]; i++) a->target[i] = PetscMin(a->target[i], cap);
   }
+  PetscCall(PetscLogEventEnd(PFF_FlowAdaptMap, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 PetscErrorCode PffFlowAdapt_Private(PffFlow f, PffFlowAdaptStats *st)
 {
   PffFlowAdaptCtx *a = &f->adapt;
-  int8_t          *target;
   PetscInt        *map, nb[3];
 
   PetscFunctionBeginUser;
@@ -346,9 +385,8 @@ PetscErrorCode PffFlowAdapt_Private(PffFlow f, PffFlowAdaptStats *st)
   PetscCall(PffGridGetRaster(f->grid, nb, NULL, NULL));
   PetscCall(PetscMalloc1(nb[0] * nb[1] * nb[2], &map));
   PetscCall(Distance(f));
-  PetscCall(Targets(f, &target));
-  PetscCall(GradedTargets(f, target, map));
-  PetscCall(PffParticlesAdaptLevels(f->part, target, a->delay, (uint64_t)f->step + 1, &st->particles));
+  PetscCall(GradedTargets(f, map));
+  PetscCall(PffParticlesAdaptLevels(f->part, a->target, a->delay, (uint64_t)f->step + 1, &st->particles));
   PetscCall(AdaptGrid(f, map, st));
   PetscCall(PetscFree(map));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -364,12 +402,10 @@ PetscErrorCode PffFlowAdaptSeed_Private(PffFlow f, PffSeedFn fn, void *ctx)
   PetscCall(PetscMalloc1(nb[0] * nb[1] * nb[2], &map));
   /* the last round keeps its particles even if their map differs: the first step adapts to it */
   for (it = 0;; it++) {
-    int8_t *target;
     PetscCall(PffParticlesSeed(f->part, fn, ctx));
     PetscCall(PffFlowUpdateFields(f, PETSC_FALSE));
     PetscCall(Distance(f));
-    PetscCall(Targets(f, &target));
-    PetscCall(GradedTargets(f, target, map));
+    PetscCall(GradedTargets(f, map));
     if (it == a->levels || SameMap(a, nb[0] * nb[1] * nb[2], map)) break;
     PetscCall(PffParticlesClear(f->part));
     PetscCall(AdaptGrid(f, map, NULL));

@@ -35,45 +35,71 @@ static PetscInt SplitParticle(PffParticles p, const float g[3], uint64_t id, Pet
   return m;
 }
 
-static PetscErrorCode Volumes(PffParticles p, PetscReal vol[PFF_PARTICLE_NTYPES])
-{
-  PetscFunctionBeginUser;
-  PetscCall(PffParticlesGetTotals(p, NULL, NULL, vol));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
 PetscErrorCode PffParticlesAdaptLevels(PffParticles p, const int8_t target[], PetscInt delay, uint64_t key,
                                        PffParticleAdaptStats *stats)
 {
   PffParticleAdaptStats st = {0};
   const PetscInt        n = p->n, lmax = p->nlevels - 1;
-  PetscInt64            extra = 0;
   const uint32_t        rm    = PffParticleWordSetFlags(0, PFF_PARTICLE_FLAG_REMOVE, PETSC_TRUE);
-  float                *cx;
-  uint64_t             *cid;
+  PetscInt64            extra = 0, nsplit = 0, marked = 0, removed = 0;
+  PetscReal             vl0 = 0, va0 = 0, dl = 0, da = 0; /* volumes before, and their changes, per type */
 
   PetscFunctionBeginUser;
   PetscCheck(delay >= 1 && delay <= 15, p->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "PffParticlesAdaptLevels: the coarsening delay %" PetscInt_FMT " must be in [1, 15]", delay);
   PetscCall(PetscLogEventBegin(PFF_PartAdapt, 0, 0, 0, 0));
-  PetscCall(Volumes(p, st.volumeBefore));
-  /* room for the children first: the store may move */
-#pragma omp parallel for reduction(+ : extra) schedule(static)
+  /* counters and coarsening in threads (each particle on its own); splits only counted here */
+#pragma omp parallel for reduction(+ : extra, nsplit, marked, removed, vl0, va0, dl, da) schedule(static)
   for (PetscInt i = 0; i < n; i++) {
-    const PetscInt l = PffParticleWordLevel(p->s.word[i]), t = PetscClipInterval((PetscInt)target[i], 0, lmax);
-    if (t < l) extra += ((PetscInt64)1 << (3 * (l - t))) - 1;
+    const uint32_t  w = p->s.word[i];
+    const PetscInt  l = PffParticleWordLevel(w), t = PetscClipInterval((PetscInt)target[i], 0, lmax);
+    const PetscBool liquid = (PetscBool)(PffParticleWordType(w) == PFF_PARTICLE_LIQUID);
+    const PetscReal vol    = (PetscReal)((PetscInt64)1 << (3 * l));
+    PetscReal       dv     = 0;
+    if (liquid)
+      vl0 += vol;
+    else
+      va0 += vol;
+    if (t < l) {
+      extra += ((PetscInt64)1 << (3 * (l - t))) - 1;
+      nsplit++;
+    } else if (t > l) {
+      const PetscInt d = PffParticleWordCoarsen(w) + 1;
+      if (d < delay)
+        p->s.word[i] = PffParticleWordSetLevel(w, l, d);
+      else {
+        marked++;
+        if (PffRandom01_Private(p->seed, p->s.id[i], PFF_RNG_COARSEN, key) >=
+            1.0 / (PetscReal)((PetscInt64)1 << (3 * (t - l)))) {
+          p->s.word[i] = w | rm;
+          removed++;
+          dv = -vol;
+        } else {
+          p->s.word[i] = PffParticleWordSetLevel(w, t, 0);
+          dv           = (PetscReal)((PetscInt64)1 << (3 * t)) - vol;
+        }
+      }
+    } else if (PffParticleWordCoarsen(w))
+      p->s.word[i] = PffParticleWordSetLevel(w, l, 0);
+    if (liquid)
+      dl += dv;
+    else
+      da += dv;
   }
   PetscCheck(n + extra < PETSC_MAX_INT, PETSC_COMM_SELF, PETSC_ERR_SUP,
              "the split would give %" PetscInt64_FMT " particles on one rank", (PetscInt64)n + extra);
-  PetscCall(PffParticlesReserve_Private(p, n + (PetscInt)extra));
-  PetscCall(PetscMalloc2(3 * ((size_t)1 << (3 * lmax)), &cx, (size_t)1 << (3 * lmax), &cid));
-  PetscInt m = n;
-  for (PetscInt i = 0; i < n; i++) {
-    uint32_t       w = p->s.word[i];
-    const PetscInt l = PffParticleWordLevel(w), t = PetscClipInterval((PetscInt)target[i], 0, lmax);
-    if (t < l) {
+  if (nsplit) {
+    float    *cx;
+    uint64_t *cid;
+    PetscInt  m = n;
+    PetscCall(PffParticlesReserve_Private(p, n + (PetscInt)extra)); /* the store may move */
+    PetscCall(PetscMalloc2(3 * ((size_t)1 << (3 * lmax)), &cx, (size_t)1 << (3 * lmax), &cid));
+    for (PetscInt i = 0; i < n; i++) {
+      const uint32_t w = p->s.word[i];
+      const PetscInt l = PffParticleWordLevel(w), t = PetscClipInterval((PetscInt)target[i], 0, lmax);
+      if (t >= l) continue;
       const PetscInt nc = SplitParticle(p, &p->s.x[3 * i], p->s.id[i], l, t, cx, cid);
-      w                 = PffParticleWordSetLevel(w, t, 0);
+      const uint32_t wc = PffParticleWordSetLevel(w, t, 0);
       for (PetscInt c = 0; c < nc; c++) {
         const PetscInt j = c == 0 ? i : m++;
         for (int a = 0; a < 3; a++) {
@@ -81,32 +107,28 @@ PetscErrorCode PffParticlesAdaptLevels(PffParticles p, const int8_t target[], Pe
           p->s.v[3 * j + a] = p->s.v[3 * i + a];
         }
         p->s.id[j]   = cid[c];
-        p->s.word[j] = w;
+        p->s.word[j] = wc;
       }
-      st.split++;
-      st.children += nc;
-    } else if (t > l) {
-      const PetscInt d = PffParticleWordCoarsen(w) + 1;
-      if (d < delay)
-        p->s.word[i] = PffParticleWordSetLevel(w, l, d);
-      else {
-        const PetscReal keep = 1.0 / (PetscReal)((PetscInt64)1 << (3 * (t - l)));
-        st.marked++;
-        if (PffRandom01_Private(p->seed, p->s.id[i], PFF_RNG_COARSEN, key) >= keep) {
-          p->s.word[i] = w | rm;
-          st.removed++;
-        } else
-          p->s.word[i] = PffParticleWordSetLevel(w, t, 0);
-      }
-    } else if (PffParticleWordCoarsen(w))
-      p->s.word[i] = PffParticleWordSetLevel(w, l, 0);
+    }
+    PetscCall(PetscFree2(cx, cid));
+    p->n      = m;
+    p->binned = PETSC_FALSE;
   }
-  PetscCall(PetscFree2(cx, cid));
-  p->n      = m;
-  p->binned = PETSC_FALSE;
-  PetscCall(PffParticlesRemove(p));
-  PetscCall(PffParticlesBin(p));
-  PetscCall(Volumes(p, st.volumeAfter));
+  /* a store that only changed levels keeps its bins */
+  if (removed) PetscCall(PffParticlesRemove(p));
+  if (!p->binned) PetscCall(PffParticlesBin(p));
+  {
+    PetscReal v[4] = {vl0, va0, dl, da};
+    PetscCall(MPIU_Allreduce(MPI_IN_PLACE, v, 4, MPIU_REAL, MPI_SUM, p->comm));
+    st.volumeBefore[PFF_PARTICLE_LIQUID] = v[0];
+    st.volumeBefore[PFF_PARTICLE_AIR]    = v[1];
+    st.volumeAfter[PFF_PARTICLE_LIQUID]  = v[0] + v[2];
+    st.volumeAfter[PFF_PARTICLE_AIR]     = v[1] + v[3];
+  }
+  st.split    = nsplit;
+  st.children = nsplit + extra;
+  st.marked   = marked;
+  st.removed  = removed;
   PetscCall(MPIU_Allreduce(MPI_IN_PLACE, &st.split, 4, MPIU_INT64, MPI_SUM, p->comm));
   PetscCall(PetscLogEventEnd(PFF_PartAdapt, 0, 0, 0, 0));
   if (stats) *stats = st;

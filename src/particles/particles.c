@@ -284,19 +284,31 @@ PetscErrorCode PffParticlesClear(PffParticles p)
 
 PetscErrorCode PffParticlesRemove(PffParticles p)
 {
-  PetscInt       m   = 0;
-  PetscBool      bin = p->binned;
-  const uint32_t rm  = PffParticleWordSetFlags(0, PFF_PARTICLE_FLAG_REMOVE, PETSC_TRUE);
+  PetscInt       m  = 0;
+  const uint32_t rm = PffParticleWordSetFlags(0, PFF_PARTICLE_FLAG_REMOVE, PETSC_TRUE);
 
   PetscFunctionBeginUser;
+  if (p->binned) {
+    /* compaction keeps the order, so each bin stays contiguous: its new start is where it begins */
+    for (PetscInt lb = 0; lb < p->nlocal; lb++) {
+      const PetscInt i0 = p->start[lb], i1 = p->start[lb + 1];
+      p->start[lb] = m;
+      for (PetscInt i = i0; i < i1; i++) {
+        if (p->s.word[i] & rm) continue;
+        if (m != i) PffParticlesMove_Private(p, m, i);
+        m++;
+      }
+    }
+    p->start[p->nlocal] = m;
+    p->n                = m;
+    PetscFunctionReturn(PETSC_SUCCESS);
+  }
   for (PetscInt i = 0; i < p->n; i++) {
     if (p->s.word[i] & rm) continue;
     if (m != i) PffParticlesMove_Private(p, m, i);
     m++;
   }
-  p->n      = m;
-  p->binned = PETSC_FALSE;
-  if (bin) PetscCall(PffParticlesBin(p));
+  p->n = m;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
