@@ -33,18 +33,72 @@ static PetscErrorCode PffReferenceSeed(const PetscReal x[3], PetscInt *type, Pet
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Lattice particles per batch and rank: the reference lattice (8 particles per cell) exists a batch of
+   blocks at a time, so that a reset during a run (PffFlowReset after an adapt) does not hold a lattice
+   of the whole grid beside the particles (36 B per lattice particle, 288 B per cell). */
+#define PFF_REFERENCE_BATCH ((PetscInt64)1 << 22)
+
+/* owned values of src added to dst (face channels of one component) */
+static PetscErrorCode PffAddFaceChannel(PffGrid grid, PetscInt src, PetscInt dst)
+{
+  PetscInt nlocal;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetLocalBlocks(grid, &nlocal));
+  for (PetscInt lb = 0; lb < nlocal; lb++)
+    for (PetscInt d = 0; d < 3; d++) {
+      float   *s, *t;
+      PetscInt n3 = 0;
+      PetscCall(PffFlowGridBlockData_Private(grid, lb, d, 1, &src, &s, &n3));
+      PetscCall(PffFlowGridBlockData_Private(grid, lb, d, 1, &dst, &t, NULL));
+      for (PetscInt c = 0; c < n3; c++) t[c] += s[c];
+    }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffFlowReferenceVolume_Private(PffFlow f)
 {
   PffParticles    ref;
   const PetscReal one[PFF_PARTICLE_NTYPES] = {1, 1};
+  PetscInt        nlocal, nbatch, lb0 = 0;
+  PetscInt64      cells = 0, done = 0;
 
   PetscFunctionBeginUser;
+  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+    cells += (PetscInt64)info.n * info.n * info.n;
+  }
+  {
+    PetscInt64 nb = (8 * cells + PFF_REFERENCE_BATCH - 1) / PFF_REFERENCE_BATCH;
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nb, 1, MPIU_INT64, MPI_MAX, f->comm)); /* P2G is collective */
+    nbatch = (PetscInt)PetscMax(nb, 1);
+  }
   PetscCall(PffParticlesCreate(f->grid, &ref));
   PetscCall(PffParticlesSetJitter(ref, 0));
-  PetscCall(PffParticlesSeed(ref, PffReferenceSeed, f));
-  /* the kernel sum of Eq. 6 for the same lattice normalises Eq. 7 (phase.c); the momentum lands in a
-     working channel that every step overwrites */
-  PetscCall(PffParticlesP2G(ref, one, f->chMassRef, f->chUt, f->chVolRef));
+  for (PetscInt k = 0; k < nbatch; k++) {
+    /* blocks up to the k+1-th share of the cells */
+    PetscInt lb1 = lb0;
+    while (lb1 < nlocal && (k == nbatch - 1 || done * nbatch < cells * (k + 1))) {
+      PffBlockInfo info;
+      PetscCall(PffGridGetBlockInfo(f->grid, lb1, &info));
+      done += (PetscInt64)info.n * info.n * info.n;
+      lb1++;
+    }
+    PetscCall(PffParticlesClear(ref));
+    PetscCall(PffParticlesSeedBlocks(ref, PffReferenceSeed, f, lb0, lb1));
+    /* the kernel sum of Eq. 6 for the same lattice normalises Eq. 7 (phase.c); the momentum lands in a
+       working channel that every step overwrites, and so do the later batches' mass and volume */
+    if (k == 0)
+      PetscCall(PffParticlesP2G(ref, one, f->chMassRef, f->chUt, f->chVolRef));
+    else {
+      PetscCall(PffParticlesP2G(ref, one, f->chMass, f->chUt, f->chVol));
+      PetscCall(PffAddFaceChannel(f->grid, f->chMass, f->chMassRef));
+      if (f->chVolRef >= 0) PetscCall(PffAddFaceChannel(f->grid, f->chVol, f->chVolRef));
+    }
+    lb0 = lb1;
+  }
   PetscCall(PffParticlesDestroy(&ref));
 #if defined(__GLIBC__)
   /* glibc keeps freed heap pages resident until they are trimmed: the lattice's store and scratch (160 MB per rank in

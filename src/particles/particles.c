@@ -90,19 +90,17 @@ PetscErrorCode PffParticlesDestroy(PffParticles *part)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Grows one array set to capacity cap, keeping the first n entries. */
+/* Grows one array set to capacity cap, keeping the first n entries. In place, field by field: glibc's realloc
+   moves a large block by remapping its pages, so a growth does not hold the old and the new store at once (a
+   split of many particles during a run would otherwise add a whole store to the peak). */
 static PetscErrorCode PffParticleSoAGrow(PffParticleSoA *s, PetscInt n, PetscInt cap)
 {
-  PffParticleSoA t;
-
   PetscFunctionBeginUser;
+  (void)n;
 #define PFF_PARTICLE_FIELD_GROW(name, type, k)                                                                         \
-  PetscCall(PetscMalloc1((size_t)(k) * (size_t)cap, &t.name));                                                         \
-  if (n > 0) PetscCall(PetscArraycpy(t.name, s->name, (size_t)(k) * (size_t)n));
+  PetscCall(PetscRealloc(sizeof(type) * (size_t)(k) * (size_t)cap, &s->name));
   PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_GROW)
 #undef PFF_PARTICLE_FIELD_GROW
-  PetscCall(PffParticleSoAFree(s));
-  *s = t;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

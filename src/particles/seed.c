@@ -10,6 +10,16 @@
 
 PetscErrorCode PffParticlesSeed(PffParticles p, PffSeedFn fn, void *ctx)
 {
+  PetscInt nlocal;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetLocalBlocks(p->grid, &nlocal));
+  PetscCall(PffParticlesSeedBlocks(p, fn, ctx, 0, nlocal));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffParticlesSeedBlocks(PffParticles p, PffSeedFn fn, void *ctx, PetscInt lb0, PetscInt lb1)
+{
   PetscInt        nlocal;
   PetscInt64      ncand = 0;
   const PetscReal n0c   = (PetscReal)p->n0 * (PetscReal)p->n0 * (PetscReal)p->n0;
@@ -20,7 +30,10 @@ PetscErrorCode PffParticlesSeed(PffParticles p, PffSeedFn fn, void *ctx)
              PETSC_ERR_ARG_OUTOFRANGE, "the raster is too large for 64-bit particle ids");
   PetscCall(PetscLogEventBegin(PFF_PartSeed, 0, 0, 0, 0));
   PetscCall(PffGridGetLocalBlocks(p->grid, &nlocal));
-  for (PetscInt lb = 0; lb < nlocal; lb++) {
+  PetscCheck(lb0 >= 0 && lb0 <= lb1 && lb1 <= nlocal, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+             "PffParticlesSeedBlocks: blocks [%" PetscInt_FMT ", %" PetscInt_FMT ") are not in [0, %" PetscInt_FMT ")",
+             lb0, lb1, nlocal);
+  for (PetscInt lb = lb0; lb < lb1; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(p->grid, lb, &info));
     ncand += 8 * (PetscInt64)info.n * info.n * info.n;
@@ -28,7 +41,7 @@ PetscErrorCode PffParticlesSeed(PffParticles p, PffSeedFn fn, void *ctx)
   /* an eighth more than the candidates: particles that migrate in later fill untouched pages, where a
      growth would hold the old and the new store at once (+36 B per particle of peak memory) */
   PetscCall(PffParticlesReserve_Private(p, p->n + (PetscInt)(ncand + ncand / 8)));
-  for (PetscInt lb = 0; lb < nlocal; lb++) {
+  for (PetscInt lb = lb0; lb < lb1; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(p->grid, lb, &info));
     const PetscInt  n     = info.n;

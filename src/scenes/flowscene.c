@@ -36,6 +36,33 @@ PetscErrorCode PffFlowSceneDomain(PffFlowScene *fs, PetscReal lo[3], PetscReal h
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* With -adapt_levels L the grid starts on its coarsest adaptive level everywhere, so that nothing (grid
+   channels, pressure, the first seed) is ever allocated at the finest level over the whole domain; the
+   adaptive seed then refines towards the interface (docs/flow.md, "Adaptivity"). This replaces any
+   static refinement of the scene. A value that is not a valid level count is left to the flow, which
+   names the key. */
+static PetscErrorCode PffFlowSceneAdaptiveStart(PffFlowScene *fs)
+{
+  char      val[64];
+  PetscBool set;
+  PetscInt  cells[3], n0, nlevels, nblocks = 1, *map;
+  char     *end;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscOptionsGetString(NULL, NULL, "-adapt_levels", val, sizeof(val), &set));
+  if (!set) PetscFunctionReturn(PETSC_SUCCESS);
+  const long al = strtol(val, &end, 10);
+  PetscCall(PffGridGetCells(fs->grid, cells));
+  PetscCall(PffGridGetSizes(fs->grid, &n0, &nlevels, NULL, NULL, NULL));
+  if (*end || end == val || al < 2 || al > nlevels) PetscFunctionReturn(PETSC_SUCCESS);
+  for (int d = 0; d < 3; d++) nblocks *= cells[d] / n0;
+  PetscCall(PetscMalloc1(nblocks, &map));
+  for (PetscInt b = 0; b < nblocks; b++) map[b] = (PetscInt)al - 1;
+  PetscCall(PffGridSetRefinementMap(fs->grid, map));
+  PetscCall(PetscFree(map));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /* Per phase (PFF_PARTICLE_LIQUID, PFF_PARTICLE_AIR): the option of its volume-drift bound and its name. */
 static const char *const PffFlowSceneDriftKeys[PFF_PARTICLE_NTYPES]  = {"-sim_max_volume_drift",
                                                                         "-sim_max_gas_volume_drift"};
@@ -103,6 +130,7 @@ static PetscErrorCode PffFlowSceneSetFromOptions(PffScene s)
   PetscCall(PffGridCreate(s->comm, &fs->grid));
   PetscCall(PffGridSetFromOptions(fs->grid));
   if (fs->ops.gridsetup) PetscCall(fs->ops.gridsetup(fs));
+  PetscCall(PffFlowSceneAdaptiveStart(fs));
   PetscCall(PffGridSetUp(fs->grid));
   PetscCall(PffFlowCreate(fs->grid, &fs->flow));
   PetscCall(PffFlowSetFromOptions(fs->flow));
