@@ -14,11 +14,13 @@ typedef struct _n_PffFlow *PffFlow;
 #define PFF_FLOW_DELTA_PHI_DEFAULT 0.2 /* -flow_delta_phi (Sec. 3.4) */
 #define PFF_FLOW_FLIP_DEFAULT 0.99     /* -flow_flip: FLIP ratio where no viscosity is given */
 #define PFF_FLOW_VOLCORR_DEFAULT 0.5   /* -flow_volume_correction: kappa, share of the volume error removed per step */
-#define PFF_FLOW_VOLCORR_MAXDISP_DEFAULT 0.5  /* -flow_volume_correction_max_displacement, in cells */
-#define PFF_FLOW_VOLCORR_RTOL_DEFAULT 1e-3    /* -flow_volume_correction_rtol of its solve */
-#define PFF_FLOW_EXTRAPOLATE_LAYERS_DEFAULT 3 /* -flow_extrapolate_layers: the paper's "a few cells" (Sec. 3.7) */
-#define PFF_FLOW_ADAPT_BAND_DEFAULT 1.0       /* -adapt_band: beta_bw of Sec. 5.4 step 6 */
-#define PFF_FLOW_ADAPT_DELAY_DEFAULT 3        /* -adapt_coarsen_delay: D_p >= 3 (Sec. 5.4) */
+#define PFF_FLOW_VOLCORR_MAXDISP_DEFAULT 0.5       /* -flow_volume_correction_max_displacement, in cells */
+#define PFF_FLOW_VOLCORR_RTOL_DEFAULT 1e-3         /* -flow_volume_correction_rtol of its solve */
+#define PFF_FLOW_EXTRAPOLATE_LAYERS_DEFAULT 3      /* -flow_extrapolate_layers: the paper's "a few cells" (Sec. 3.7) */
+#define PFF_FLOW_ADAPT_BAND_DEFAULT 1.0            /* -adapt_band: beta_bw of Sec. 5.4 step 6 */
+#define PFF_FLOW_ADAPT_DELAY_DEFAULT 3             /* -adapt_coarsen_delay: D_p >= 3 (Sec. 5.4) */
+#define PFF_FLOW_ADAPT_PARTICLE_WEIGHT_DEFAULT 0.2 /* -adapt_particle_weight: a particle's work in cells */
+#define PFF_FLOW_ADAPT_IMBALANCE_DEFAULT 1.1       /* -adapt_imbalance: re-partition above this max/mean work */
 
 /* Prescribed face velocity (e.g. the shear benchmark): component comp at x and time t. */
 typedef PetscReal (*PffVelocityFn)(const PetscReal x[3], PetscInt comp, PetscReal t, void *ctx);
@@ -27,9 +29,11 @@ typedef PetscReal (*PffVelocityFn)(const PetscReal x[3], PetscInt comp, PetscRea
 
 /* What one adaptation did (PF-FLIP Sec. 5.4, -adapt_levels). */
 typedef struct {
-  PetscBool             adapted;   /* the grid changed */
-  PffAdaptInfo          grid;      /* PffGridAdapt's counts, bytes and time (when adapted) */
-  PffParticleAdaptStats particles; /* splits and coarsening */
+  PetscBool             adapted;                    /* the grid changed */
+  PetscBool             repartitioned;              /* the grid was re-partitioned only, for load balance */
+  PetscReal             imbalanceBefore, imbalance; /* max/mean work (cells + weighted particles) before and after */
+  PffAdaptInfo          grid;                       /* PffGridAdapt's counts, bytes and time (when adapted) */
+  PffParticleAdaptStats particles;                  /* splits and coarsening */
 } PffFlowAdaptStats;
 
 /* What one step did; the scene prints it in the progress line. */
@@ -85,6 +89,10 @@ PETSC_EXTERN PetscErrorCode PffFlowSetTime(PffFlow flow, PetscReal t, PetscInt s
 PETSC_EXTERN PetscErrorCode PffFlowGetParticles(PffFlow flow, PffParticles *p);
 /* The levels of dynamic adaptivity (-adapt_levels; 0: off). Not collective. */
 PETSC_EXTERN PetscErrorCode PffFlowGetAdaptLevels(PffFlow flow, PetscInt *levels);
+/* With -adapt_levels: the grid follows level[] (every raster block; a checkpoint's map, PffIOReadLevels) as
+   the flow's own adaptation would make it, so that a restart continues on the grid of the run it
+   continues. Collective. */
+PETSC_EXTERN PetscErrorCode PffFlowAdaptSetMap(PffFlow flow, const PetscInt level[]);
 PETSC_EXTERN PetscErrorCode PffFlowGetGrid(PffFlow flow, PffGrid *grid);
 PETSC_EXTERN PetscErrorCode PffFlowGetDensities(PffFlow flow, PetscReal rho[PFF_PARTICLE_NTYPES]);
 /* Whether escaped gas particles are deleted (-flow_delete_bubbles); without deletion the

@@ -185,6 +185,11 @@ PETSC_EXTERN PetscErrorCode PffGridGetMortonOrder(PffGrid grid, PetscInt *nactiv
 /* Local index of global block gid, or -1 when another rank owns it. */
 PETSC_EXTERN PetscErrorCode PffGridGetLocalIndex(PffGrid grid, PetscInt gid, PetscInt *lb);
 PETSC_EXTERN PetscErrorCode PffGridGetPartitionQuality(PffGrid grid, PffPartitionQuality *q);
+/* Extra work per raster block (e.g. its particles in cell-equivalents), added to the cells at its level in
+   the partition weights of the next partition (PffGridAdapt, also with a NULL map) and in the imbalance
+   of PffGridGetPartitionQuality, which it updates at once. NULL: cells only. Not collective, but every
+   rank must pass the same values. */
+PETSC_EXTERN PetscErrorCode PffGridSetBlockWork(PffGrid grid, const PetscInt64 extra[]);
 /* Global number of active cells at each level and in total (collective-free: from the raster). */
 PETSC_EXTERN PetscErrorCode PffGridGetCellCounts(PffGrid grid, PetscInt64 perLevel[PFF_GRID_MAX_LEVELS],
                                                  PetscInt64 *total);

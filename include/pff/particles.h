@@ -37,6 +37,11 @@ static inline PetscInt PffParticleWordCoarsen(uint32_t w)
 {
   return (PetscInt)(w >> 28);
 }
+/* The flags byte of the files: the flags in bits 0-3, D_p in bits 4-7 (docs/file-format.md). */
+static inline uint8_t PffParticleFlagsByte(uint32_t w)
+{
+  return (uint8_t)((PffParticleWordFlags(w) & 0xfu) | (uint32_t)(w >> 28) << 4);
+}
 /* w with level l and the deferred-coarsening counter c (saturated at 15) */
 static inline uint32_t PffParticleWordSetLevel(uint32_t w, PetscInt l, PetscInt c)
 {
@@ -198,8 +203,8 @@ PETSC_EXTERN PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const Pets
 
 /* Appends m particles anywhere in the domain, ids chosen by the caller, from world positions (rounded to
    the store's float grid units; a position the store wrote comes back exactly) and velocities; flags
-   may be NULL. Call PffParticlesMigrate next to send them to their owners and bin them. For restart and
-   tests. Not collective. */
+   (the files' byte, PffParticleFlagsByte: flags in bits 0-3, D_p in bits 4-7) may be NULL. Call PffParticlesMigrate
+   next to send them to their owners and bin them. For restart and tests. Not collective. */
 PETSC_EXTERN PetscErrorCode PffParticlesAdd(PffParticles p, PetscInt m, const PetscReal x[], const PetscReal v[],
                                             const uint64_t id[], const uint8_t type[], const int8_t level[],
                                             const uint8_t flags[]);

@@ -330,6 +330,7 @@ PetscErrorCode PffFlowAdaptSetUp_Private(PffFlow f)
   const PetscInt nblocks = nb[0] * nb[1] * nb[2], ntot = a->C[0] * a->C[1] * a->C[2];
   PetscCall(PetscMalloc4(nblocks, &a->base, nblocks, &a->request, ntot, &a->dist, ntot, &a->work));
   PetscCall(PetscMalloc1((a->C[0] + 1) * (a->C[1] + 1) * (a->C[2] + 1), &a->lev));
+  PetscCall(PetscMalloc1(nblocks, &a->pwork));
   for (PetscInt b = 0; b < nblocks; b++) {
     a->base[b]    = level[b] < 0 ? -1 : 0;
     a->request[b] = level[b];
@@ -345,6 +346,7 @@ PetscErrorCode PffFlowAdaptDestroy_Private(PffFlow f)
   PetscCall(PetscFree4(a->base, a->request, a->dist, a->work));
   PetscCall(PetscFree(a->target));
   PetscCall(PetscFree(a->lev));
+  PetscCall(PetscFree(a->pwork));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -375,6 +377,39 @@ static PetscErrorCode GradedTargets(PffFlow f, PetscInt map[])
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Partition weights: each block's particles in cell-equivalents (-adapt_particle_weight), summed over
+   ranks into the replicated raster (PffGridSetBlockWork). */
+static PetscErrorCode BlockWork(PffFlow f)
+{
+  PffFlowAdaptCtx  *a = &f->adapt;
+  PffParticleArrays pa;
+  PetscInt          nlocal, nb[3];
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetRaster(f->grid, nb, NULL, NULL));
+  const PetscInt nblocks = nb[0] * nb[1] * nb[2];
+  PetscCall(PetscArrayzero(a->pwork, nblocks));
+  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  PetscCall(PffParticlesGetArrays(f->part, &pa));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+    a->pwork[info.gid] = pa.start[lb + 1] - pa.start[lb];
+  }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, a->pwork, (PetscMPIInt)nblocks, MPIU_INT64, MPI_SUM, f->comm));
+  for (PetscInt b = 0; b < nblocks; b++) a->pwork[b] = (PetscInt64)(a->pweight * (PetscReal)a->pwork[b] + 0.5);
+  PetscCall(PffGridSetBlockWork(f->grid, a->pwork));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowAdaptSetMap(PffFlow f, const PetscInt level[])
+{
+  PetscFunctionBeginUser;
+  PetscCheck(f->adapt.levels > 0, f->comm, PETSC_ERR_ARG_WRONGSTATE, "PffFlowAdaptSetMap needs -adapt_levels");
+  PetscCall(AdaptGrid(f, level, NULL));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffFlowAdapt_Private(PffFlow f, PffFlowAdaptStats *st)
 {
   PffFlowAdaptCtx *a = &f->adapt;
@@ -387,7 +422,22 @@ PetscErrorCode PffFlowAdapt_Private(PffFlow f, PffFlowAdaptStats *st)
   PetscCall(Distance(f));
   PetscCall(GradedTargets(f, map));
   PetscCall(PffParticlesAdaptLevels(f->part, a->target, a->delay, (uint64_t)f->step + 1, &st->particles));
-  PetscCall(AdaptGrid(f, map, st));
+  /* the new map is partitioned with this step's particle counts; an unchanged one is re-partitioned only
+     when the work has become unbalanced */
+  {
+    PffPartitionQuality q;
+    PetscCall(BlockWork(f));
+    PetscCall(PffGridGetPartitionQuality(f->grid, &q));
+    st->imbalanceBefore = q.imbalance;
+    PetscCall(AdaptGrid(f, map, st));
+    if (!st->adapted && q.imbalance > a->imbalance) {
+      PetscCall(PffGridAdapt(f->grid, NULL));
+      PetscCall(PffGridGetAdaptInfo(f->grid, &st->grid));
+      st->repartitioned = PETSC_TRUE;
+    }
+    PetscCall(PffGridGetPartitionQuality(f->grid, &q));
+    st->imbalance = q.imbalance;
+  }
   PetscCall(PetscFree(map));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

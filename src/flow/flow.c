@@ -31,6 +31,8 @@ PetscErrorCode PffFlowCreate(PffGrid grid, PffFlow *flow)
   f->adapt.interval           = 1;
   f->adapt.delay              = PFF_FLOW_ADAPT_DELAY_DEFAULT;
   f->adapt.margin             = -1; /* ceil(CFL) */
+  f->adapt.pweight            = PFF_FLOW_ADAPT_PARTICLE_WEIGHT_DEFAULT;
+  f->adapt.imbalance          = PFF_FLOW_ADAPT_IMBALANCE_DEFAULT;
   f->chMass = f->chMassRef = f->chUt = f->chU = f->chPhiF = f->chBeta = f->chOpen = f->chPhi = f->chP = f->chCdiv =
       f->chVort                                                                                       = -1;
   f->chUl = f->chUlMask = f->chVol = f->chVolRef = f->chQ = f->chUa = -1;
@@ -94,6 +96,10 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
   PetscCall(PffOptionsReal("-adapt_margin",
                            "Finest cells added to each particle's radius for the block map (default: ceil(-flow_cfl))",
                            "PffFlowSetFromOptions", f->adapt.margin, &f->adapt.margin, NULL));
+  PetscCall(PffOptionsReal("-adapt_particle_weight", "Partition work of a particle, in cells (0: cells only)",
+                           "PffFlowSetFromOptions", f->adapt.pweight, &f->adapt.pweight, NULL));
+  PetscCall(PffOptionsReal("-adapt_imbalance", "Re-partition when the max/mean work per rank exceeds this",
+                           "PffFlowSetFromOptions", f->adapt.imbalance, &f->adapt.imbalance, NULL));
   PetscOptionsEnd();
   for (int t = 0; t < PFF_PARTICLE_NTYPES; t++) {
     const char *key = t == PFF_PARTICLE_LIQUID ? "liquid" : "gas";
@@ -138,6 +144,10 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
   if (f->adapt.margin < 0 && f->adapt.margin != -1)
     SETERRQ(f->comm, PETSC_ERR_ARG_OUTOFRANGE, "-adapt_margin %g is invalid: must be >= 0", (double)f->adapt.margin);
   if (f->adapt.margin == -1) f->adapt.margin = PetscCeilReal(f->cfl);
+  PetscCheck(f->adapt.pweight >= 0 && f->adapt.pweight <= 1e3, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-adapt_particle_weight %g is invalid: must be in [0, 1000]", (double)f->adapt.pweight);
+  PetscCheck(f->adapt.imbalance >= 1 && PetscIsNormalReal(f->adapt.imbalance), f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-adapt_imbalance %g is invalid: must be >= 1", (double)f->adapt.imbalance);
   PetscCall(PffParticlesSetFromOptions(f->part));
   PetscCall(PffPressureSetFromOptions(f->press));
   /* the advection stages read velocity up to about CFL cells beyond a particle's block, plus one cell

@@ -6,17 +6,19 @@
 
 /* Dynamic adaptivity (adapt.c). */
 typedef struct {
-  PetscInt  levels, interval, delay; /* -adapt_levels (0: off), -adapt_interval, -adapt_coarsen_delay */
-  PetscReal band, margin;            /* -adapt_band (beta_bw), -adapt_margin (finest cells) */
-  PetscInt  n0, s, m, C[3];          /* block size; lattice cell size s = 2^(levels-1), m per block, C per axis */
-  float     is;                      /* 1 / s */
-  PetscBool periodic[3];
-  PetscInt *base;        /* [nblocks] -1: inactive at set-up */
-  PetscInt *request;     /* [nblocks] the map the grid last followed */
-  float    *dist, *work; /* [C] distance lattice (finest cells) and the coarse phase field */
-  uint8_t  *lev;         /* [C + 1] level of each dual lattice cell, 0xff where it varies */
-  int8_t   *target;      /* per particle */
-  size_t    ntarget;
+  PetscInt    levels, interval, delay; /* -adapt_levels (0: off), -adapt_interval, -adapt_coarsen_delay */
+  PetscReal   band, margin;            /* -adapt_band (beta_bw), -adapt_margin (finest cells) */
+  PetscReal   pweight, imbalance;      /* -adapt_particle_weight, -adapt_imbalance */
+  PetscInt64 *pwork;                   /* [nblocks] particle work per block */
+  PetscInt    n0, s, m, C[3];          /* block size; lattice cell size s = 2^(levels-1), m per block, C per axis */
+  float       is;                      /* 1 / s */
+  PetscBool   periodic[3];
+  PetscInt   *base;        /* [nblocks] -1: inactive at set-up */
+  PetscInt   *request;     /* [nblocks] the map the grid last followed */
+  float      *dist, *work; /* [C] distance lattice (finest cells) and the coarse phase field */
+  uint8_t    *lev;         /* [C + 1] level of each dual lattice cell, 0xff where it varies */
+  int8_t     *target;      /* per particle */
+  size_t      ntarget;
 } PffFlowAdaptCtx;
 
 struct _n_PffFlow {

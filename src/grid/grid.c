@@ -284,6 +284,7 @@ PetscErrorCode PffGridDestroy(PffGrid *grid)
   PetscCall(PetscFree(g->lgid));
   PetscCall(PetscFree(g->loff));
   PetscCall(PetscFree(g->lholes));
+  PetscCall(PetscFree(g->xwork));
   PetscCallMPI(MPI_Comm_free(&g->comm));
   PetscCall(PetscFree(g));
   *grid = NULL;

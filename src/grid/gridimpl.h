@@ -81,6 +81,7 @@ struct _n_PffGrid {
   PetscInt64  *offset;        /* [nblocks] cell offset of the block in its owner's storage */
   PetscInt64  *rankCellStart; /* [size + 1] global number of the first cell of each rank */
   PetscInt    *local;         /* [nblocks] local index on this rank or -1 */
+  PetscInt64  *xwork;         /* [nblocks] extra partition work per block (PffGridSetBlockWork), or NULL */
 
   /* owned blocks, Morton order */
   PetscInt    nlocal;

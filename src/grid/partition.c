@@ -9,10 +9,51 @@
 #include "gridimpl.h"
 #include <metis.h>
 
-static PetscInt64 PffBlockWork(PffGrid g, PetscInt gid)
+static PetscInt64 PffBlockCells(PffGrid g, PetscInt gid)
 {
   const PetscInt64 n = g->n0 >> g->level[gid];
   return n * n * n;
+}
+
+/* Cells at the block's level, plus the extra work set by PffGridSetBlockWork (particles, say). */
+static PetscInt64 PffBlockWork(PffGrid g, PetscInt gid)
+{
+  return PffBlockCells(g, gid) + (g->xwork ? g->xwork[gid] : 0);
+}
+
+/* max over ranks of the work per rank / its mean, from the replicated raster */
+static PetscErrorCode PffGridImbalance(PffGrid g, PetscReal *imbalance)
+{
+  PetscInt64 *work, wmax = 0, wsum = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscCalloc1(g->size, &work));
+  for (PetscInt a = 0; a < g->nactive; a++) work[g->owner[g->order[a]]] += PffBlockWork(g, g->order[a]);
+  for (PetscMPIInt r = 0; r < g->size; r++) {
+    wmax = PetscMax(wmax, work[r]);
+    wsum += work[r];
+  }
+  PetscCall(PetscFree(work));
+  *imbalance = wsum > 0 ? (PetscReal)wmax * (PetscReal)g->size / (PetscReal)wsum : 1;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffGridSetBlockWork(PffGrid g, const PetscInt64 extra[])
+{
+  PetscFunctionBeginUser;
+  PetscCheck(g->setupcalled, g->comm, PETSC_ERR_ORDER, "PffGridSetBlockWork: call PffGridSetUp() first");
+  if (!extra)
+    PetscCall(PetscFree(g->xwork));
+  else {
+    if (!g->xwork) PetscCall(PetscMalloc1(g->nblocks, &g->xwork));
+    for (PetscInt b = 0; b < g->nblocks; b++) {
+      PetscCheck(extra[b] >= 0, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+                 "PffGridSetBlockWork: negative work %" PetscInt64_FMT " at block %" PetscInt_FMT, extra[b], b);
+      g->xwork[b] = extra[b];
+    }
+  }
+  PetscCall(PffGridImbalance(g, &g->quality.imbalance));
+  PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 static PetscErrorCode PffPartitionMorton(PffGrid g)
@@ -117,7 +158,7 @@ PetscErrorCode PffGridPartition_Private(PffGrid g)
   for (PetscInt a = 0; a < g->nactive; a++) {
     const PetscInt gid = g->order[a];
     g->offset[gid]     = next[g->owner[gid]];
-    next[g->owner[gid]] += PffBlockWork(g, gid);
+    next[g->owner[gid]] += PffBlockCells(g, gid);
     if (g->owner[gid] == g->rank) g->nlocal++;
   }
   g->ncells = next[g->rank];
@@ -150,18 +191,15 @@ PetscErrorCode PffGridPartition_Private(PffGrid g)
 
 PetscErrorCode PffGridComputeQuality_Private(PffGrid g)
 {
-  PetscInt64  *work;
   PffHaloPlan *plan;
   PetscInt     cut = 0;
   PetscReal    recv, rsum, rmax;
 
   PetscFunctionBeginUser;
-  PetscCall(PetscCalloc1(g->size, &work));
   for (PetscInt a = 0; a < g->nactive; a++) {
     const PetscInt gid = g->order[a];
     PetscInt       ijk[3];
     PffGridBlockIJK_Private(g, gid, ijk);
-    work[g->owner[gid]] += PffBlockWork(g, gid);
     for (int d = 0; d < 3; d++) { /* each face counted once, from its lower block */
       PetscInt dd[3]     = {0, 0, 0};
       dd[d]              = 1;
@@ -169,14 +207,8 @@ PetscErrorCode PffGridComputeQuality_Private(PffGrid g)
       if (nbr >= 0 && g->level[nbr] >= 0 && g->owner[nbr] != g->owner[gid]) cut++;
     }
   }
-  PetscInt64 wmax = 0, wsum = 0;
-  for (PetscMPIInt r = 0; r < g->size; r++) {
-    wmax = PetscMax(wmax, work[r]);
-    wsum += work[r];
-  }
-  PetscCall(PetscFree(work));
-  g->quality.imbalance = (PetscReal)wmax * (PetscReal)g->size / (PetscReal)wsum;
-  g->quality.cutFaces  = cut;
+  PetscCall(PffGridImbalance(g, &g->quality.imbalance));
+  g->quality.cutFaces = cut;
   PetscCall(PffHaloPlanGet_Private(g, PFF_CHANNEL_CELL, 1, &plan));
   recv = 4.0 * (PetscReal)plan->recvRemote;
   PetscCall(MPIU_Allreduce(&recv, &rsum, 1, MPIU_REAL, MPIU_SUM, g->comm));

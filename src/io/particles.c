@@ -108,7 +108,7 @@ PetscErrorCode PffIOWriteParticles_Private(PffParticles particles, MPI_Comm comm
         const uint32_t w = a.word[i];
         bytes[i]         = (uint8_t)(k == 0   ? (uint32_t)PffParticleWordType(w)
                                      : k == 1 ? (uint32_t)PffParticleWordLevel(w)
-                                              : PffParticleWordFlags(w));
+                                              : PffParticleFlagsByte(w));
       }
       PetscCall(PffIOWriteRows(group, names[k], ftypes[k], H5T_NATIVE_UINT8, (hsize_t)total, 0, (hsize_t)start,
                                (hsize_t)n, dxpl, bytes));

@@ -264,8 +264,10 @@ PetscErrorCode PffParticlesAdd(PffParticles p, PetscInt m, const PetscReal x[], 
       p->s.x[3 * j + d] = (float)((x[3 * i + d] - p->origin[d]) / p->h0);
       p->s.v[3 * j + d] = (float)v[3 * i + d];
     }
-    p->s.id[j]   = id[i];
-    p->s.word[j] = PffParticleWord(type[i], level[i], flags ? flags[i] : 0);
+    p->s.id[j] = id[i];
+    /* the flags byte of the files holds D_p in its upper half (PffParticleFlagsByte) */
+    const uint8_t fl = flags ? flags[i] : 0;
+    p->s.word[j]     = PffParticleWordSetLevel(PffParticleWord(type[i], level[i], fl & 0xfu), level[i], fl >> 4);
   }
   p->n += m;
   p->binned = PETSC_FALSE;

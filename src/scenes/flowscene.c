@@ -324,6 +324,19 @@ static PetscErrorCode PffFlowSceneStart(PffFlowScene *fs)
   PetscCall(PffIOGetCheckpointExtraCount(fs->grid, fs->restart, &nextra));
   /* any other count is the reader's error: the checkpoint is not one of a fluid scene */
   if (nextra != 0 && nextra != PFF_FLOW_SCENE_NEXTRA_LEGACY) nextra = PFF_FLOW_SCENE_NEXTRA;
+  {
+    /* an adaptive run continues on the grid the checkpoint was written on (its level map); a static one
+       must match it, which the reader checks */
+    PetscInt adapt;
+    PetscCall(PffFlowGetAdaptLevels(fs->flow, &adapt));
+    if (adapt) {
+      PetscInt nb[3], fnb[3], *level;
+      PetscCall(PffGridGetRaster(fs->grid, nb, NULL, NULL));
+      PetscCall(PffIOReadLevels(fs->scene->comm, fs->restart, fnb, &level));
+      if (fnb[0] == nb[0] && fnb[1] == nb[1] && fnb[2] == nb[2]) PetscCall(PffFlowAdaptSetMap(fs->flow, level));
+      PetscCall(PetscFree(level));
+    }
+  }
   PetscCall(PffIOReadCheckpoint(fs->grid, p, fs->restart, &t, &step, nextra, extra));
   if (nextra == PFF_FLOW_SCENE_NEXTRA) {
     PetscReal rho[PFF_PARTICLE_NTYPES];
@@ -439,7 +452,7 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
   PetscCall(PetscTime(&tstart));
   while (t < tEnd * (1 - 1e-12) && (!fs->maxSteps || step < fs->maxSteps)) {
     PetscLogDouble t0, t1;
-    char           extra[256];
+    char           extra[512];
     PetscCall(PetscTime(&t0));
     PetscCall(PffFlowStep(fs->flow, PetscMin(nextOut, tEnd) - t, &st));
     PetscCall(PetscTime(&t1));
@@ -453,6 +466,14 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
                             " %.1e  bubbles %" PetscInt64_FMT "  droplets %" PetscInt64_FMT,
                             (double)st.dt, (double)st.cfl, st.particles, st.pressure.its, (double)st.pressure.rnorm,
                             st.bubblesDeleted, st.dropletCandidates));
+    if (st.adapt.repartitioned) {
+      const size_t len = strlen(extra);
+      PetscCall(PetscSNPrintf(extra + len, sizeof(extra) - len,
+                              "  repartition: imbalance %.3f -> %.3f, %" PetscInt_FMT
+                              " blocks and %.2f MB moved in %.3f s",
+                              (double)st.adapt.imbalanceBefore, (double)st.adapt.imbalance, st.adapt.grid.moved,
+                              (double)st.adapt.grid.bytesMoved / 1048576.0, (double)st.adapt.grid.seconds));
+    }
     if (st.adapt.particles.split || st.adapt.particles.marked || st.adapt.adapted) {
       const PffParticleAdaptStats *pa  = &st.adapt.particles;
       const size_t                 len = strlen(extra);

@@ -14,6 +14,9 @@
    - the adapt's counts match the two rasters, and the topology state rises by one per adapt;
    - a round trip B -> B one level finer -> B returns random fields to rounding (linear) or exactly
      (constant), and an adapt to NULL (re-partition only) changes no value;
+   - extra block work (PffGridSetBlockWork) enters the imbalance at once, and a re-partition with it
+     balances at least as well, owns every block once and moves values unchanged (linear field exact,
+     integral to 1e-9);
    - a map with an impossible level, or without an active block, is refused and the grid is unchanged.
 
    Sample run:  mpiexec -n 4 ./test_adapt
@@ -342,6 +345,34 @@ static PetscErrorCode RunCase(MPI_Comm comm, const Case *cs)
   PetscCall(AdaptChecked(&ctx, NULL));
   PetscCall(Snapshot(&ctx, ch.rnd, &snapR, PETSC_TRUE, 1e-6));
   PetscCall(CheckRasterMatchesSetUp(&ctx, mapB));
+
+  /* extra work on a third of the blocks: the imbalance accounts for it at once, and a re-partition with
+     it balances at least as well and moves values unchanged */
+  {
+    PffPartitionQuality q0, q1, q2;
+    PetscInt64         *extra;
+    PetscReal           r0, r1;
+    PetscCall(PffGridGetPartitionQuality(ctx.grid, &q0));
+    PetscCall(Integral(&ctx, ch.rnd, ctx.level, ctx.level, &r0));
+    PetscCall(PetscMalloc1(nblocks, &extra));
+    for (PetscInt b = 0; b < nblocks; b++) extra[b] = b % 3 == 0 && ctx.level[b] >= 0 ? 4 * N0 * N0 * N0 : 0;
+    PetscCall(PffGridSetBlockWork(ctx.grid, extra));
+    PetscCall(PetscFree(extra));
+    PetscCall(PffGridGetPartitionQuality(ctx.grid, &q1));
+    PetscCall(AdaptChecked(&ctx, NULL));
+    PetscCall(PffGridGetPartitionQuality(ctx.grid, &q2));
+    PetscCheck(q2.imbalance <= q1.imbalance + 1e-12, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+               "re-partition with block work: imbalance %g -> %g", (double)q1.imbalance, (double)q2.imbalance);
+    PetscCall(CheckOwnedOnce(&ctx));
+    PetscCall(CheckLinear(&ctx, ch.lin, 0, levelA)); /* moved, not resampled: exact (zero where A had no block) */
+    PetscCall(Integral(&ctx, ch.rnd, ctx.level, ctx.level, &r1));
+    PetscCheck(PetscAbsReal(r1 - r0) <= 1e-9 * PetscAbsReal(r0), PETSC_COMM_SELF, PETSC_ERR_PLIB,
+               "integral %.12g before the re-partition, %.12g after", (double)r0, (double)r1);
+    PetscCall(PetscPrintf(comm, "%s: imbalance %.3f, with block work %.3f, re-partitioned %.3f\n", cs->name,
+                          (double)q0.imbalance, (double)q1.imbalance, (double)q2.imbalance));
+    PetscCall(PffGridSetBlockWork(ctx.grid, NULL));
+    PetscCall(AdaptChecked(&ctx, NULL)); /* back to the partition by cells, which a fresh set-up gives */
+  }
 
   /* refused maps */
   for (PetscInt b = 0; b < nblocks; b++) bad[b] = b == nblocks / 2 ? NLEVELS : mapB[b];
