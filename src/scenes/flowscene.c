@@ -479,9 +479,9 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
       const size_t                 len = strlen(extra);
       PetscCall(PetscSNPrintf(extra + len, sizeof(extra) - len,
                               "  adapt: split %" PetscInt64_FMT " removed %" PetscInt64_FMT "/%" PetscInt64_FMT
-                              " blocks +%" PetscInt_FMT " -%" PetscInt_FMT " moved %" PetscInt_FMT,
+                              " blocks +%" PetscInt_FMT " -%" PetscInt_FMT " moved %" PetscInt_FMT " imbalance %.3f",
                               pa->split, pa->removed, pa->marked, st.adapt.grid.refined, st.adapt.grid.coarsened,
-                              st.adapt.grid.moved));
+                              st.adapt.grid.moved, (double)st.adapt.imbalance));
     }
     PetscCall(PffProgressPrint(s->comm, &prog, step, t, extra));
     if (t >= nextOut * (1 - 1e-12) || t >= tEnd * (1 - 1e-12)) {
