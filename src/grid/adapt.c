@@ -16,21 +16,23 @@ const char *const PffTransferTypes[] = {"linear", "constant", "none", "PffTransf
 
 PetscErrorCode PffGridSetChannelTransfer(PffGrid g, PetscInt ch, PffTransferType type)
 {
+  PffChannel *c;
+
   PetscFunctionBeginUser;
-  PetscCheck(ch >= 0 && ch < g->nch, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
-             "PffGridSetChannelTransfer: no channel %" PetscInt_FMT " (the grid has %" PetscInt_FMT ")", ch, g->nch);
+  PetscCall(PffGridGetChannel_Private(g, ch, &c));
   PetscCheck(type >= PFF_TRANSFER_LINEAR && type <= PFF_TRANSFER_NONE, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
              "PffGridSetChannelTransfer: unknown transfer type %d", (int)type);
-  g->ch[ch]->transfer = type;
+  c->transfer = type;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 PetscErrorCode PffGridGetChannelTransfer(PffGrid g, PetscInt ch, PffTransferType *type)
 {
+  PffChannel *c;
+
   PetscFunctionBeginUser;
-  PetscCheck(ch >= 0 && ch < g->nch, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
-             "PffGridGetChannelTransfer: no channel %" PetscInt_FMT " (the grid has %" PetscInt_FMT ")", ch, g->nch);
-  *type = g->ch[ch]->transfer;
+  PetscCall(PffGridGetChannel_Private(g, ch, &c));
+  *type = c->transfer;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
