@@ -112,9 +112,11 @@ PETSC_EXTERN PetscErrorCode PffParticlesDestroy(PffParticles *p);
    level = block level), asking fn for type and velocity. Ids come from the global cell and sub-cell
    index, jitter from a counter-based RNG keyed by (seed, id): identical on any rank count. Collective. */
 PETSC_EXTERN PetscErrorCode PffParticlesSeed(PffParticles p, PffSeedFn fn, void *ctx);
-/* The same for the local blocks [lb0, lb1) only (the same particles and ids as PffParticlesSeed gives
-   there), e.g. to splat a reference lattice a batch of blocks at a time. Not collective. */
-PETSC_EXTERN PetscErrorCode PffParticlesSeedBlocks(PffParticles p, PffSeedFn fn, void *ctx, PetscInt lb0, PetscInt lb1);
+/* The same for the local blocks lb in [lb0, lb1) with mask[lb] (mask may be NULL: all) only (the same
+   particles and ids as PffParticlesSeed gives there), e.g. to splat a reference lattice a batch of blocks
+   at a time. Bins the particles. Not collective. */
+PETSC_EXTERN PetscErrorCode PffParticlesSeedBlocks(PffParticles p, PffSeedFn fn, void *ctx, PetscInt lb0, PetscInt lb1,
+                                                   const PetscBool mask[]);
 PETSC_EXTERN PetscErrorCode PffParticlesGetArrays(PffParticles p, PffParticleArrays *a);
 /* Counting sort of the local particles by owned block (every particle must lie in an owned block). */
 PETSC_EXTERN PetscErrorCode PffParticlesBin(PffParticles p);

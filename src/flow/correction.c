@@ -38,73 +38,121 @@ static PetscErrorCode PffReferenceSeed(const PetscReal x[3], PetscInt *type, Pet
    of the whole grid beside the particles (36 B per lattice particle, 288 B per cell). */
 #define PFF_REFERENCE_BATCH ((PetscInt64)1 << 22)
 
-/* owned values of src added to dst (face channels of one component) */
-static PetscErrorCode PffAddFaceChannel(PffGrid grid, PetscInt src, PetscInt dst)
+/* owned values of src copied (add = false) or added to dst on the local blocks with mask[lb] (face channels
+   of one component) */
+static PetscErrorCode PffCopyFaceChannel(PffGrid grid, PetscInt src, PetscInt dst, const PetscBool mask[],
+                                         PetscBool add)
 {
   PetscInt nlocal;
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetLocalBlocks(grid, &nlocal));
-  for (PetscInt lb = 0; lb < nlocal; lb++)
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    if (!mask[lb]) continue;
     for (PetscInt d = 0; d < 3; d++) {
       float   *s, *t;
       PetscInt n3 = 0;
       PetscCall(PffFlowGridBlockData_Private(grid, lb, d, 1, &src, &s, &n3));
       PetscCall(PffFlowGridBlockData_Private(grid, lb, d, 1, &dst, &t, NULL));
-      for (PetscInt c = 0; c < n3; c++) t[c] += s[c];
+      if (add)
+        for (PetscInt c = 0; c < n3; c++) t[c] += s[c];
+      else
+        PetscCall(PetscArraycpy(t, s, n3));
     }
+  }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* out = in and its 26 neighbours (raster masks) */
+static void PffDilate(const PetscInt nb[3], const PetscBool periodic[3], const PetscBool in[], PetscBool out[])
+{
+  const PetscInt nblocks = nb[0] * nb[1] * nb[2];
+  for (PetscInt b = 0; b < nblocks; b++) out[b] = in[b];
+  for (PetscInt b = 0; b < nblocks; b++) {
+    if (!in[b]) continue;
+    const PetscInt ijk[3] = {b % nb[0], (b / nb[0]) % nb[1], b / (nb[0] * nb[1])};
+    for (PetscInt r = 0; r < 27; r++) {
+      PetscInt d[3];
+      PffRegionDirection(r, d);
+      const PetscInt q = PffRasterNeighbour(nb, periodic, ijk, d);
+      if (q >= 0) out[q] = PETSC_TRUE;
+    }
+  }
+}
+
+/* The reference of Eq. 6-7 and of the volume correction is the P2G of a lattice of 8 particles per cell.
+   A face's value depends on the lattice within one cell of it, so on its block's and its 26 neighbours'
+   levels, walls and solids only. After a topology change (refLevel: the raster levels it was last made for)
+   only the blocks whose level changed and their neighbours (R1) are made again, from a lattice seeded in R1
+   and its neighbours; the others kept theirs through PffGridAdapt (a copy: their level did not change).
+   Without refLevel everything is made. */
 PetscErrorCode PffFlowReferenceVolume_Private(PffFlow f)
 {
   PffParticles    ref;
   const PetscReal one[PFF_PARTICLE_NTYPES] = {1, 1};
-  PetscInt        nlocal, nbatch, lb0 = 0;
-  PetscInt64      cells = 0, done = 0;
+  const PetscInt *level;
+  PetscInt        nlocal, nbatch, nb[3], nblocks, lb0 = 0;
+  PetscInt64      cells = 0, done = 0, nchanged = 0;
+  PetscBool       periodic[3], *seed, *keep, *changed, *r1, *s2;
 
   PetscFunctionBeginUser;
+  PetscCall(PffGridGetRaster(f->grid, nb, &level, NULL));
+  PetscCall(PffGridGetSizes(f->grid, NULL, NULL, NULL, NULL, periodic));
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  nblocks = nb[0] * nb[1] * nb[2];
+  PetscCall(PetscMalloc5(nblocks, &changed, nblocks, &r1, nblocks, &s2, PetscMax(nlocal, 1), &seed, PetscMax(nlocal, 1),
+                         &keep));
+  for (PetscInt b = 0; b < nblocks; b++) {
+    changed[b] = (PetscBool)(!f->refLevel || f->refLevel[b] != level[b]);
+    nchanged += changed[b];
+  }
+  PffDilate(nb, periodic, changed, r1);
+  PffDilate(nb, periodic, r1, s2);
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
-    cells += (PetscInt64)info.n * info.n * info.n;
+    keep[lb] = r1[info.gid];
+    seed[lb] = s2[info.gid];
+    if (seed[lb]) cells += (PetscInt64)info.n * info.n * info.n;
   }
-  {
-    PetscInt64 nb = (8 * cells + PFF_REFERENCE_BATCH - 1) / PFF_REFERENCE_BATCH;
-    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nb, 1, MPIU_INT64, MPI_MAX, f->comm)); /* P2G is collective */
-    nbatch = (PetscInt)PetscMax(nb, 1);
-  }
-  PetscCall(PffParticlesCreate(f->grid, &ref));
-  PetscCall(PffParticlesSetJitter(ref, 0));
-  for (PetscInt k = 0; k < nbatch; k++) {
-    /* blocks up to the k+1-th share of the cells */
-    PetscInt lb1 = lb0;
-    while (lb1 < nlocal && (k == nbatch - 1 || done * nbatch < cells * (k + 1))) {
-      PffBlockInfo info;
-      PetscCall(PffGridGetBlockInfo(f->grid, lb1, &info));
-      done += (PetscInt64)info.n * info.n * info.n;
-      lb1++;
-    }
-    PetscCall(PffParticlesClear(ref));
-    PetscCall(PffParticlesSeedBlocks(ref, PffReferenceSeed, f, lb0, lb1));
-    /* the kernel sum of Eq. 6 for the same lattice normalises Eq. 7 (phase.c); the momentum lands in a
-       working channel that every step overwrites, and so do the later batches' mass and volume */
-    if (k == 0)
-      PetscCall(PffParticlesP2G(ref, one, f->chMassRef, f->chUt, f->chVolRef));
-    else {
+  if (!f->refLevel) PetscCall(PetscMalloc1(nblocks, &f->refLevel));
+  PetscCall(PetscArraycpy(f->refLevel, level, nblocks));
+  if (nchanged) {
+    PetscInt64 nbt = (8 * cells + PFF_REFERENCE_BATCH - 1) / PFF_REFERENCE_BATCH;
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nbt, 1, MPIU_INT64, MPI_MAX, f->comm)); /* P2G is collective */
+    nbatch = (PetscInt)PetscMax(nbt, 1);
+    PetscCall(PffParticlesCreate(f->grid, &ref));
+    PetscCall(PffParticlesSetJitter(ref, 0));
+    for (PetscInt k = 0; k < nbatch; k++) {
+      /* seeded blocks up to the k+1-th share of their cells */
+      PetscInt lb1 = lb0;
+      while (lb1 < nlocal && (k == nbatch - 1 || done * nbatch < cells * (k + 1))) {
+        if (seed[lb1]) {
+          PffBlockInfo info;
+          PetscCall(PffGridGetBlockInfo(f->grid, lb1, &info));
+          done += (PetscInt64)info.n * info.n * info.n;
+        }
+        lb1++;
+      }
+      PetscCall(PffParticlesClear(ref));
+      PetscCall(PffParticlesSeedBlocks(ref, PffReferenceSeed, f, lb0, lb1, seed));
+      /* the kernel sum of Eq. 6 for the same lattice normalises Eq. 7 (phase.c); mass, momentum and volume
+         land in working channels that every step overwrites */
       PetscCall(PffParticlesP2G(ref, one, f->chMass, f->chUt, f->chVol));
-      PetscCall(PffAddFaceChannel(f->grid, f->chMass, f->chMassRef));
-      if (f->chVolRef >= 0) PetscCall(PffAddFaceChannel(f->grid, f->chVol, f->chVolRef));
+      PetscCall(PffCopyFaceChannel(f->grid, f->chMass, f->chMassRef, keep, (PetscBool)(k > 0)));
+      if (f->chVolRef >= 0) PetscCall(PffCopyFaceChannel(f->grid, f->chVol, f->chVolRef, keep, (PetscBool)(k > 0)));
+      lb0 = lb1;
     }
-    lb0 = lb1;
-  }
-  PetscCall(PffParticlesDestroy(&ref));
+    PetscCall(PffParticlesDestroy(&ref));
 #if defined(__GLIBC__)
-  /* glibc keeps freed heap pages resident until they are trimmed: the lattice's store and scratch (160 MB per rank in
-     rt3d W = 64) stayed resident, and the seed reused only part of them (20 MB per rank of the peak) */
-  malloc_trim(0);
+    /* glibc keeps freed heap pages resident until they are trimmed: the lattice's store and scratch (160 MB per rank
+       in rt3d W = 64) stayed resident, and the seed reused only part of them (20 MB per rank of the peak) */
+    malloc_trim(0);
 #endif
+  }
+  PetscCall(PetscFree5(changed, r1, s2, seed, keep));
+  PetscCall(PetscInfo(NULL, "reference lattice made again on %" PetscInt64_FMT " changed blocks and their neighbours\n",
+                      nchanged));
   if (f->chVolRef >= 0) {
     PetscCall(PffGridHaloBegin(f->grid, f->chVolRef));
     PetscCall(PffGridHaloEnd(f->grid, f->chVolRef));

@@ -223,8 +223,9 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
   for (size_t k = 0; k < PETSC_STATIC_ARRAY_LENGTH(hidden); k++)
     PetscCall(PffGridSetChannelOutput(f->grid, hidden[k], PETSC_FALSE));
   /* what an adapt need not move: every step recomputes it from the particles, or PffFlowReset does */
-  const PetscInt scratch[] = {f->chMass, f->chUt,     f->chPhiF, f->chMassRef, f->chBeta,  f->chOpen,
-                              f->chVol,  f->chVolRef, f->chCdiv, f->chQ,       f->chUlMask};
+  /* (mass_ref and volume_ref move: a reset makes them again only where the levels changed) */
+  const PetscInt scratch[] = {f->chMass, f->chUt,   f->chPhiF, f->chBeta,  f->chOpen,
+                              f->chVol,  f->chCdiv, f->chQ,    f->chUlMask};
   for (size_t k = 0; k < PETSC_STATIC_ARRAY_LENGTH(scratch); k++)
     if (scratch[k] >= 0) PetscCall(PffGridSetChannelTransfer(f->grid, scratch[k], PFF_TRANSFER_NONE));
   PetscCall(PffParticlesGetKernelSum(f->part, &f->rho0));
@@ -264,6 +265,7 @@ PetscErrorCode PffFlowDestroy(PffFlow *flow)
   PetscCall(PffParticlesDestroy(&(*flow)->part));
   PetscCall(PffPressureDestroy(&(*flow)->press));
   PetscCall(PffFlowAdaptDestroy_Private(*flow));
+  PetscCall(PetscFree((*flow)->refLevel));
   PetscCall(PetscFree(*flow));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

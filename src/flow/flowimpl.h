@@ -49,6 +49,7 @@ struct _n_PffFlow {
   PetscInt uWidth;
 
   PffFlowAdaptCtx  adapt;
+  PetscInt        *refLevel; /* [nblocks] raster levels the reference lattice was made for (correction.c) */
   PetscObjectState topology; /* the grid's topology state of the open faces and the reference lattice */
   PetscReal        t, dtPrev;
   PetscInt         step;

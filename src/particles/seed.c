@@ -14,11 +14,12 @@ PetscErrorCode PffParticlesSeed(PffParticles p, PffSeedFn fn, void *ctx)
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetLocalBlocks(p->grid, &nlocal));
-  PetscCall(PffParticlesSeedBlocks(p, fn, ctx, 0, nlocal));
+  PetscCall(PffParticlesSeedBlocks(p, fn, ctx, 0, nlocal, NULL));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode PffParticlesSeedBlocks(PffParticles p, PffSeedFn fn, void *ctx, PetscInt lb0, PetscInt lb1)
+PetscErrorCode PffParticlesSeedBlocks(PffParticles p, PffSeedFn fn, void *ctx, PetscInt lb0, PetscInt lb1,
+                                      const PetscBool mask[])
 {
   PetscInt        nlocal;
   PetscInt64      ncand = 0;
@@ -35,6 +36,7 @@ PetscErrorCode PffParticlesSeedBlocks(PffParticles p, PffSeedFn fn, void *ctx, P
              lb0, lb1, nlocal);
   for (PetscInt lb = lb0; lb < lb1; lb++) {
     PffBlockInfo info;
+    if (mask && !mask[lb]) continue;
     PetscCall(PffGridGetBlockInfo(p->grid, lb, &info));
     ncand += 8 * (PetscInt64)info.n * info.n * info.n;
   }
@@ -42,6 +44,7 @@ PetscErrorCode PffParticlesSeedBlocks(PffParticles p, PffSeedFn fn, void *ctx, P
      growth would hold the old and the new store at once (+36 B per particle of peak memory) */
   PetscCall(PffParticlesReserve_Private(p, p->n + (PetscInt)(ncand + ncand / 8)));
   for (PetscInt lb = lb0; lb < lb1; lb++) {
+    if (mask && !mask[lb]) continue;
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(p->grid, lb, &info));
     const PetscInt  n     = info.n;
