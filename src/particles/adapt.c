@@ -89,12 +89,22 @@ PetscErrorCode PffParticlesAdaptLevels(PffParticles p, const int8_t target[], Pe
   PetscCheck(n + extra < PETSC_MAX_INT, PETSC_COMM_SELF, PETSC_ERR_SUP,
              "the split would give %" PetscInt64_FMT " particles on one rank", (PetscInt64)n + extra);
   if (nsplit) {
-    float    *cx;
-    uint64_t *cid;
-    PetscInt  m = n;
+    float           *cx;
+    uint64_t        *cid;
+    int32_t         *dst = NULL;
+    PetscInt         m   = n;
+    PetscObjectState state;
+    /* binned on the current raster: the children's bins are their parents', so the sort needs no locate */
+    PetscCall(PffGridGetTopologyState(p->grid, &state));
+    const PetscBool rebin = (PetscBool)(p->binned && p->topology == state);
+    if (rebin) PetscCall(PffParticlesGetIntWork_Private(p, (size_t)(n + extra) + 1, &dst));
     PetscCall(PffParticlesReserve_Private(p, n + (PetscInt)extra)); /* the store may move */
     PetscCall(PetscMalloc2(3 * ((size_t)1 << (3 * lmax)), &cx, (size_t)1 << (3 * lmax), &cid));
-    for (PetscInt i = 0; i < n; i++) {
+    for (PetscInt lb = 0, i = 0; i < n; i++) {
+      if (rebin) {
+        while (i >= p->start[lb + 1]) lb++;
+        dst[i] = (int32_t)lb | PFF_SORT_STAYS;
+      }
       const uint32_t w = p->s.word[i];
       const PetscInt l = PffParticleWordLevel(w), t = PetscClipInterval((PetscInt)target[i], 0, lmax);
       if (t >= l) continue;
@@ -108,12 +118,17 @@ PetscErrorCode PffParticlesAdaptLevels(PffParticles p, const int8_t target[], Pe
         }
         p->s.id[j]   = cid[c];
         p->s.word[j] = wc;
+        if (rebin && j >= n) dst[j] = (int32_t)lb;
       }
     }
     PetscCall(PetscFree2(cx, cid));
-    p->n      = m;
-    p->binned = PETSC_FALSE;
+    p->n = m;
+    if (rebin)
+      PetscCall(PffParticlesSort_Private(p)); /* bins again (the children are the movers) */
+    else
+      p->binned = PETSC_FALSE;
   }
+
   /* a store that only changed levels keeps its bins */
   if (removed) PetscCall(PffParticlesRemove(p));
   if (!p->binned) PetscCall(PffParticlesBin(p));

@@ -5,7 +5,7 @@
    - split: particles of level 2 in x < 1/2 asked for level 0 split into 64 children each; the volume
      (mass) per type is exact, the momentum per type to 1e-12, every sub-cell of level 0 (half a finest
      cell) in the split region holds exactly one particle, the rest is untouched, and every particle
-     stays in its block (the store bins again);
+     lies in the block of its bin (the store bins again without a locate);
    - coarsening: level-0 particles asked for level 1 (and level 2) are kept through delay - 1 calls, then
      removed with probability 7/8 (63/64): the survivors' count within 5 sigma of the expectation, their
      level the target, and the volume per type within 5 sigma of its expectation (reported as the drift);
@@ -127,6 +127,20 @@ static PetscErrorCode CaseSplit(MPI_Comm comm)
     PetscInt s[3];
     for (int d = 0; d < 3; d++) s[d] = (PetscInt)PetscFloorReal(2 * (PetscReal)a.x[3 * i + d]);
     count[s[0] + 32 * (s[1] + 32 * s[2])]++;
+  }
+  /* the bins after the split: every particle in the block of its bin */
+  {
+    PetscInt nlocal;
+    PetscCall(PffGridGetLocalBlocks(grid, &nlocal));
+    PetscCheck(a.start && a.start[nlocal] == a.n, PETSC_COMM_SELF, PETSC_ERR_PLIB, "not binned after the split");
+    for (PetscInt lb = 0; lb < nlocal; lb++) {
+      PffBlockInfo info;
+      PetscCall(PffGridGetBlockInfo(grid, lb, &info));
+      for (PetscInt i = a.start[lb]; i < a.start[lb + 1]; i++)
+        for (int d = 0; d < 3; d++)
+          PetscCheck((PetscInt)(a.x[3 * i + d] / 8) == info.ijk[d], PETSC_COMM_SELF, PETSC_ERR_PLIB,
+                     "particle %" PetscInt_FMT " lies outside the block of its bin %" PetscInt_FMT, i, lb);
+    }
   }
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, count, 32 * 32 * 32, MPIU_INT, MPI_SUM, comm));
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nbad, 1, MPIU_INT, MPI_SUM, comm));
