@@ -58,20 +58,6 @@ static PetscErrorCode CoarsePhase(PffFlow f, float *phi)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Neighbour of lattice cell (i, j, k) at offset o, wrapped on periodic axes; -1 outside. */
-static inline PetscInt LatticeNeighbour(const PffFlowAdaptCtx *a, const PetscInt c[3], const PetscInt o[3])
-{
-  PetscInt q[3];
-  for (int d = 0; d < 3; d++) {
-    q[d] = c[d] + o[d];
-    if (q[d] < 0 || q[d] >= a->C[d]) {
-      if (!a->periodic[d]) return -1;
-      q[d] = (q[d] + a->C[d]) % a->C[d];
-    }
-  }
-  return q[0] + a->C[0] * (q[1] + a->C[1] * q[2]);
-}
-
 /* d at grid position g (finest cells, inside the domain), trilinear between lattice cell centres,
    wrapped on periodic axes and constant beyond the outer centres on walled ones. */
 static inline float DistanceAt(const PffFlowAdaptCtx *a, const float g[3])
@@ -164,7 +150,7 @@ static PetscErrorCode Distance(PffFlow f)
         for (PetscInt f6 = 0; f6 < 6; f6++) {
           PetscInt o[3]    = {0, 0, 0};
           o[f6 / 2]        = f6 % 2 ? 1 : -1;
-          const PetscInt q = LatticeNeighbour(a, cc, o);
+          const PetscInt q = PffRasterNeighbour(a->C, a->periodic, cc, o);
           if (q >= 0 && phi[q] >= 0 && (phi[q] >= 0.5f) != (phi[c] >= 0.5f)) d[c] = 0.5f;
         }
       }
@@ -180,7 +166,7 @@ static PetscErrorCode Distance(PffFlow f)
         if ((r < 13) != fwd || r == 13) continue;
         PetscInt o[3];
         PffRegionDirection(r, o);
-        const PetscInt q = LatticeNeighbour(a, cc, o);
+        const PetscInt q = PffRasterNeighbour(a->C, a->periodic, cc, o);
         if (q < 0) continue;
         const PetscInt n1 = (o[0] != 0) + (o[1] != 0) + (o[2] != 0);
         const float    w  = n1 == 1 ? 1.0f : (n1 == 2 ? 1.41421356f : 1.73205081f);
@@ -313,7 +299,7 @@ PetscErrorCode PffFlowAdaptSetUp_Private(PffFlow f)
 {
   PffFlowAdaptCtx *a = &f->adapt;
   const PetscInt  *level;
-  PetscInt         nb[3], nlevels, cells[3];
+  PetscInt         nb[3], nlevels;
 
   PetscFunctionBeginUser;
   if (a->levels == 0) PetscFunctionReturn(PETSC_SUCCESS);
@@ -322,7 +308,6 @@ PetscErrorCode PffFlowAdaptSetUp_Private(PffFlow f)
              "-adapt_levels %" PetscInt_FMT " is invalid: must be 0 (off) or in [2, -grid_levels = %" PetscInt_FMT "]",
              a->levels, nlevels);
   PetscCall(PffGridGetRaster(f->grid, nb, &level, NULL));
-  PetscCall(PffGridGetCells(f->grid, cells));
   a->s  = (PetscInt)1 << (a->levels - 1);
   a->is = 1.0f / (float)a->s;
   a->m  = a->n0 / a->s;

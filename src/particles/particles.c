@@ -90,13 +90,12 @@ PetscErrorCode PffParticlesDestroy(PffParticles *part)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Grows one array set to capacity cap, keeping the first n entries. In place, field by field: glibc's realloc
+/* Grows one array set to capacity cap, keeping its entries. In place, field by field: glibc's realloc
    moves a large block by remapping its pages, so a growth does not hold the old and the new store at once (a
    split of many particles during a run would otherwise add a whole store to the peak). */
-static PetscErrorCode PffParticleSoAGrow(PffParticleSoA *s, PetscInt n, PetscInt cap)
+static PetscErrorCode PffParticleSoAGrow(PffParticleSoA *s, PetscInt cap)
 {
   PetscFunctionBeginUser;
-  (void)n;
 #define PFF_PARTICLE_FIELD_GROW(name, type, k)                                                                         \
   PetscCall(PetscRealloc(sizeof(type) * (size_t)(k) * (size_t)cap, &s->name));
   PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_GROW)
@@ -111,7 +110,7 @@ PetscErrorCode PffParticlesReserve_Private(PffParticles p, PetscInt m)
   PetscFunctionBeginUser;
   if (m <= p->cap) PetscFunctionReturn(PETSC_SUCCESS);
   const PetscInt cap = PetscMax(m, PetscMax(1024, p->cap + p->cap / 2));
-  PetscCall(PffParticleSoAGrow(&p->s, p->n, cap));
+  PetscCall(PffParticleSoAGrow(&p->s, cap));
   p->cap    = cap;
   p->binned = PETSC_FALSE;
   PetscFunctionReturn(PETSC_SUCCESS);
