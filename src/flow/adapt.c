@@ -184,7 +184,11 @@ static PetscErrorCode Distance(PffFlow f)
 /* Steps 6 and 1 in one pass over the binned particles: the level each particle asks for,
    l = min(L - 1, floor(beta d / n0)), into a->target, and per block the finest level asked by the
    particles whose box x_p +- (2^l + margin) touches it, merged over ranks into map; blocks no particle
-   touches take L - 1, blocks inactive at set-up stay inactive. */
+   touches take L - 1, blocks inactive at set-up stay inactive. The boxes are the particles' own: a block's
+   bounding box of its particles per level (the first version) also marked the edge and corner neighbours
+   that two particles reached on two faces, which refined blocks no particle was near and made them
+   flicker from one step to the next as the particles moved (every flicker splits all of a block's
+   particles, and their children coarsen again a few steps later). */
 static PetscErrorCode TargetsAndMap(PffFlow f, PetscInt map[])
 {
   PffFlowAdaptCtx  *a = &f->adapt;
@@ -217,34 +221,21 @@ static PetscErrorCode TargetsAndMap(PffFlow f, PetscInt map[])
       continue;
     }
     const float lo[3] = {(float)info.ijk[0] * n0f, (float)info.ijk[1] * n0f, (float)info.ijk[2] * n0f};
-    /* per level the bounding box of the block's particles that ask for it; a level's boxes reach a
-       neighbour region when that box, grown by the radius, does. This marks a corner or edge region also
-       when two particles reach its two faces but none reaches it, which refines at most a few more blocks
-       than the per-particle boxes (conservative) for a single pass of min/max per particle. */
-    float                 mn[PFF_GRID_MAX_LEVELS][3], mx[PFF_GRID_MAX_LEVELS][3];
+    /* each particle's box x_p +- (2^l + margin) marks the neighbour regions it reaches; most particles
+       reach none but their own block (one comparison pair per axis) */
     const PffFlowAdaptCtx ac = *a;
     const float *const    x  = pa.x;
     const PetscInt        i0 = pa.start[lb], i1 = pa.start[lb + 1];
-    for (PetscInt l = 0; l <= lmax; l++)
-      for (int d = 0; d < 3; d++) {
-        mn[l][d] = PETSC_MAX_REAL;
-        mx[l][d] = -PETSC_MAX_REAL;
-      }
+    float                 rp[PFF_GRID_MAX_LEVELS];
+    for (PetscInt l = 0; l <= lmax; l++) rp[l] = (float)((PetscInt)1 << l) + (float)ac.margin;
     for (PetscInt i = i0; i < i1; i++) {
       const PetscInt l = LevelAt(&ac, &x[3 * i]);
-      target[i]        = (int8_t)l;
+      PetscInt       rlo[3], rhi[3];
+      target[i] = (int8_t)l;
       for (int d = 0; d < 3; d++) {
-        mn[l][d] = PetscMin(mn[l][d], x[3 * i + d]);
-        mx[l][d] = PetscMax(mx[l][d], x[3 * i + d]);
-      }
-    }
-    for (PetscInt l = 0; l <= lmax; l++) {
-      const float rp = (float)((PetscInt)1 << l) + (float)ac.margin;
-      PetscInt    rlo[3], rhi[3];
-      if (mn[l][0] > mx[l][0]) continue; /* no particle asks for l */
-      for (int d = 0; d < 3; d++) {
-        rlo[d] = mn[l][d] - lo[d] - rp < 0 ? 0 : 1;
-        rhi[d] = mx[l][d] - lo[d] + rp >= n0f ? 2 : 1;
+        const float u = x[3 * i + d] - lo[d];
+        rlo[d]        = u - rp[l] < 0 ? 0 : 1;
+        rhi[d]        = u + rp[l] >= n0f ? 2 : 1;
       }
       for (PetscInt z = rlo[2]; z <= rhi[2]; z++)
         for (PetscInt y = rlo[1]; y <= rhi[1]; y++)

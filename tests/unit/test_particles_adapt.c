@@ -2,10 +2,11 @@
 
    A closed 16^3 box of 8^3 blocks with three levels, liquid below y = 1/2 and air above, each particle
    with a velocity of its own. Checks:
-   - split: particles of level 2 in x < 1/2 asked for level 0 split into 64 children each; the volume
-     (mass) per type is exact, the momentum per type to 1e-12, every sub-cell of level 0 (half a finest
-     cell) in the split region holds exactly one particle, the rest is untouched, and every particle
-     lies in the block of its bin (the store bins again without a locate);
+   - split: particles of level 2 in x < 1/2, each at a random place in its level-2 cell (as after
+     advection), asked for level 0 split into 64 children each; the volume (mass) per type is exact, the
+     momentum per type to 1e-12, every sub-cell of level 0 (half a finest cell) in the split region holds
+     exactly one particle (no hole where no parent sat), the rest is untouched, and every particle lies in
+     the block of its bin (the store bins again without a locate);
    - coarsening: level-0 particles asked for level 1 (and level 2) are kept through delay - 1 calls, then
      removed with probability 7/8 (63/64): the survivors' count within 5 sigma of the expectation, their
      level the target, and the volume per type within 5 sigma of its expectation (reported as the drift);
@@ -92,8 +93,18 @@ static PetscErrorCode CaseSplit(MPI_Comm comm)
 
   PetscFunctionBeginUser;
   PetscCall(Create(comm, 2, &grid, &p));
-  PetscCall(Momentum(comm, p, mom0));
   PetscCall(PffParticlesGetArrays(p, &a));
+  /* advected parents: each anywhere in its level-2 cell (4 finest cells, 8 parents per cell), drawn from
+     its id, so that a parent's own neighbourhood says nothing about where the finer cells are empty */
+  for (PetscInt i = 0; i < a.n; i++) {
+    uint64_t z = a.id[i];
+    for (int d = 0; d < 3; d++) {
+      z                 = z * 6364136223846793005ULL + 1442695040888963407ULL;
+      const PetscReal u = (PetscReal)(z >> 11) * (1.0 / 9007199254740992.0);
+      a.x[3 * i + d]    = (float)(4 * PetscFloorReal(a.x[3 * i + d] / 4) + 4 * u);
+    }
+  }
+  PetscCall(Momentum(comm, p, mom0));
   PetscCall(PetscMalloc1(a.n + 1, &target));
   for (PetscInt i = 0; i < a.n; i++) {
     target[i] = (int8_t)(a.x[3 * i] < 8 ? 0 : 2);
