@@ -141,18 +141,25 @@ typedef struct {
   PetscReal  volumeAfter[PFF_PARTICLE_NTYPES];
 } PffParticleAdaptStats;
 
-/* Particle adaptivity (PF-FLIP Sec. 5.1 and Sec. 5.4 step 6). target[i] is the level the refinement
-   criterion asks of local particle i (clamped to the grid's levels).
-   - target < l_p: the particle splits into 8^(l_p - target) children of level target, one level at a
-     time into 8 children, each placed at random in one octant of the cell of the child's level that
-     contains its parent; velocity and type are the parent's, so mass and momentum are exact.
-   - target > l_p: the deferred-coarsening counter D_p grows; at D_p >= delay the particle is removed
-     with probability 1 - 8^-(target - l_p), and otherwise takes level target (and the volume of the
-     removed ones: mass is conserved in expectation). D_p returns to 0 then, and whenever target <= l_p.
+/* The deferred-coarsening counters of particle adaptivity (PF-FLIP Sec. 5.1). wish[i] is the level the
+   refinement criterion asks of local particle i (clamped to the grid's levels): where wish > l_p the
+   counter D_p grows by one (it saturates at 15), elsewhere it returns to 0. On return wish[i] is the level
+   the particle holds the grid at (Sec. 5.4 step 1): l_p while its coarsening is pending (wish > l_p and
+   D_p < delay), its wish otherwise, so that a block coarsens only after its particles asked for it delay
+   times in a row. Not collective. */
+PETSC_EXTERN PetscErrorCode PffParticlesAdaptCounters(PffParticles p, int8_t wish[], PetscInt delay);
+/* Particle adaptivity (PF-FLIP Sec. 5.1 and Sec. 5.4 step 6). target[i] is the level local particle i is
+   to take (clamped to the grid's levels), D_p the counter of PffParticlesAdaptCounters.
+   - target < l_p: the particle splits into 8^(l_p - target) children of level target with its velocity
+     and type, so mass and momentum are exact. The splitting particles of one cell C of level l_p share
+     C's finer sub-cells (docs/particles.md, "Adaptive particles"), so a split leaves no finer cell empty.
+   - target > l_p and D_p >= delay: the particle is removed with probability 1 - 8^-(target - l_p), and
+     otherwise takes level target (and the volume of the removed ones: mass is conserved in expectation)
+     with D_p = 0. With D_p < delay it stays as it is.
    The randomness is the counter-based RNG keyed by (seed, id, purpose, key): pass the step number as key,
    so that the result is the same on any number of ranks and threads. Children get ids hashed from their
    parent's with the top bit set (unique with probability 1 - n^2 2^-64). Particles stay in their blocks;
-   the store is binned again. Collective (the statistics). */
+   the store must be binned on the current grid and is binned again. Collective (the statistics). */
 PETSC_EXTERN PetscErrorCode PffParticlesAdaptLevels(PffParticles p, const int8_t target[], PetscInt delay, uint64_t key,
                                                     PffParticleAdaptStats *stats);
 /* Global count and mass per type (mass = density[type] * particle volume). Collective. */

@@ -7,7 +7,8 @@
       computes the same d, from interface cells (a neighbour across the threshold, d = half a cell)
       by a two-pass 26-neighbour chamfer (weights 1, sqrt 2, sqrt 3), first-order as the paper's;
    2. the level each particle asks for (step 6), l = min(L - 1, floor(beta |d(x_p)| / n0)) with d
-      interpolated trilinearly;
+      interpolated trilinearly; the deferred-coarsening counters D_p advance, and a particle whose
+      coarsening is pending (D_p < delay) asks for its current level;
    3. the block map (step 1): the minimum level asked by the particles whose box x_p +- (r + margin)
       touches a block, r = 2^l finest cells for the level l asked; blocks no particle touches take level
       L - 1, blocks inactive at set-up stay inactive; graded 2:1. Each particle's level is then capped by
@@ -181,24 +182,29 @@ static PetscErrorCode Distance(PffFlow f)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Steps 6 and 1 in one pass over the binned particles: the level each particle asks for,
-   l = min(L - 1, floor(beta d / n0)), into a->target, and per block the finest level asked by the
-   particles whose box x_p +- (2^l + margin) touches it, merged over ranks into map; blocks no particle
-   touches take L - 1, blocks inactive at set-up stay inactive. The boxes are the particles' own: a block's
-   bounding box of its particles per level (the first version) also marked the edge and corner neighbours
-   that two particles reached on two faces, which refined blocks no particle was near and made them
-   flicker from one step to the next as the particles moved (every flicker splits all of a block's
-   particles, and their children coarsen again a few steps later). */
-static PetscErrorCode TargetsAndMap(PffFlow f, PetscInt map[])
+/* Steps 6 and 1 over the binned particles: the level each particle asks for, l = min(L - 1,
+   floor(beta d / n0)), into a->target; with counters, the deferred-coarsening counters advance and a
+   particle whose coarsening is pending asks for its own level instead (PffParticlesAdaptCounters), so a
+   block coarsens only after its particles asked for it -adapt_coarsen_delay times in a row. Then per
+   block the finest level asked by the particles whose box x_p +- (2^l + margin) touches it, merged over
+   ranks into map; blocks no particle touches take L - 1, blocks inactive at set-up stay inactive. Without
+   that hold a block flickered whenever a small drop or bubble came and went in the thresholded coarse
+   phase field: in rt3d at W = 64, 48-52 blocks refined and coarsened again every few steps from
+   t/t0 = 2.6, and each time 1.5 M of 7.4 M particles were split and removed again. The boxes are the particles' own: a
+   block's bounding box of its particles per level (the first version) also marked the edge and corner neighbours that
+   two particles reached on two faces, which refined blocks no particle was near and made them flicker from one step to
+   the next as the particles moved (every flicker splits all of a block's particles, and their children coarsen again a
+   few steps later). */
+static PetscErrorCode TargetsAndMap(PffFlow f, PetscBool counters, PetscInt map[])
 {
   PffFlowAdaptCtx  *a = &f->adapt;
   PffParticleArrays pa;
-  PetscInt          nlocal, nb[3], nblocks, *reach;
-  const PetscInt    lmax = a->levels - 1, none = PETSC_MAX_INT;
+  PetscInt          nlocal, nb[3], nblocks, *reach, *both;
+  const PetscInt    lmax = a->levels - 1, none = PETSC_MAX_INT, *cur;
   PetscBool         ok = PETSC_TRUE;
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridGetRaster(f->grid, nb, NULL, NULL));
+  PetscCall(PffGridGetRaster(f->grid, nb, &cur, NULL));
   nblocks = nb[0] * nb[1] * nb[2];
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
   PetscCall(PffParticlesGetArrays(f->part, &pa));
@@ -208,14 +214,22 @@ static PetscErrorCode TargetsAndMap(PffFlow f, PetscInt map[])
     a->ntarget = (size_t)pa.n + (size_t)pa.n / 4 + 1;
     PetscCall(PetscMalloc1(a->ntarget, &a->target));
   }
-  PetscCall(PetscMalloc1(27 * (size_t)PetscMax(nlocal, 1), &reach));
+  PetscCall(PetscMalloc1(54 * (size_t)PetscMax(nlocal, 1), &reach));
   const float n0f    = (float)a->n0;
   int8_t     *target = a->target;
+  {
+    const PffFlowAdaptCtx ac = *a;
+    const float *const    x  = pa.x;
+#pragma omp parallel for schedule(static)
+    for (PetscInt i = 0; i < pa.n; i++) target[i] = (int8_t)LevelAt(&ac, &x[3 * i]);
+  }
+  /* a particle whose coarsening is pending holds the grid at its level (the blocks' hysteresis) */
+  if (counters) PetscCall(PffParticlesAdaptCounters(f->part, target, a->delay));
 #pragma omp parallel for schedule(dynamic, 1) reduction(&& : ok)
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo info;
-    PetscInt    *r = reach + 27 * lb;
-    for (int q = 0; q < 27; q++) r[q] = none;
+    PetscInt    *r = reach + 54 * lb; /* [27] the levels asked, [27] the levels held */
+    for (int q = 0; q < 54; q++) r[q] = none;
     if (PffGridGetBlockInfo(f->grid, lb, &info)) {
       ok = PETSC_FALSE;
       continue;
@@ -223,15 +237,14 @@ static PetscErrorCode TargetsAndMap(PffFlow f, PetscInt map[])
     const float lo[3] = {(float)info.ijk[0] * n0f, (float)info.ijk[1] * n0f, (float)info.ijk[2] * n0f};
     /* each particle's box x_p +- (2^l + margin) marks the neighbour regions it reaches; most particles
        reach none but their own block (one comparison pair per axis) */
-    const PffFlowAdaptCtx ac = *a;
-    const float *const    x  = pa.x;
-    const PetscInt        i0 = pa.start[lb], i1 = pa.start[lb + 1];
-    float                 rp[PFF_GRID_MAX_LEVELS];
-    for (PetscInt l = 0; l <= lmax; l++) rp[l] = (float)((PetscInt)1 << l) + (float)ac.margin;
+    const float *const x  = pa.x;
+    const PetscInt     i0 = pa.start[lb], i1 = pa.start[lb + 1];
+    float              rp[PFF_GRID_MAX_LEVELS];
+    for (PetscInt l = 0; l <= lmax; l++) rp[l] = (float)((PetscInt)1 << l) + (float)a->margin;
     for (PetscInt i = i0; i < i1; i++) {
-      const PetscInt l = LevelAt(&ac, &x[3 * i]);
+      const PetscInt l = target[i], dp = PffParticleWordCoarsen(pa.word[i]);
+      PetscInt      *rr = r + (counters && dp > 0 && dp < a->delay ? 27 : 0);
       PetscInt       rlo[3], rhi[3];
-      target[i] = (int8_t)l;
       for (int d = 0; d < 3; d++) {
         const float u = x[3 * i + d] - lo[d];
         rlo[d]        = u - rp[l] < 0 ? 0 : 1;
@@ -239,25 +252,30 @@ static PetscErrorCode TargetsAndMap(PffFlow f, PetscInt map[])
       }
       for (PetscInt z = rlo[2]; z <= rhi[2]; z++)
         for (PetscInt y = rlo[1]; y <= rhi[1]; y++)
-          for (PetscInt q = rlo[0]; q <= rhi[0]; q++) r[q + 3 * (y + 3 * z)] = PetscMin(r[q + 3 * (y + 3 * z)], l);
+          for (PetscInt q = rlo[0]; q <= rhi[0]; q++) rr[q + 3 * (y + 3 * z)] = PetscMin(rr[q + 3 * (y + 3 * z)], l);
     }
   }
   PetscCheck(ok, PETSC_COMM_SELF, PETSC_ERR_PLIB, "adapt: bad local block");
-  for (PetscInt b = 0; b < nblocks; b++) map[b] = none;
+  PetscCall(PetscMalloc1(2 * nblocks, &both)); /* the map asked, then the map held */
+  for (PetscInt b = 0; b < 2 * nblocks; b++) both[b] = none;
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
-    for (PetscInt q = 0; q < 27; q++) {
+    for (PetscInt q = 0; q < 54; q++) {
       PetscInt o[3];
-      if (reach[27 * lb + q] == none) continue;
-      PffRegionDirection(q, o);
+      if (reach[54 * lb + q] == none) continue;
+      PffRegionDirection(q % 27, o);
       const PetscInt nbr = PffRasterNeighbour(nb, a->periodic, info.ijk, o);
-      if (nbr >= 0) map[nbr] = PetscMin(map[nbr], reach[27 * lb + q]);
+      if (nbr >= 0) both[nbr + (q / 27) * nblocks] = PetscMin(both[nbr + (q / 27) * nblocks], reach[54 * lb + q]);
     }
   }
   PetscCall(PetscFree(reach));
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, map, (PetscMPIInt)nblocks, MPIU_INT, MPI_MIN, f->comm));
-  for (PetscInt b = 0; b < nblocks; b++) map[b] = a->base[b] < 0 ? -1 : PetscMin(map[b], lmax);
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, both, (PetscMPIInt)(2 * nblocks), MPIU_INT, MPI_MIN, f->comm));
+  /* a hold keeps a block from coarsening but never refines it: a pending particle reaching into a coarser
+     neighbour (or a whole grid of them, one block further each step) must not spread the fine region */
+  for (PetscInt b = 0; b < nblocks; b++)
+    map[b] = a->base[b] < 0 ? -1 : PetscMin(PetscMin(both[b], PetscMax(both[nblocks + b], cur[b])), lmax);
+  PetscCall(PetscFree(both));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -330,7 +348,7 @@ PetscErrorCode PffFlowAdaptDestroy_Private(PffFlow f)
    particle never stays coarser than its block (P2G splats with the block's radius, which would leave a
    coarse particle's mass in too few faces), and a coarsening never outruns the grid, which would split
    the particle again at the next adaptation. */
-static PetscErrorCode GradedTargets(PffFlow f, PetscInt map[])
+static PetscErrorCode GradedTargets(PffFlow f, PetscBool counters, PetscInt map[])
 {
   PffFlowAdaptCtx  *a = &f->adapt;
   PffParticleArrays pa;
@@ -338,7 +356,7 @@ static PetscErrorCode GradedTargets(PffFlow f, PetscInt map[])
 
   PetscFunctionBeginUser;
   PetscCall(PetscLogEventBegin(PFF_FlowAdaptMap, 0, 0, 0, 0));
-  PetscCall(TargetsAndMap(f, map));
+  PetscCall(TargetsAndMap(f, counters, map));
   PetscCall(PffGridGetRaster(f->grid, nb, NULL, NULL));
   PetscCall(PffGradeLevels(nb, a->periodic, map));
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
@@ -396,7 +414,7 @@ PetscErrorCode PffFlowAdapt_Private(PffFlow f, PffFlowAdaptStats *st)
   PetscCall(PffGridGetRaster(f->grid, nb, NULL, NULL));
   PetscCall(PetscMalloc1(nb[0] * nb[1] * nb[2], &map));
   PetscCall(Distance(f));
-  PetscCall(GradedTargets(f, map));
+  PetscCall(GradedTargets(f, PETSC_TRUE, map));
   PetscCall(PffParticlesAdaptLevels(f->part, a->target, a->delay, (uint64_t)f->step + 1, &st->particles));
   /* the new map is partitioned with this step's particle counts; an unchanged one is re-partitioned only
      when the work has become unbalanced */
@@ -431,7 +449,7 @@ PetscErrorCode PffFlowAdaptSeed_Private(PffFlow f, PffSeedFn fn, void *ctx)
     PetscCall(PffParticlesSeed(f->part, fn, ctx));
     PetscCall(PffFlowUpdateFields(f, PETSC_FALSE));
     PetscCall(Distance(f));
-    PetscCall(GradedTargets(f, map));
+    PetscCall(GradedTargets(f, PETSC_FALSE, map)); /* a fresh seed has nothing pending */
     if (it == a->levels || SameMap(a, nb[0] * nb[1] * nb[2], map)) break;
     PetscCall(PffParticlesClear(f->part));
     PetscCall(AdaptGrid(f, map, NULL));

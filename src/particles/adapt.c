@@ -34,6 +34,24 @@ static inline uint64_t PffChildId(uint64_t parent, PetscInt64 c)
   return PffHash64_Private(parent ^ (0x9e3779b97f4a7c15ULL * (uint64_t)(c + 1))) | (1ULL << 63);
 }
 
+PetscErrorCode PffParticlesAdaptCounters(PffParticles p, int8_t wish[], PetscInt delay)
+{
+  const PetscInt n = p->n, lmax = p->nlevels - 1;
+
+  PetscFunctionBeginUser;
+  PetscCheck(delay >= 1 && delay <= 15, p->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "PffParticlesAdaptCounters: the coarsening delay %" PetscInt_FMT " must be in [1, 15]", delay);
+#pragma omp parallel for schedule(static)
+  for (PetscInt i = 0; i < n; i++) {
+    const uint32_t w = p->s.word[i];
+    const PetscInt l = PffParticleWordLevel(w), t = PetscClipInterval((PetscInt)wish[i], 0, lmax);
+    const PetscInt d = t > l ? PetscMin(PffParticleWordCoarsen(w) + 1, 15) : 0;
+    p->s.word[i]     = PffParticleWordSetLevel(w, l, d);
+    wish[i]          = (int8_t)(t > l && d < delay ? l : t);
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffParticlesAdaptLevels(PffParticles p, const int8_t target[], PetscInt delay, uint64_t key,
                                        PffParticleAdaptStats *stats)
 {
@@ -62,24 +80,18 @@ PetscErrorCode PffParticlesAdaptLevels(PffParticles p, const int8_t target[], Pe
     if (t < l) {
       extra += ((PetscInt64)1 << (3 * (l - t))) - 1;
       nsplit++;
-    } else if (t > l) {
-      const PetscInt d = PffParticleWordCoarsen(w) + 1;
-      if (d < delay)
-        p->s.word[i] = PffParticleWordSetLevel(w, l, d);
-      else {
-        marked++;
-        if (PffRandom01_Private(p->seed, p->s.id[i], PFF_RNG_COARSEN, key) >=
-            1.0 / (PetscReal)((PetscInt64)1 << (3 * (t - l)))) {
-          p->s.word[i] = w | rm;
-          removed++;
-          dv = -vol;
-        } else {
-          p->s.word[i] = PffParticleWordSetLevel(w, t, 0);
-          dv           = (PetscReal)((PetscInt64)1 << (3 * t)) - vol;
-        }
+    } else if (t > l && PffParticleWordCoarsen(w) >= delay) {
+      marked++;
+      if (PffRandom01_Private(p->seed, p->s.id[i], PFF_RNG_COARSEN, key) >=
+          1.0 / (PetscReal)((PetscInt64)1 << (3 * (t - l)))) {
+        p->s.word[i] = w | rm;
+        removed++;
+        dv = -vol;
+      } else {
+        p->s.word[i] = PffParticleWordSetLevel(w, t, 0);
+        dv           = (PetscReal)((PetscInt64)1 << (3 * t)) - vol;
       }
-    } else if (PffParticleWordCoarsen(w))
-      p->s.word[i] = PffParticleWordSetLevel(w, l, 0);
+    }
     if (liquid)
       dl += dv;
     else

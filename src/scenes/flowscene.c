@@ -1,6 +1,7 @@
 /* The fluid-scene driver: -sim_* options, the time loop, diagnostics CSV, frames and the run
    summary with each stage's share of the step time. */
 #include "flowscene.h"
+#include <sys/resource.h>
 #include <errno.h>
 
 PetscErrorCode PffFlowSceneDefault(const char key[], const char value[])
@@ -482,6 +483,18 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
                               " blocks +%" PetscInt_FMT " -%" PetscInt_FMT " moved %" PetscInt_FMT " imbalance %.3f",
                               pa->split, pa->removed, pa->marked, st.adapt.grid.refined, st.adapt.grid.coarsened,
                               st.adapt.grid.moved, (double)st.adapt.imbalance));
+    }
+    {
+      /* the largest resident set of any rank now and its peak so far: adaptivity, splits and re-partitions
+         move memory around */
+      PetscLogDouble rss[2];
+      struct rusage  ru;
+      const size_t   len = strlen(extra);
+      PetscCall(PetscMemoryGetCurrentUsage(&rss[0]));
+      rss[1] = getrusage(RUSAGE_SELF, &ru) == 0 ? 1024.0 * (PetscLogDouble)ru.ru_maxrss : rss[0];
+      PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, rss, 2, MPI_DOUBLE, MPI_MAX, s->comm));
+      PetscCall(PetscSNPrintf(extra + len, sizeof(extra) - len, "  rss %.0f MB (peak %.0f)", rss[0] / 1048576.0,
+                              rss[1] / 1048576.0));
     }
     PetscCall(PffProgressPrint(s->comm, &prog, step, t, extra));
     if (t >= nextOut * (1 - 1e-12) || t >= tEnd * (1 - 1e-12)) {

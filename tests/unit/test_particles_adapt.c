@@ -7,8 +7,9 @@
      momentum per type to 1e-12, every sub-cell of level 0 (half a finest cell) in the split region holds
      exactly one particle (no hole where no parent sat), the rest is untouched, and every particle lies in
      the block of its bin (the store bins again without a locate);
-   - coarsening: level-0 particles asked for level 1 (and level 2) are kept through delay - 1 calls, then
-     removed with probability 7/8 (63/64): the survivors' count within 5 sigma of the expectation, their
+   - coarsening: level-0 particles asked for level 1 (and level 2) are kept through delay - 1 calls, during
+     which PffParticlesAdaptCounters has them hold the grid at their own level, then removed with
+     probability 7/8 (63/64): the survivors' count within 5 sigma of the expectation, their
      level the target, and the volume per type within 5 sigma of its expectation (reported as the drift);
    - hysteresis: a call with target <= l_p resets the counter, so the next delay - 1 calls remove nothing;
    - independence of the partition: the ids that survive, hashed together, and the count equal those of
@@ -177,7 +178,7 @@ static PetscErrorCode Coarsen(MPI_Comm comm, PetscInt to, PetscBool hysteresis, 
   PffParticleArrays     a;
   PffParticleAdaptStats st;
   int8_t               *target;
-  PetscInt              calls = 0;
+  PetscInt              calls = 0, d = 0, nbad = 0;
 
   PetscFunctionBeginUser;
   PetscCall(Create(comm, 0, &grid, &p));
@@ -187,6 +188,14 @@ static PetscErrorCode Coarsen(MPI_Comm comm, PetscInt to, PetscBool hysteresis, 
     const PetscInt want = hysteresis && c == DELAY - 1 ? 0 : to;
     PetscCall(PffParticlesGetArrays(p, &a));
     PetscCall(PetscMalloc1(a.n + 1, &target));
+    /* the counters: while a coarsening is pending the particle holds the grid at its own level */
+    d = want > 0 ? d + 1 : 0;
+    for (PetscInt i = 0; i < a.n; i++) target[i] = (int8_t)want;
+    PetscCall(PffParticlesAdaptCounters(p, target, DELAY));
+    for (PetscInt i = 0; i < a.n; i++) nbad += target[i] != (want > 0 && d < DELAY ? 0 : want);
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nbad, 1, MPIU_INT, MPI_SUM, comm));
+    PetscCheck(nbad == 0, comm, PETSC_ERR_PLIB,
+               "call %" PetscInt_FMT ": %" PetscInt_FMT " particles hold a wrong level", calls + 1, nbad);
     for (PetscInt i = 0; i < a.n; i++) target[i] = (int8_t)want;
     PetscCall(PffParticlesAdaptLevels(p, target, DELAY, (uint64_t)(c + 1), &st));
     PetscCall(PetscFree(target));
