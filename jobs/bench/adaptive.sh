@@ -3,7 +3,7 @@
 # uniform against 3 adaptive levels (-adapt_levels 3, bands beta_bw in PFF_BANDS, default "1 2"), on
 # 2 ranks x 1 thread. One CSV row per run in output/bench/adaptive/adaptive.csv:
 #   run,W,levels,band,ranks,threads,steps,wall_s,s_per_step,rss_max_mb,rss_sum_mb,particles_end,
-#   spike_t3,max_dev,inside_band,adapt_share,start_utc,load1
+#   spike_t3,max_dev,inside_band,adapt_share,start_utc,load1,commit
 # wall_s is the run's time-stepping wall time (the summary line), rss_* the peak resident set of the
 # ranks (/usr/bin/time around each rank), max_dev the largest |spike - reference| over t/t0 <= 3
 # (postproc/rt_spike.py, De Rosis & Enan 2021), adapt_share the Adapt stage's share of the step time.
@@ -22,7 +22,7 @@ export OMP_NUM_THREADS=${OMP_NUM_THREADS:-1}
 py=/usr/bin/python3
 pfflip=$PFF_BUILD_DIR/bin/pfflip
 rev=$(git -C "$PFF_ROOT" describe --always --dirty)
-[ -f "$csv" ] || echo "run,W,levels,band,ranks,threads,steps,wall_s,s_per_step,rss_max_mb,rss_sum_mb,particles_end,spike_t3,max_dev,inside_band,adapt_share,start_utc,load1" >"$csv"
+[ -f "$csv" ] || echo "run,W,levels,band,ranks,threads,steps,wall_s,s_per_step,rss_max_mb,rss_sum_mb,particles_end,spike_t3,max_dev,inside_band,adapt_share,start_utc,load1,commit" >"$csv"
 
 # bench <name> <levels> <band> <pfflip args...>
 bench() {
@@ -48,7 +48,7 @@ bench() {
   dev=$(sed -n 's/.*max_dev=\([^ ]*\).*/\1/p' <<<"$line")
   inside=$(sed -n 's/.*inside_band=\([^ ]*\).*/\1/p' <<<"$line")
   share=$(sed -n 's/.*Adapt \([0-9.]*\)%.*/\1/p' "$dir/log.txt")
-  echo "$name,$W,$levels,$band,$ranks,$OMP_NUM_THREADS,$steps,$wall,$sps,$rss,$particles,$spike,$dev,$inside,${share:-0},$start,$load" | tee -a "$csv"
+  echo "$name,$W,$levels,$band,$ranks,$OMP_NUM_THREADS,$steps,$wall,$sps,$rss,$particles,$spike,$dev,$inside,${share:-0},$start,$load,$rev" | tee -a "$csv"
   echo "# $name W=$W $rev: $line" >>"$out/adaptive.log"
 }
 
