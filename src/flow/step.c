@@ -1,6 +1,9 @@
 /* One PF-FLIP time step (DESIGN.md §4): P2G, phase field, forces, pressure, G2P, escaped particles,
    advection. Each stage is a PETSc log stage and is timed for the run summary. */
 #include "flowimpl.h"
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 static PetscLogStage PffFlowStages[PFF_FLOW_NSTAGES];
 static PetscBool     PffFlowStagesRegistered = PETSC_FALSE;
@@ -252,6 +255,11 @@ PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
   f->t += dt;
   f->step++;
   f->dtPrev = dt;
+#if defined(__GLIBC__)
+  /* after a grid change the pressure, pffmg and the particles' scratch were made again on the new grid
+     in this step; glibc keeps the pages of the old ones resident until it is told to trim */
+  if (st->adapt.adapted) malloc_trim(0);
+#endif
   PetscCall(PffParticlesGetTotals(f->part, f->rho, count, mass));
   st->particles = count[0] + count[1];
   PetscFunctionReturn(PETSC_SUCCESS);
