@@ -36,8 +36,8 @@ static PetscErrorCode PffReferenceSeed(const PetscReal x[3], PetscInt *type, Pet
 /* Lattice particles per batch and rank: the reference lattice (8 particles per cell) exists a batch of
    blocks at a time, so that a reset during a run (PffFlowReset after an adapt) does not hold a lattice
    of the whole grid beside the particles (36 B per lattice particle, 288 B per cell): at most 2^20, 36 MB
-   of store per rank (2^22 let the peak of an adaptive rt3d W = 64 run rise by up to 100 MB per rank
-   at each large refinement). */
+   of store per rank (with 2^22 the peak of the adaptive rt3d W = 64 run to t/t0 = 2.7 was 587 MB per rank
+   instead of 531; the extra batches cost about 1 % of its time, docs/benchmarks.md). */
 #define PFF_REFERENCE_BATCH ((PetscInt64)1 << 20)
 
 /* owned values of src copied (add = false) or added to dst on the local blocks with mask[lb] (face channels
