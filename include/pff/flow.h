@@ -122,3 +122,7 @@ PETSC_EXTERN PetscErrorCode PffExtrapolateLiquidVelocity(PffGrid grid, PetscInt 
    neither, so liquid + gas is the fluid volume of the domain. Either output may be NULL. After
    PffFlowSetUp. Collective. */
 PETSC_EXTERN PetscErrorCode PffFlowGetPhaseVolumes(PffFlow flow, PetscReal *liquid, PetscReal *gas);
+/* Where the liquid is, over the same fluid cells and phase field: front[0] and front[1] the largest x and y
+   reached by a cell with phi >= 1/2 (its upper face: a dam break's front, a splash's crest; 0 without
+   one), centroid the liquid centroid sum phi_c V_c x_c / sum phi_c V_c. Collective. */
+PETSC_EXTERN PetscErrorCode PffFlowGetLiquidExtent(PffFlow flow, PetscReal front[2], PetscReal centroid[3]);

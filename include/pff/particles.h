@@ -37,6 +37,13 @@ static inline PetscInt PffParticleWordCoarsen(uint32_t w)
 {
   return (PetscInt)(w >> 28);
 }
+/* Whether the coarsening of a particle is pending: it asked for a coarser level fewer than delay times in a
+   row (PffParticlesAdaptCounters), so it still holds the grid at its own level. */
+static inline PetscBool PffParticleWordPending(uint32_t w, PetscInt delay)
+{
+  const PetscInt d = PffParticleWordCoarsen(w);
+  return (PetscBool)(d > 0 && d < delay);
+}
 /* The flags byte of the files: the flags in bits 0-3, D_p in bits 4-7 (docs/file-format.md). */
 static inline uint8_t PffParticleFlagsByte(uint32_t w)
 {

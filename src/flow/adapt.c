@@ -242,8 +242,8 @@ static PetscErrorCode TargetsAndMap(PffFlow f, PetscBool counters, PetscInt map[
     float              rp[PFF_GRID_MAX_LEVELS];
     for (PetscInt l = 0; l <= lmax; l++) rp[l] = (float)((PetscInt)1 << l) + (float)a->margin;
     for (PetscInt i = i0; i < i1; i++) {
-      const PetscInt l = target[i], dp = PffParticleWordCoarsen(pa.word[i]);
-      PetscInt      *rr = r + (counters && dp > 0 && dp < a->delay ? 27 : 0);
+      const PetscInt l  = target[i];
+      PetscInt      *rr = r + (counters && PffParticleWordPending(pa.word[i], a->delay) ? 27 : 0);
       PetscInt       rlo[3], rhi[3];
       for (int d = 0; d < 3; d++) {
         const float u = x[3 * i + d] - lo[d];

@@ -11,6 +11,15 @@
    driver after each step; it does not update the phase field. */
 #include "flowimpl.h"
 
+/* A cell with at least one open face (its upper faces through the halo of chOpen). */
+static inline PetscBool FluidCell(const PffView *const vopen[3], PetscInt i, PetscInt j, PetscInt k, PetscInt n)
+{
+  for (PetscInt d = 0; d < 3; d++)
+    if (*PffViewsAt(vopen[d], i, j, k, n) > 0 || *PffViewsAt(vopen[d], i + (d == 0), j + (d == 1), k + (d == 2), n) > 0)
+      return PETSC_TRUE;
+  return PETSC_FALSE;
+}
+
 PetscErrorCode PffFlowGetPhaseVolumes(PffFlow f, PetscReal *liquid, PetscReal *gas)
 {
   PetscInt  nlocal;
@@ -32,11 +41,7 @@ PetscErrorCode PffFlowGetPhaseVolumes(PffFlow f, PetscReal *liquid, PetscReal *g
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt j = 0; j < n; j++)
         for (PetscInt i = 0; i < n; i++) {
-          PetscBool fluid = PETSC_FALSE;
-          for (PetscInt d = 0; d < 3 && !fluid; d++)
-            fluid = (PetscBool)(*PffViewsAt(vopen[d], i, j, k, n) > 0 ||
-                                *PffViewsAt(vopen[d], i + (d == 0), j + (d == 1), k + (d == 2), n) > 0);
-          if (!fluid) continue;
+          if (!FluidCell(vopen, i, j, k, n)) continue;
           const PetscReal p = (PetscReal)phi[i + n * (j + n * k)];
           s[0] += p;
           s[1] += 1 - p;
@@ -48,5 +53,45 @@ PetscErrorCode PffFlowGetPhaseVolumes(PffFlow f, PetscReal *liquid, PetscReal *g
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, loc, 2, MPIU_REAL, MPI_SUM, f->comm));
   if (liquid) *liquid = loc[0];
   if (gas) *gas = loc[1];
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Where the liquid is, over the same fluid cells: the largest x and y reached by a cell with phi >= 1/2 (its
+   upper face) and the centroid sum phi V x_c / sum phi V. */
+PetscErrorCode PffFlowGetLiquidExtent(PffFlow f, PetscReal front[2], PetscReal centroid[3])
+{
+  PetscInt  nlocal;
+  PetscReal mx[2] = {-PETSC_MAX_REAL, -PETSC_MAX_REAL}, s[4] = {0, 0, 0, 0};
+
+  PetscFunctionBeginUser;
+  PetscCheck(f->setupcalled, f->comm, PETSC_ERR_ORDER, "PffFlowSetUp() must come before PffFlowGetLiquidExtent()");
+  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo   info;
+    const PffView *vopen[3];
+    float         *phi;
+    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+    PetscCall(PffGridGetBlockData(f->grid, f->chPhi, lb, 0, &phi));
+    for (PetscInt d = 0; d < 3; d++) PetscCall(PffGridGetBlockViews(f->grid, f->chOpen, lb, d, &vopen[d]));
+    const PetscInt  n = info.n;
+    const PetscReal h = info.h, v = h * h * h;
+    for (PetscInt k = 0; k < n; k++)
+      for (PetscInt j = 0; j < n; j++)
+        for (PetscInt i = 0; i < n; i++) {
+          if (!FluidCell(vopen, i, j, k, n)) continue;
+          const PetscReal p    = (PetscReal)phi[i + n * (j + n * k)];
+          const PetscReal x[3] = {info.lo[0] + (i + 0.5) * h, info.lo[1] + (j + 0.5) * h, info.lo[2] + (k + 0.5) * h};
+          if (p >= 0.5) {
+            mx[0] = PetscMax(mx[0], x[0] + 0.5 * h);
+            mx[1] = PetscMax(mx[1], x[1] + 0.5 * h);
+          }
+          for (int a = 0; a < 3; a++) s[a] += p * v * x[a];
+          s[3] += p * v;
+        }
+  }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, mx, 2, MPIU_REAL, MPI_MAX, f->comm));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, s, 4, MPIU_REAL, MPI_SUM, f->comm));
+  for (int a = 0; a < 2; a++) front[a] = mx[a] > -PETSC_MAX_REAL ? mx[a] : 0;
+  for (int a = 0; a < 3; a++) centroid[a] = s[3] > 0 ? s[a] / s[3] : 0;
   PetscFunctionReturn(PETSC_SUCCESS);
 }

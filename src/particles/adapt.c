@@ -3,16 +3,17 @@
 
    A particle of level l asked for level t < l becomes 8^(l - t) particles of level t with its velocity,
    type and flags. Children are placed per group: the splitting particles of one (l, t) that lie in one
-   cell C of level l share the 8^(l - t + 1) sub-cells of level t in C (8 particles per cell, as seeding
-   puts them), each child in a sub-cell of its own, in an order drawn from the group, at a uniformly
-   random place inside it. The level-l kernel saw C's parents as a smooth density, but they lie anywhere
-   in C after advection: placing each parent's children around the parent (in its finer cell, or in its
-   own cube) left the finer cells that no parent happened to sit in empty. Such holes read phi = 0.3 in
-   the bulk of the liquid, and rt3d_small_adaptive lost 4 % of its liquid volume for three steps after a
-   refinement. Sharing the sub-cells leaves no hole while C has at least 8 parents; mass and momentum are
-   exact (each child carries its parent's velocity and 8^-(l - t) of its volume). Children stay in C, so
-   particles keep their block and the store is binned again without a migration. The groups, their order
-   (by id) and the draws (keyed by ids) do not depend on the partition or the threads. */
+   cell C of level l share C's 64 sub-cells of level l - 1 (8 particles per cell, as seeding puts them):
+   in rounds each parent takes the nearest of the least used sub-cells in the least filled octant of C
+   (AssignSubCells); children of deeper levels take the octants of their first-level sub-cell; each child
+   goes to a uniformly random place inside its sub-cell. The level-l kernel saw C's parents as a smooth density, but
+   they lie anywhere in C after advection: placing each parent's children around the parent (in its finer cell, or in
+   its own cube) left the finer cells that no parent happened to sit in empty. Such holes read phi = 0.3 in the bulk of
+   the liquid, and rt3d_small_adaptive lost 4 % of its liquid volume for three steps after a refinement. Sharing the
+   sub-cells leaves no hole while C has at least 8 parents; mass and momentum are exact (each child carries its parent's
+   velocity and 8^-(l - t) of its volume). Children stay in C, so particles keep their block and the store is binned
+   again without a migration. The groups, their order (by id) and the draws (keyed by child ids) do not depend on the
+   partition or the threads. */
 #include "particlesimpl.h"
 
 /* A splitting particle: its group (l, t, cell of level l in its block) and id, for the sort. */
@@ -34,6 +35,84 @@ static inline uint64_t PffChildId(uint64_t parent, PetscInt64 c)
   return PffHash64_Private(parent ^ (0x9e3779b97f4a7c15ULL * (uint64_t)(c + 1))) | (1ULL << 63);
 }
 
+/* The cell of level l that holds grid coordinate x (one axis): its index within its block, and in lo
+   (if not NULL) its lower face. */
+static inline PetscInt CellOfLevel(PffParticles p, float x, PetscInt l, float *lo)
+{
+  const PetscInt xi = (PetscInt)x, b = (xi >> p->log2n0) << p->log2n0;
+  const PetscInt q = PetscClipInterval((xi - b) >> l, 0, (p->n0 >> l) - 1);
+  if (lo) *lo = (float)(b + (q << l));
+  return q;
+}
+
+/* The first-level sub-cells of the parents item[g0, g1) of one cell C (lower corner lo, sub-cells of side
+   q1): slot[8 (g - g0) + c] for child c of parent g. In 8 rounds each parent in turn takes a sub-cell of
+   the octant of C (a cell of level l - 1) with the fewest children so far, the least used sub-cell in it,
+   the nearest to the parent among those; so every finer cell in C gets its share (no hole while C has 8
+   parents, an even density below that) and each child stays near its parent. */
+static void AssignSubCells(PffParticles p, const PffSplitItem *item, PetscInt g0, PetscInt g1, const float lo[3],
+                           PetscReal q1, PetscInt slot[])
+{
+  PetscInt used[64] = {0}, octUsed[8] = {0};
+
+  for (PetscInt c = 0; c < 8; c++)
+    for (PetscInt g = g0; g < g1; g++) {
+      const float *x    = &p->s.x[3 * item[g].i];
+      PetscInt     best = -1, bo = 0;
+      PetscReal    bd = PETSC_MAX_REAL;
+      for (PetscInt k = 0; k < 64; k++) {
+        const PetscInt o = ((k >> 1) & 1) | ((k >> 2) & 2) | ((k >> 3) & 4); /* octant of sub-cell k */
+        if (best >= 0 && (octUsed[o] > octUsed[bo] || (octUsed[o] == octUsed[bo] && used[k] > used[best]))) continue;
+        PetscReal d2 = 0;
+        for (int a = 0; a < 3; a++) {
+          const PetscReal e = (PetscReal)lo[a] + q1 * ((PetscReal)((k >> (2 * a)) & 3) + 0.5) - (PetscReal)x[a];
+          d2 += e * e;
+        }
+        if (best < 0 || octUsed[o] < octUsed[bo] || used[k] < used[best] || d2 < bd) {
+          best = k;
+          bo   = o;
+          bd   = d2;
+        }
+      }
+      used[best]++;
+      octUsed[bo]++;
+      slot[(g - g0) * 8 + c] = best;
+    }
+}
+
+/* The 8^r children of level t = l - r of parent i (id, velocity and word taken first): child 0 in the
+   parent's slot, the others appended at *m with bin lb in dst; child c in first-level sub-cell
+   slot[c / 8^(r-1)] of C (corner lo, side q1), then down the octants of its path c % 8^(r-1) to a sub-cell
+   of side qt, at a random place in it. */
+static void PlaceChildren(PffParticles p, PetscInt i, PetscInt r, PetscInt t, const float lo[3], float cside,
+                          PetscReal q1, const PetscInt slot[], PetscInt lb, PetscInt *m, int32_t dst[])
+{
+  const PetscInt64 ndeep = (PetscInt64)1 << (3 * (r - 1));
+  const PetscReal  qt    = 0.5 * (PetscReal)((PetscInt)1 << t);
+  const uint64_t   id    = p->s.id[i];
+  const uint32_t   wc    = PffParticleWordSetLevel(p->s.word[i], t, 0);
+  const float      v[3]  = {p->s.v[3 * i], p->s.v[3 * i + 1], p->s.v[3 * i + 2]};
+
+  for (PetscInt64 c = 0; c < 8 * ndeep; c++) {
+    const PetscInt sc = slot[c / ndeep];
+    PetscInt64     d = c % ndeep, off[3] = {0, 0, 0};
+    for (PetscInt k = 1; k < r; k++, d >>= 3)
+      for (int a = 0; a < 3; a++) off[a] = 2 * off[a] + ((d >> a) & 1);
+    const uint64_t cid = PffChildId(id, c);
+    const PetscInt j   = c == 0 ? i : (*m)++;
+    for (int a = 0; a < 3; a++) {
+      const PetscReal u = PffRandom01_Private(p->seed, cid, PFF_RNG_SPLIT, (uint64_t)a);
+      const PetscReal x = (PetscReal)lo[a] + q1 * (PetscReal)((sc >> (2 * a)) & 3) + qt * ((PetscReal)off[a] + u);
+      /* rounding must not carry a child out of C (or its block) */
+      p->s.x[3 * j + a] = PetscMin((float)x, nextafterf(lo[a] + cside, 0));
+      p->s.v[3 * j + a] = v[a];
+    }
+    p->s.id[j]   = cid;
+    p->s.word[j] = wc;
+    if (c > 0) dst[j] = (int32_t)lb; /* the parent's slot stays in its bin */
+  }
+}
+
 PetscErrorCode PffParticlesAdaptCounters(PffParticles p, int8_t wish[], PetscInt delay)
 {
   const PetscInt n = p->n, lmax = p->nlevels - 1;
@@ -47,7 +126,7 @@ PetscErrorCode PffParticlesAdaptCounters(PffParticles p, int8_t wish[], PetscInt
     const PetscInt l = PffParticleWordLevel(w), t = PetscClipInterval((PetscInt)wish[i], 0, lmax);
     const PetscInt d = t > l ? PetscMin(PffParticleWordCoarsen(w) + 1, 15) : 0;
     p->s.word[i]     = PffParticleWordSetLevel(w, l, d);
-    wish[i]          = (int8_t)(t > l && d < delay ? l : t);
+    wish[i]          = (int8_t)(PffParticleWordPending(p->s.word[i], delay) ? l : t);
   }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -104,7 +183,7 @@ PetscErrorCode PffParticlesAdaptLevels(PffParticles p, const int8_t target[], Pe
     PetscInt         m = n, nb = 0, ns = 0;
     PetscObjectState state;
     PffSplitItem    *item;
-    PetscInt        *slot, *used;
+    PetscInt        *slot;
     /* binned on the current raster: the children's bins are their parents', so the sort needs no locate */
     PetscCall(PffGridGetTopologyState(p->grid, &state));
     PetscCheck(p->binned && p->topology == state, PETSC_COMM_SELF, PETSC_ERR_ORDER,
@@ -112,7 +191,7 @@ PetscErrorCode PffParticlesAdaptLevels(PffParticles p, const int8_t target[], Pe
     PetscCall(PffGridGetLocalBlocks(p->grid, &nb));
     PetscCall(PffParticlesGetIntWork_Private(p, (size_t)(n + extra) + 1, &dst));
     PetscCall(PffParticlesReserve_Private(p, n + (PetscInt)extra)); /* the store may move */
-    PetscCall(PetscMalloc3(nsplit, &item, 8 * nsplit, &slot, 72, &used));
+    PetscCall(PetscMalloc2(nsplit, &item, 8 * nsplit, &slot));
     for (PetscInt lb = 0; lb < nb; lb++) {
       const PetscInt i0 = p->start[lb], i1 = p->start[lb + 1];
       PetscInt       k0 = ns;
@@ -121,87 +200,25 @@ PetscErrorCode PffParticlesAdaptLevels(PffParticles p, const int8_t target[], Pe
         const uint32_t w = p->s.word[i];
         const PetscInt l = PffParticleWordLevel(w), t = PetscClipInterval((PetscInt)target[i], 0, lmax);
         if (t >= l) continue;
-        const PetscInt ncell = p->n0 >> l;
-        PetscInt64     cell  = 0;
-        for (int a = 2; a >= 0; a--) {
-          const PetscInt q = PetscClipInterval((((PetscInt)p->s.x[3 * i + a]) & (p->n0 - 1)) >> l, 0, ncell - 1);
-          cell             = cell * ncell + q;
-        }
+        PetscInt64 cell = 0;
+        for (int a = 2; a >= 0; a--) cell = cell * (p->n0 >> l) + CellOfLevel(p, p->s.x[3 * i + a], l, NULL);
         item[ns++] = (PffSplitItem){(cell * PFF_GRID_MAX_LEVELS + l) * PFF_GRID_MAX_LEVELS + t, p->s.id[i], i};
       }
       qsort(item + k0, (size_t)(ns - k0), sizeof(PffSplitItem), PffSplitItemCompare);
       for (PetscInt g0 = k0, g1; g0 < ns; g0 = g1) {
         for (g1 = g0 + 1; g1 < ns && item[g1].group == item[g0].group; g1++) {
         }
-        const PetscInt   ip = item[g0].i, l = PffParticleWordLevel(p->s.word[ip]);
-        const PetscInt   t = PetscClipInterval((PetscInt)target[ip], 0, lmax), r = l - t;
-        const PetscInt64 ndeep = (PetscInt64)1 << (3 * (r - 1)); /* children of each first-level child */
-        const PetscReal  q1 = 0.25 * (PetscReal)((PetscInt)1 << l), qt = 0.5 * (PetscReal)((PetscInt)1 << t);
-        float            lo[3];
-        for (int a = 0; a < 3; a++) {
-          const PetscInt x = (PetscInt)p->s.x[3 * ip + a], b = x & ~(p->n0 - 1);
-          lo[a] = (float)(b + PetscClipInterval((x - b) >> l, 0, (p->n0 >> l) - 1) * ((PetscInt)1 << l));
-        }
-        /* the 64 sub-cells of level l - 1 in C, in rounds: each parent in turn takes a sub-cell of the
-           octant of C (a cell of level l - 1) with the fewest children so far, the least used sub-cell in
-           it, the nearest to the parent among those; so every finer cell in C gets its share of the
-           children (no hole while C has 8 parents, an even density below that), each near its parent */
-        for (PetscInt k = 0; k < 64; k++) used[k] = 0;
-        for (PetscInt k = 0; k < 8; k++) used[64 + k] = 0;
-        for (PetscInt c1 = 0; c1 < 8; c1++)
-          for (PetscInt g = g0; g < g1; g++) {
-            const PetscInt i    = item[g].i;
-            PetscInt       best = -1, bo = 0;
-            PetscReal      bd = PETSC_MAX_REAL;
-            for (PetscInt k = 0; k < 64; k++) {
-              const PetscInt o = ((k >> 1) & 1) | ((k >> 2) & 2) | ((k >> 3) & 4); /* octant of sub-cell k */
-              if (best >= 0 &&
-                  (used[64 + o] > used[64 + bo] || (used[64 + o] == used[64 + bo] && used[k] > used[best])))
-                continue;
-              PetscReal d2 = 0;
-              for (int a = 0; a < 3; a++) {
-                const PetscReal e =
-                    (PetscReal)lo[a] + q1 * ((PetscReal)((k >> (2 * a)) & 3) + 0.5) - (PetscReal)p->s.x[3 * i + a];
-                d2 += e * e;
-              }
-              if (best < 0 || used[64 + o] < used[64 + bo] || used[k] < used[best] || d2 < bd) {
-                best = k;
-                bo   = o;
-                bd   = d2;
-              }
-            }
-            used[best]++;
-            used[64 + bo]++;
-            slot[(g - g0) * 8 + c1] = best;
-          }
-        for (PetscInt g = g0; g < g1; g++) {
-          const PetscInt i    = item[g].i;
-          const uint64_t id   = item[g].id;
-          const uint32_t wc   = PffParticleWordSetLevel(p->s.word[i], t, 0);
-          const float    v[3] = {p->s.v[3 * i], p->s.v[3 * i + 1], p->s.v[3 * i + 2]};
-          for (PetscInt64 c = 0; c < 8 * ndeep; c++) {
-            const PetscInt sc = slot[(g - g0) * 8 + c / ndeep];
-            PetscInt64     d = c % ndeep, off[3] = {0, 0, 0};
-            for (PetscInt k = 1; k < r; k++, d >>= 3) /* the octant path below the first level */
-              for (int a = 0; a < 3; a++) off[a] = 2 * off[a] + ((d >> a) & 1);
-            const uint64_t cid = PffChildId(id, c);
-            const PetscInt j   = c == 0 ? i : m++;
-            for (int a = 0; a < 3; a++) {
-              const PetscReal u = PffRandom01_Private(p->seed, cid, PFF_RNG_SPLIT, (uint64_t)a);
-              const PetscReal x =
-                  (PetscReal)lo[a] + q1 * (PetscReal)((sc >> (2 * a)) & 3) + qt * ((PetscReal)off[a] + u);
-              /* rounding must not carry a child out of C (or its block) */
-              p->s.x[3 * j + a] = PetscMin((float)x, nextafterf(lo[a] + (float)((PetscInt)1 << l), 0));
-              p->s.v[3 * j + a] = v[a];
-            }
-            p->s.id[j]   = cid;
-            p->s.word[j] = wc;
-            if (j >= n) dst[j] = (int32_t)lb;
-          }
-        }
+        const PetscInt  ip = item[g0].i, l = PffParticleWordLevel(p->s.word[ip]);
+        const PetscInt  t  = PetscClipInterval((PetscInt)target[ip], 0, lmax);
+        const PetscReal q1 = 0.25 * (PetscReal)((PetscInt)1 << l); /* first-level sub-cells: 4 per axis of C */
+        float           lo[3];
+        for (int a = 0; a < 3; a++) (void)CellOfLevel(p, p->s.x[3 * ip + a], l, &lo[a]);
+        AssignSubCells(p, item, g0, g1, lo, q1, slot);
+        for (PetscInt g = g0; g < g1; g++)
+          PlaceChildren(p, item[g].i, l - t, t, lo, (float)((PetscInt)1 << l), q1, slot + 8 * (g - g0), lb, &m, dst);
       }
     }
-    PetscCall(PetscFree3(item, slot, used));
+    PetscCall(PetscFree2(item, slot));
     p->n = m;
     PetscCall(PffParticlesSort_Private(p)); /* bins again (the children are the movers) */
   }

@@ -8,7 +8,7 @@
    y_g = sum_p y_p / N_gas. For bubbles in a closed tank y_g is their mean height, so its growth is the
    mean rise (V_g also counts the thin layer at the walls where the truncated kernel lowers phi, y_g
    does not). The final values are printed to 4 and 6 digits, which do not depend on the rank count.
-   Then where the liquid is (PffFluidLiquidExtent): the largest x and y of a cell with phi >= 1/2 (a
+   Then where the liquid is (PffFlowGetLiquidExtent): the largest x and y of a cell with phi >= 1/2 (a
    dam break's front, a splash's crest) and the liquid centroid.
 
    Static multi-level grids (-fluid_refine surface): the finest level follows the initial liquid
@@ -144,54 +144,13 @@ static PetscErrorCode PffFluidGasHeight(PffFlowScene *fs, PetscReal *yg)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Where the liquid is, from the cell phase field: the largest x and y reached by a cell with phi >= 1/2
-   (its upper face: the front of a dam break, the crest of a splash) and the centroid sum phi V x_c /
-   sum phi V. Grid quantities of the step's phase field, so an adaptive run and a uniform one compare
-   directly (docs/benchmarks.md, "Dynamic adaptivity"). Collective. */
-static PetscErrorCode PffFluidLiquidExtent(PffFlowScene *fs, PetscReal front[2], PetscReal centroid[3])
-{
-  PffGrid   grid;
-  PetscInt  nlocal, chPhi;
-  PetscReal mx[2] = {-PETSC_MAX_REAL, -PETSC_MAX_REAL}, s[4] = {0, 0, 0, 0};
-
-  PetscFunctionBeginUser;
-  PetscCall(PffFlowGetGrid(fs->flow, &grid));
-  PetscCall(PffFlowGetChannels(fs->flow, &chPhi, NULL, NULL, NULL));
-  PetscCall(PffGridGetLocalBlocks(grid, &nlocal));
-  for (PetscInt lb = 0; lb < nlocal; lb++) {
-    PffBlockInfo info;
-    float       *phi;
-    PetscCall(PffGridGetBlockInfo(grid, lb, &info));
-    PetscCall(PffGridGetBlockData(grid, chPhi, lb, 0, &phi));
-    const PetscInt  n = info.n;
-    const PetscReal h = info.h, v = h * h * h;
-    for (PetscInt k = 0; k < n; k++)
-      for (PetscInt j = 0; j < n; j++)
-        for (PetscInt i = 0; i < n; i++) {
-          const PetscReal p    = (PetscReal)phi[i + n * (j + n * k)];
-          const PetscReal x[3] = {info.lo[0] + (i + 0.5) * h, info.lo[1] + (j + 0.5) * h, info.lo[2] + (k + 0.5) * h};
-          if (p >= 0.5) {
-            mx[0] = PetscMax(mx[0], x[0] + 0.5 * h);
-            mx[1] = PetscMax(mx[1], x[1] + 0.5 * h);
-          }
-          for (int a = 0; a < 3; a++) s[a] += p * v * x[a];
-          s[3] += p * v;
-        }
-  }
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, mx, 2, MPIU_REAL, MPI_MAX, fs->scene->comm));
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, s, 4, MPIU_REAL, MPI_SUM, fs->scene->comm));
-  for (int a = 0; a < 2; a++) front[a] = mx[a] > -PETSC_MAX_REAL ? mx[a] : 0;
-  for (int a = 0; a < 3; a++) centroid[a] = s[3] > 0 ? s[a] / s[3] : 0;
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
 static PetscErrorCode PffFluidDiagnose(PffFlowScene *fs, PetscReal t, char row[], size_t len)
 {
   PetscReal yg, front[2], c[3];
 
   PetscFunctionBeginUser;
   PetscCall(PffFluidGasHeight(fs, &yg));
-  PetscCall(PffFluidLiquidExtent(fs, front, c));
+  PetscCall(PffFlowGetLiquidExtent(fs->flow, front, c));
   PetscCall(PetscSNPrintf(row, len, ",%.9e,%.9e,%.9e,%.9e,%.9e,%.9e", (double)yg, (double)front[0], (double)front[1],
                           (double)c[0], (double)c[1], (double)c[2]));
   PetscFunctionReturn(PETSC_SUCCESS);

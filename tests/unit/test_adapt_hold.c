@@ -9,12 +9,12 @@
    - the next delay - 1 steps coarsen nothing: the particles whose coarsening is pending hold their blocks
      (PffParticlesAdaptCounters), so a block that the criterion gives up at one step is not coarsened
      at that step;
-   - within delay + 1 further steps the blocks around the former drop do coarsen (a hold, not a lock);
-   - the counts and the steps are the same on any number of ranks (printed).
+   - within delay + 1 further steps the blocks around the former drop do coarsen (a hold, not a lock).
+   The lines it prints (counts and steps) are the same on any number of ranks.
 
    Sample run:  mpiexec -n 2 ./test_adapt_hold
    Prints one line per step. */
-#include <pff.h>
+#include "pfftest.h"
 
 static const char help[] = "Blocks coarsen only after their particles asked for it delay times in a row.\n";
 
@@ -74,11 +74,11 @@ static PetscErrorCode Step(MPI_Comm comm, PffFlow flow, const char *what, PffFlo
 
 int main(int argc, char **argv)
 {
-  const PetscInt    cells[3]    = {8 * NB, 8 * NB, 8 * NB};
+  const PetscInt    nb[3]       = {NB, NB, NB};
   const PetscBool   periodic[3] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
   const PetscReal   origin[3]   = {0, 0, 0};
   PetscInt          map[NB * NB * NB];
-  PffGrid           grid;
+  PffTestCtx        tc;
   PffFlow           flow;
   PffFlowAdaptStats ad;
   MPI_Comm          comm;
@@ -91,15 +91,8 @@ int main(int argc, char **argv)
   PetscCall(PetscOptionsSetValue(NULL, "-adapt_coarsen_delay", "3"));
   PetscCall(PetscOptionsSetValue(NULL, "-gravity", "0,0,0"));
   for (PetscInt b = 0; b < NB * NB * NB; b++) map[b] = 2; /* the adaptive start: the coarsest level */
-  PetscCall(PffGridCreate(comm, &grid));
-  PetscCall(PffGridSetCells(grid, cells));
-  PetscCall(PffGridSetBlockSize(grid, 8));
-  PetscCall(PffGridSetLevels(grid, 3));
-  PetscCall(PffGridSetDomain(grid, origin, 1.0 / (8 * NB)));
-  PetscCall(PffGridSetPeriodic(grid, periodic));
-  PetscCall(PffGridSetRefinementMap(grid, map));
-  PetscCall(PffGridSetUp(grid));
-  PetscCall(PffFlowCreate(grid, &flow));
+  PetscCall(PffTestCreateGridFromMap(comm, nb, periodic, origin, 1.0 / (8 * NB), 8, 3, map, &tc));
+  PetscCall(PffFlowCreate(tc.grid, &flow));
   PetscCall(PffFlowSetFromOptions(flow));
   PetscCall(PffFlowSetUp(flow));
   PetscCall(PffFlowSeed(flow, SeedPool, NULL));
@@ -115,13 +108,14 @@ int main(int argc, char **argv)
     PetscCall(Step(comm, flow, "no drop", &ad));
     if (ad.adapted && ad.grid.coarsened > 0) coarsenedAt = k;
   }
+  PetscCheck(coarsenedAt >= 0, comm, PETSC_ERR_PLIB, "the drop's blocks never coarsened in %d steps", 2 * DELAY);
   PetscCheck(coarsenedAt >= DELAY, comm, PETSC_ERR_PLIB,
              "blocks coarsened %" PetscInt_FMT " steps after the drop went, before the delay of %d", coarsenedAt,
              DELAY);
   PetscCall(PetscPrintf(comm, "the drop's blocks coarsened %" PetscInt_FMT " steps after it went (delay %d)\n",
                         coarsenedAt, DELAY));
   PetscCall(PffFlowDestroy(&flow));
-  PetscCall(PffGridDestroy(&grid));
+  PetscCall(PffGridDestroy(&tc.grid));
   PetscCall(PetscFinalize());
   return 0;
 }

@@ -17,7 +17,7 @@
 
    Sample run:  mpiexec -n 4 ./test_particles_adapt
    Prints one line per case, the same on any number of ranks. */
-#include <pff.h>
+#include "pfftest.h"
 
 static const char help[] = "Particle split and probabilistic coarsening.\n";
 
@@ -97,14 +97,11 @@ static PetscErrorCode CaseSplit(MPI_Comm comm)
   PetscCall(PffParticlesGetArrays(p, &a));
   /* advected parents: each anywhere in its level-2 cell (4 finest cells, 8 parents per cell), drawn from
      its id, so that a parent's own neighbourhood says nothing about where the finer cells are empty */
-  for (PetscInt i = 0; i < a.n; i++) {
-    uint64_t z = a.id[i];
+  for (PetscInt i = 0; i < a.n; i++)
     for (int d = 0; d < 3; d++) {
-      z                 = z * 6364136223846793005ULL + 1442695040888963407ULL;
-      const PetscReal u = (PetscReal)(z >> 11) * (1.0 / 9007199254740992.0);
+      const PetscReal u = PffTestUniform01(PffTestKey(a.id[i], (uint64_t)d, 0, 0));
       a.x[3 * i + d]    = (float)(4 * PetscFloorReal(a.x[3 * i + d] / 4) + 4 * u);
     }
-  }
   PetscCall(Momentum(comm, p, mom0));
   PetscCall(PetscMalloc1(a.n + 1, &target));
   for (PetscInt i = 0; i < a.n; i++) {
