@@ -14,3 +14,4 @@
 #include <pff/flow.h>
 #include <pff/io.h>
 #include <pff/scene.h>
+#include <pff/tallcell.h>

@@ -11,7 +11,8 @@
 
 typedef struct _n_PffGrid *PffGrid;
 
-typedef enum { PFF_PARTITION_MORTON, PFF_PARTITION_METIS } PffPartitionType;
+/* columns: whole block columns along y on one rank (the tall-cell solver's columns, src/tallcell/) */
+typedef enum { PFF_PARTITION_MORTON, PFF_PARTITION_METIS, PFF_PARTITION_COLUMNS } PffPartitionType;
 PETSC_EXTERN const char *const PffPartitionTypes[];
 
 typedef enum { PFF_REFINE_NONE, PFF_REFINE_PLANE, PFF_REFINE_SPHERE } PffRefineType;
@@ -144,7 +145,7 @@ static inline void PffBlockSideCell(PetscInt f, PetscInt layer, PetscInt u, Pets
    -grid_periodic x,z          periodic axes (any of x, y, z; others are walls)
    -grid_refine none|plane|sphere, -grid_refine_point, -grid_refine_normal, -grid_refine_radius,
    -grid_refine_band b         static refinement: level = floor(distance / (b block sizes))
-   -partition_type morton|metis
+   -partition_type morton|metis|columns
    SetUp builds the raster, grades it, partitions it and allocates the channels; it validates every
    parameter first and allocates nothing when one is impossible. Destroy is NULL-safe. */
 PETSC_EXTERN PetscErrorCode PffGridCreate(MPI_Comm comm, PffGrid *grid);

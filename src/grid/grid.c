@@ -3,7 +3,7 @@
    key that controls the value, so a user can fix a scene file from the error line alone. */
 #include "gridimpl.h"
 
-const char *const PffPartitionTypes[] = {"morton", "metis", "PffPartitionType", "PFF_PARTITION_", NULL};
+const char *const PffPartitionTypes[] = {"morton", "metis", "columns", "PffPartitionType", "PFF_PARTITION_", NULL};
 const char *const PffRefineTypes[]    = {"none", "plane", "sphere", "PffRefineType", "PFF_REFINE_", NULL};
 const char *const PffChannelKinds[]   = {"cell", "face", "PffChannelKind", "PFF_CHANNEL_", NULL};
 

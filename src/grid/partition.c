@@ -5,7 +5,10 @@
    metis:  k-way partition of the face-adjacency graph of active blocks, vertex weight = cells, edge
            weight = cells on the shared face at the finer side. Computed on rank 0 with a fixed seed
            and broadcast, so every rank holds the same owner map.
-   Both are deterministic. Owned blocks are stored in Morton order either way. */
+   columns: every block column along y (the blocks with the same x and z index) goes to one rank; the
+           columns in 2D Morton order of (x, z) carry the summed work of their blocks, and the prefix sum
+           is cut as for morton. The tall-cell solver needs whole columns on a rank (docs/tallcell.md).
+   All three are deterministic. Owned blocks are stored in Morton order either way. */
 #include "gridimpl.h"
 #include <metis.h>
 
@@ -69,6 +72,43 @@ static PetscErrorCode PffPartitionMorton(PffGrid g)
     g->owner[g->order[a]] = (PetscMPIInt)PetscMin(r, (PetscInt64)g->size - 1);
     acc += w;
   }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffPartitionColumns(PffGrid g)
+{
+  const PetscInt nc = g->nb[0] * g->nb[2];
+  PetscInt      *order;
+  uint64_t      *key;
+  PetscInt64    *work, total = 0, acc = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc3(nc, &order, nc, &key, nc, &work));
+  for (PetscInt c = 0; c < nc; c++) {
+    order[c] = c;
+    key[c]   = PffMortonEncode((uint32_t)(c % g->nb[0]), 0, (uint32_t)(c / g->nb[0]));
+    work[c]  = 0;
+  }
+  for (PetscInt b = 0; b < g->nblocks; b++)
+    if (g->level[b] >= 0) work[b % g->nb[0] + g->nb[0] * (b / (g->nb[0] * g->nb[1]))] += PffBlockWork(g, b);
+  /* insertion sort by key: the raster has at most a few thousand columns */
+  for (PetscInt a = 1; a < nc; a++)
+    for (PetscInt q = a; q > 0 && key[order[q]] < key[order[q - 1]]; q--) {
+      const PetscInt tmp = order[q];
+      order[q]           = order[q - 1];
+      order[q - 1]       = tmp;
+    }
+  for (PetscInt c = 0; c < nc; c++) total += work[c];
+  for (PetscInt a = 0; a < nc; a++) {
+    const PetscInt   c = order[a];
+    const PetscInt64 w = work[c], r = total > 0 ? ((2 * acc + w) * (PetscInt64)g->size) / (2 * total) : 0;
+    for (PetscInt j = 0; j < g->nb[1]; j++) {
+      const PetscInt b = c % g->nb[0] + g->nb[0] * (j + g->nb[1] * (c / g->nb[0]));
+      if (g->level[b] >= 0) g->owner[b] = (PetscMPIInt)PetscMin(r, (PetscInt64)g->size - 1);
+    }
+    acc += w;
+  }
+  PetscCall(PetscFree3(order, key, work));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -149,6 +189,8 @@ PetscErrorCode PffGridPartition_Private(PffGrid g)
   }
   if (g->ptype == PFF_PARTITION_METIS)
     PetscCall(PffPartitionMetis(g));
+  else if (g->ptype == PFF_PARTITION_COLUMNS)
+    PetscCall(PffPartitionColumns(g));
   else
     PetscCall(PffPartitionMorton(g));
 

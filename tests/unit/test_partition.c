@@ -1,4 +1,4 @@
-/* Unit test of the block partition of PffGrid (Morton and METIS) at any rank count.
+/* Unit test of the block partition of PffGrid (Morton, METIS and columns) at any rank count.
 
    On three pseudo-random multi-level maps (n0 = 8, 3 levels; walled or partly periodic rasters, with
    and without inactive blocks) and for both partitioners it checks that
@@ -12,7 +12,9 @@
      - PffGridGetPartitionQuality agrees with the owner map: imbalance >= 1 equals
        max work * size / total work (work = cells), and the cut faces are recounted here,
      - Morton: owners are non-decreasing along the Morton order and no rank holds more than its
-       share plus one block.
+       share plus one block;
+     - columns: every block column along y has one owner, and no rank holds more than its share plus
+       one block column.
    On a uniform 4x4x4-block grid the Morton partition has imbalance exactly 1 on 1, 2 and 4 ranks.
 
    Sample run:  mpiexec -n 4 ./test_partition
@@ -238,6 +240,25 @@ static PetscErrorCode CheckPartition(PffGrid grid, const PetscInt request[], Pff
   PetscCheck(q.haloBytesMax >= q.haloBytesMean && q.haloBytesMean >= 0 && (size > 1 || q.haloBytesMax == 0),
              PETSC_COMM_SELF, PETSC_ERR_PLIB, "%s: halo bytes max %g mean %g", what, (double)q.haloBytesMax,
              (double)q.haloBytesMean);
+  if (ptype == PFF_PARTITION_COLUMNS) {
+    PetscInt64 colMax = 0;
+    for (PetscInt g = 0; g < nblocks; g++) {
+      const PetscInt b0 = g % nb[0] + nb[0] * nb[1] * (g / (nb[0] * nb[1])); /* the column's bottom block */
+      PetscInt64     cw = 0;
+      PetscCheck(level[g] < 0 || level[b0] < 0 || owner[g] == owner[b0], PETSC_COMM_SELF, PETSC_ERR_PLIB,
+                 "%s: block %" PetscInt_FMT " has owner %d, its column's bottom block %d", what, g, owner[g],
+                 owner[b0]);
+      if (g != b0) continue;
+      for (PetscInt j = 0; j < nb[1]; j++) {
+        const PetscInt b = b0 + nb[0] * j;
+        if (level[b] >= 0) cw += (PetscInt64)(N0 >> level[b]) * (N0 >> level[b]) * (N0 >> level[b]);
+      }
+      colMax = PetscMax(colMax, cw);
+    }
+    PetscCheck(wmax * size <= total + (PetscInt64)size * colMax, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+               "%s: a rank holds %" PetscInt64_FMT " cells, more than its share of %" PetscInt64_FMT " plus one column",
+               what, wmax, total);
+  }
   if (ptype == PFF_PARTITION_MORTON) {
     /* each rank holds the blocks whose work midpoint falls in its share: at most one block too many */
     PetscCheck(wmax * size <= total + (PetscInt64)size * N0 * N0 * N0, PETSC_COMM_SELF, PETSC_ERR_PLIB,
@@ -271,7 +292,7 @@ int main(int argc, char **argv)
   for (size_t c = 0; c < PETSC_STATIC_ARRAY_LENGTH(cases); c++) {
     PetscInt *request;
     PetscCall(BuildRequest(&cases[c], &request));
-    for (PffPartitionType pt = PFF_PARTITION_MORTON; pt <= PFF_PARTITION_METIS; pt++) {
+    for (PffPartitionType pt = PFF_PARTITION_MORTON; pt <= PFF_PARTITION_COLUMNS; pt++) {
       PffGrid  a, b, o;
       PetscInt nl[3];
       char     what[128];

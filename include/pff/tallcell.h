@@ -1,0 +1,79 @@
+/* tallcell: the variational pressure projection on quadtree tall cells (Narita et al. 2025, "tall
+   cells" Sec. 4.2-4.3) for a liquid with a free surface, on the MSBG.
+
+   The grid is the quadtree: its level map must be constant along y in every block column (the x-z image
+   of levels is the quadtree, graded 2:1 by the grid) and the grid must be partitioned by whole columns
+   (-partition_type columns), so that every column of cells lies on one rank. A column of cells of size s
+   is cut into liquid runs (level set phi < 0 at the cell centre; the input is a cell channel). Near each
+   free-surface end of a run a band of cubic cells stays; the rest of the run merges into one tall cell.
+   A cubic cell carries one pressure sample at its centre, a tall cell two (the centres of its lowest and
+   highest sub-cells). Inside a run the pressure is the piecewise-linear function of y through the samples
+   and p = 0 at the free surface (ghost fluid), extrapolated linearly at a wall.
+
+   Gradient rows (the faces of [grad] in Eq. 1):
+     vertical    between consecutive samples of a run (d = their distance, V = s^2 d; the y-faces between
+                 them are averaged, Eq. 5), and from the last sample to the air cell across a free
+                 surface (d = s, F = 1/theta);
+     horizontal  per stored lower x- or z-face of a column's cells (same level: d = s; coarser lower
+                 side: d = 1.5 s; finer lower side, two fine columns averaged: d = 0.75 s), the pressure
+                 of each side evaluated at the face's mid height (Eq. 2-4). Consecutive faces whose cells
+                 on both sides lie in the same tall cells merge into one row (Eq. 5). A face between a
+                 liquid and an air cell gets F = 1/theta and p = 0 on the air side.
+   The system [grad]^T V F [grad] p = (rho/dt) [grad]^T V u* (Eq. 1 with A = 1: no solids yet) is
+   symmetric positive definite and assembled as a MATMPIAIJ, solved by a PETSc KSP (prefix tall_,
+   default CG with block Jacobi / ICC(0), rtol 1e-4). docs/tallcell.md has the derivation and choices. */
+#pragma once
+
+#include <pff/grid.h>
+#include <petscksp.h>
+
+typedef struct _n_PffTall *PffTall;
+
+typedef struct {
+  PetscInt64         cells;       /* pressure cells: cubic cells plus tall cells (each tall cell counts once) */
+  PetscInt64         tallCells;   /* of which tall */
+  PetscInt64         samples;     /* unknowns */
+  PetscInt64         rows;        /* gradient rows */
+  PetscInt64         liquidCells; /* liquid cells of the grid (the cubic cells a uniform discretisation would solve) */
+  PetscInt           its;
+  PetscReal          res0, res; /* absolute residual inf-norm at the initial guess and at the end (Table 2) */
+  PetscReal          rnorm;     /* final residual 2-norm relative to the rhs */
+  KSPConvergedReason reason;
+  PetscLogDouble     assembleTime, solveTime;
+} PffTallStats;
+
+/* Life cycle. Create borrows grid (set up, columns partition, column-constant levels, y not periodic).
+   SetFromOptions reads -tall_merge (merge the deep part of runs into tall cells, default true; false gives
+   cubic cells everywhere), -tall_layer_fraction (band of cubic cells under each free surface as a fraction
+   of the run's height, default 0.25), -tall_layer_min (at least this many cells, default 2), -tall_theta_min
+   (smallest liquid fraction of a free-surface gradient, default 0.01), and the KSP options under tall_. */
+PETSC_EXTERN PetscErrorCode PffTallCreate(PffGrid grid, PffTall *tc);
+PETSC_EXTERN PetscErrorCode PffTallSetFromOptions(PffTall tc);
+PETSC_EXTERN PetscErrorCode PffTallDestroy(PffTall *tc);
+/* Whether the deep part of each run merges into a tall cell (-tall_merge); takes effect at the next Build.
+   Not collective, but every rank must pass the same value. */
+PETSC_EXTERN PetscErrorCode PffTallSetMerge(PffTall tc, PetscBool merge);
+
+/* Builds the columns, samples, rows and the operator from the level set in cell channel chPhi (negative in
+   liquid); the ghost columns of neighbouring ranks come through one PetscSF. Collective. */
+PETSC_EXTERN PetscErrorCode PffTallBuild(PffTall tc, PetscInt chPhi);
+/* Projection: solves the system with u* from face channel chU, sets u <- u* - dt/rho F grad p on every face
+   that belongs to a row (the rows' faces get their row's gradient), and writes p at every cell centre into
+   cell channel chP (the column's function; 0 in air). stats may be NULL. Collective. */
+PETSC_EXTERN PetscErrorCode PffTallProject(PffTall tc, PetscInt chU, PetscReal dt, PetscReal rho, PetscInt chP,
+                                           PffTallStats *stats);
+/* Largest |[grad]^T V u_row| / (cell volume) over the samples for the velocity in chU (1/s): the variational
+   divergence the projection removes. Collective. */
+PETSC_EXTERN PetscErrorCode PffTallMaxDivergence(PffTall tc, PetscInt chU, PetscReal *maxdiv);
+/* Largest |u_row| over the rows (the row averages of chU). Collective. */
+PETSC_EXTERN PetscErrorCode PffTallMaxRowVelocity(PffTall tc, PetscInt chU, PetscReal *umax);
+/* The assembled operator [grad]^T V F [grad] (borrowed, valid until the next Build) and the solution of
+   the last projection (samples, global numbering). */
+PETSC_EXTERN PetscErrorCode PffTallGetOperator(PffTall tc, Mat *A);
+PETSC_EXTERN PetscErrorCode PffTallGetSolution(PffTall tc, Vec *p);
+PETSC_EXTERN PetscErrorCode PffTallGetKSP(PffTall tc, KSP *ksp);
+/* Counts of the last Build (the solve fields of the stats are zero). Collective. */
+PETSC_EXTERN PetscErrorCode PffTallGetCounts(PffTall tc, PffTallStats *stats);
+/* Writes the pressure-cell height (in cells of the column's size: 1 cubic, m for a tall cell's sub-cells,
+   0 in air) into cell channel ch, for frames. Not collective. */
+PETSC_EXTERN PetscErrorCode PffTallWriteCellHeight(PffTall tc, PetscInt ch);

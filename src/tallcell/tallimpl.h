@@ -1,0 +1,94 @@
+/* The private body of PffTall (include/pff/tallcell.h). Only src/tallcell/ includes this header.
+
+   Columns. A block column (the blocks with one x and z index) has one level and one owner. Its columns of
+   cells are numbered ck * n + ci (n cells per axis at its level) and each holds ny = nb[1] * n records, one
+   per cell from the bottom. The records of a block column lie at bcOffset[bc] on its owner, in raster order
+   of the block columns (x fastest, then z), so any rank can address any record of any rank.
+
+   A record says how the pressure varies over its cell: for the lower and the upper half of the cell, a
+   segment between two points (sample id, height); id PFF_TALL_SURFACE is the free surface (p = 0). The
+   pressure at height y in that half is the linear function through the two points. */
+#pragma once
+
+#include <pff.h>
+#include <pff/tallcell.h>
+
+#define PFF_TALL_SURFACE (-1) /* segment point: the free surface, p = 0 */
+#define PFF_TALL_AIR (-2)     /* record kind: an air cell */
+#define PFF_TALL_CUBIC (-1)   /* record kind: a cubic cell (otherwise the id of its tall cell's lowest sample) */
+#define PFF_TALL_RI 5         /* ints per record: 4 segment ids, kind */
+#define PFF_TALL_RR 5         /* reals per record: 4 segment heights, phi */
+#define PFF_TALL_ROW_MAX 6    /* entries of a gradient row (2 samples above, 2 x 2 below at a finer side) */
+
+typedef struct {
+  PetscInt  n; /* entries */
+  PetscInt  col[PFF_TALL_ROW_MAX];
+  PetscReal val[PFF_TALL_ROW_MAX];
+} PffTallRow;
+
+struct _n_PffTall {
+  PffGrid     grid;
+  MPI_Comm    comm; /* the grid's, borrowed */
+  PetscMPIInt rank, size;
+
+  /* options */
+  PetscBool merge;
+  PetscReal layerFraction, thetaMin;
+  PetscInt  layerMin;
+
+  /* raster */
+  PetscInt     nb[3], n0;
+  PetscReal    h0, origin[3];
+  PetscBool    periodic[3];
+  PetscInt     nbc;      /* block columns nb[0] * nb[2] */
+  PetscInt    *bcLevel;  /* [nbc] */
+  PetscMPIInt *bcOwner;  /* [nbc] */
+  PetscInt    *bcOffset; /* [nbc] first record on the owner */
+
+  /* owned records */
+  PetscInt   nrec;
+  PetscInt  *ri;     /* [PFF_TALL_RI nrec] */
+  PetscReal *rr;     /* [PFF_TALL_RR nrec] */
+  float     *height; /* [nrec] pressure-cell height in cells (0 air, 1 cubic, m tall) */
+
+  /* ghost records of the lower x and z neighbour columns on other ranks */
+  PetscInt    nghost; /* ghost columns */
+  PetscInt64 *gkey;   /* [nghost] sorted column keys (ColumnKey) */
+  PetscInt   *gstart; /* [nghost + 1] first ghost record */
+  PetscInt   *gi;     /* [PFF_TALL_RI gstart[nghost]] */
+  PetscReal  *gr;     /* [PFF_TALL_RR gstart[nghost]] */
+
+  /* samples (unknowns): global numbers sstart .. sstart + nsamp - 1 */
+  PetscInt   nsamp, sstart;
+  PetscReal *sampleS; /* [nsamp] cell size of the sample's column */
+
+  /* rows: local rows 0 .. nrows - 1, global rstart + r */
+  PetscInt    nrows, rstart, rowsCap;
+  PetscReal  *rowF, *rowV; /* [nrows] F (1 or 1 / theta) and V (area times distance) */
+  PetscInt   *rowFace;     /* [nrows + 1] CSR into the face list */
+  PetscInt    nfaces, facesCap;
+  PetscInt   *faceLb, *faceComp, *faceCell; /* [nfaces] local block, component, cell index in the block */
+  PffTallRow *rowEnt;                       /* [nrows] entries (global sample ids) */
+  PetscInt64  nsurface;                     /* global free-surface rows: none leaves A singular */
+
+  PetscInt64 cells, tallCells, liquidCells; /* global counts */
+
+  Mat            G, A;
+  Vec            p, b, urow, grow, w; /* samples: p, b; rows: u*, G p, work */
+  KSP            ksp;
+  PetscBool      subPCDefaultApplied, built;
+  PetscLogDouble assembleTime;
+};
+
+/* Key of the column (gx, gz) of cells at level l. */
+static inline PetscInt64 PffTallColumnKey(const struct _n_PffTall *tc, PetscInt l, PetscInt gx, PetscInt gz)
+{
+  const PetscInt64 nx = (PetscInt64)tc->nb[0] * tc->n0, nz = (PetscInt64)tc->nb[2] * tc->n0;
+  return ((PetscInt64)l * nx + gx) * nz + gz;
+}
+
+PETSC_INTERN PetscErrorCode PffTallBuildColumns_Private(PffTall, PetscInt chPhi);
+PETSC_INTERN PetscErrorCode PffTallBuildRows_Private(PffTall);
+PETSC_INTERN PetscErrorCode PffTallFreeBuild_Private(PffTall);
+PETSC_INTERN PetscErrorCode PffTallAddRow_Private(PffTall, const PffTallRow *, PetscReal F, PetscReal V, PetscInt nf,
+                                                  const PetscInt lb[], const PetscInt comp[], const PetscInt cell[]);
