@@ -54,6 +54,16 @@ PETSC_EXTERN PetscErrorCode PffTallDestroy(PffTall *tc);
    Not collective, but every rank must pass the same value. */
 PETSC_EXTERN PetscErrorCode PffTallSetMerge(PffTall tc, PetscBool merge);
 
+/* The quadtree from the sizing function (tall cells Sec. 4.1): near the free surface (|phi| < 1.5 s) the wanted
+   cell size is min(c_kappa / |kappa|, c_u / |grad u|) (curvature of phi, velocity gradient of face channel chU,
+   or chU = -1 for none); every block column asks for the coarsest level whose cells are no larger, and level[]
+   (the raster, nb[0] nb[1] nb[2], x fastest) receives it for all its blocks. Pass level[] to PffGridAdapt (or
+   PffGridSetRefinementMap before set-up), whose 2:1 grading is the paper's smoothing of neighbour sizes.
+   Options (SetFromOptions): -tall_sizing_curvature c_kappa (rad per cell, default 0.3), -tall_sizing_velocity
+   c_u (m/s per cell, default 0.05), -tall_levels (levels used, default the grid's). Halos of chPhi and chU are
+   exchanged here. Collective; every rank gets the same map. */
+PETSC_EXTERN PetscErrorCode PffTallSizingLevels(PffTall tc, PetscInt chPhi, PetscInt chU, PetscInt level[]);
+
 /* Builds the columns, samples, rows and the operator from the level set in cell channel chPhi (negative in
    liquid); the ghost columns of neighbouring ranks come through one PetscSF. Collective. */
 PETSC_EXTERN PetscErrorCode PffTallBuild(PffTall tc, PetscInt chPhi);

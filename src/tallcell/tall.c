@@ -24,6 +24,8 @@ PetscErrorCode PffTallCreate(PffGrid grid, PffTall *tcp)
   tc->layerFraction = PFF_TALL_LAYER_FRACTION_DEFAULT;
   tc->layerMin      = PFF_TALL_LAYER_MIN_DEFAULT;
   tc->thetaMin      = PFF_TALL_THETA_MIN_DEFAULT;
+  tc->sizingKappa   = 0.3;
+  tc->sizingU       = 0.05;
   PetscCall(PffGridGetComm(grid, &tc->comm));
   PetscCallMPI(MPI_Comm_rank(tc->comm, &tc->rank));
   PetscCallMPI(MPI_Comm_size(tc->comm, &tc->size));
@@ -55,7 +57,16 @@ PetscErrorCode PffTallSetFromOptions(PffTall tc)
                                  "PffTallBuild", tc->layerMin, &tc->layerMin, NULL, 1));
   PetscCall(PffOptionsReal("-tall_theta_min", "Smallest liquid fraction of a free-surface gradient, in (0, 1]",
                            "PffTallBuild", tc->thetaMin, &tc->thetaMin, NULL));
+  PetscCall(PffOptionsReal("-tall_sizing_curvature", "Sizing: largest turn of the surface across one cell (rad), > 0",
+                           "PffTallSizingLevels", tc->sizingKappa, &tc->sizingKappa, NULL));
+  PetscCall(PffOptionsReal("-tall_sizing_velocity", "Sizing: largest velocity jump across one cell (m/s), > 0",
+                           "PffTallSizingLevels", tc->sizingU, &tc->sizingU, NULL));
+  PetscCall(PffOptionsBoundedInt("-tall_levels", "Quadtree levels of the sizing function (0: the grid's)",
+                                 "PffTallSizingLevels", tc->levels, &tc->levels, NULL, 0));
   PetscOptionsEnd();
+  PetscCheck(tc->sizingKappa > 0 && tc->sizingU > 0, tc->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-tall_sizing_curvature and -tall_sizing_velocity must be positive (%g, %g)", (double)tc->sizingKappa,
+             (double)tc->sizingU);
   PetscCheck(tc->layerFraction >= 0 && tc->layerFraction <= 1, tc->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-tall_layer_fraction: %g is not in [0, 1]", (double)tc->layerFraction);
   PetscCheck(tc->thetaMin > 0 && tc->thetaMin <= 1, tc->comm, PETSC_ERR_ARG_OUTOFRANGE,

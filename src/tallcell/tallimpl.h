@@ -35,6 +35,8 @@ struct _n_PffTall {
   PetscBool merge;
   PetscReal layerFraction, thetaMin;
   PetscInt  layerMin;
+  PetscReal sizingKappa, sizingU; /* the sizing function's turn (rad) and velocity jump (m/s) per cell */
+  PetscInt  levels;               /* quadtree levels the sizing function uses (0: the grid's) */
 
   /* raster */
   PetscInt     nb[3], n0;

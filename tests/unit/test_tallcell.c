@@ -8,6 +8,8 @@
      leaves no variational divergence;
    - the same random problem on this communicator and on one rank gives the same counts and the same
      cell pressures (partition independence);
+   - the sizing function: a flat pool at rest asks for the coarsest level everywhere (walls are not
+     surfaces), a falling drop above it asks for the finest level over the drop and the coarsest far away;
    - bad input: levels that change along y, an out-of-range option.
    Sample run: mpiexec -n 4 ./test_tallcell     prints one line per check on rank 0. */
 #include "pfftest.h"
@@ -19,7 +21,7 @@
 
 typedef struct {
   PetscReal H;     /* pool height */
-  PetscInt  shape; /* 0 flat pool; 1 wavy surface, a drop and an air pocket */
+  PetscInt  shape; /* 0 flat pool; 1 wavy surface, a drop and an air pocket; 2 flat pool and a drop */
 } Scene;
 
 static PetscReal Phi(const PetscReal x[3], PetscInt comp, void *vctx)
@@ -27,6 +29,9 @@ static PetscReal Phi(const PetscReal x[3], PetscInt comp, void *vctx)
   const Scene *sc = (const Scene *)vctx;
   (void)comp;
   if (sc->shape == 0) return x[1] - sc->H;
+  if (sc->shape == 2)
+    return PetscMin(x[1] - sc->H,
+                    PetscSqrtReal(PetscSqr(x[0] - 0.45) + PetscSqr(x[1] - 0.8) + PetscSqr(x[2] - 0.45)) - 0.1);
   const PetscReal surf   = sc->H + 0.06 * PetscSinReal(9 * x[0]) * PetscCosReal(7 * x[2]);
   const PetscReal drop   = PetscSqrtReal(PetscSqr(x[0] - 0.4) + PetscSqr(x[1] - 0.85) + PetscSqr(x[2] - 0.55)) - 0.09;
   const PetscReal pocket = 0.1 - PetscSqrtReal(PetscSqr(x[0] - 0.7) + PetscSqr(x[1] - 0.25) + PetscSqr(x[2] - 0.3));
@@ -37,6 +42,13 @@ static PetscReal Gravity(const PetscReal x[3], PetscInt comp, void *vctx)
 {
   (void)vctx;
   return comp == 1 && x[1] > 1e-9 ? -G * DT : 0;
+}
+
+/* gravity, and -2 m/s inside the drop of shape 2 */
+static PetscReal DropU(const PetscReal x[3], PetscInt comp, void *vctx)
+{
+  const PetscReal d = PetscSqrtReal(PetscSqr(x[0] - 0.45) + PetscSqr(x[1] - 0.8) + PetscSqr(x[2] - 0.45));
+  return Gravity(x, comp, vctx) + (comp == 1 && d < 0.1 ? -2.0 : 0.0);
 }
 
 static PetscReal RandomU(const PetscReal x[3], PetscInt comp, void *vctx)
@@ -272,6 +284,45 @@ static PetscErrorCode PartitionIndependence(MPI_Comm comm)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* The sizing function's level map on a uniform grid of 4 x 4 x 4 blocks (block columns of 0.25 x 0.25). */
+static PetscErrorCode Sizing(MPI_Comm comm)
+{
+  const PetscInt nb[3] = {4, 4, 4};
+  PetscInt       level[64];
+
+  PetscFunctionBeginUser;
+  for (PetscInt shape = 0; shape <= 2; shape += 2) {
+    Scene   sc = {0.61, shape};
+    Problem pb;
+    PetscCall(ProblemCreate(comm, nb, 0, 1, PETSC_TRUE, &sc, &pb));
+    PetscCall(PffGridFillChannel(pb.t.grid, pb.u, shape ? DropU : Gravity, NULL));
+    PetscCall(PffTallSizingLevels(pb.tc, pb.phi, pb.u, level));
+    for (PetscInt b = 0; b < 64; b++)
+      PetscCheck(level[b] == level[b % 4 + 16 * (b / 16)], comm, PETSC_ERR_PLIB, "sizing: levels change along y");
+    if (shape == 0)
+      for (PetscInt b = 0; b < 64; b++)
+        PetscCheck(level[b] == 2, comm, PETSC_ERR_PLIB,
+                   "sizing, still pool: block %" PetscInt_FMT " asks for level %" PetscInt_FMT, b, level[b]);
+    else {
+      /* the drop (centre 0.45, radius 0.1) lies over block columns 1..2 in x and z; column (0, 3) is far away */
+      PetscCheck(level[1 + 16 * 1] == 0 && level[2 + 16 * 2] == 0 && level[0 + 16 * 3] == 2 && level[3 + 16 * 0] == 2,
+                 comm, PETSC_ERR_PLIB,
+                 "sizing, drop: levels %" PetscInt_FMT " %" PetscInt_FMT " %" PetscInt_FMT " %" PetscInt_FMT,
+                 level[1 + 16], level[2 + 32], level[48], level[3]);
+    }
+    PetscCall(PetscPrintf(comm,
+                          "sizing, %s: block-column levels %" PetscInt_FMT "%" PetscInt_FMT "%" PetscInt_FMT
+                          "%" PetscInt_FMT " / %" PetscInt_FMT "%" PetscInt_FMT "%" PetscInt_FMT "%" PetscInt_FMT
+                          " / %" PetscInt_FMT "%" PetscInt_FMT "%" PetscInt_FMT "%" PetscInt_FMT " / %" PetscInt_FMT
+                          "%" PetscInt_FMT "%" PetscInt_FMT "%" PetscInt_FMT " (z rows)\n",
+                          shape ? "falling drop" : "still pool", level[0], level[1], level[2], level[3], level[16],
+                          level[17], level[18], level[19], level[32], level[33], level[34], level[35], level[48],
+                          level[49], level[50], level[51]));
+    PetscCall(ProblemDestroy(&pb));
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /* Bad input: one clear error each. */
 static PetscErrorCode BadInput(MPI_Comm comm)
 {
@@ -330,6 +381,7 @@ int main(int argc, char **argv)
   PetscCall(StillWater(PETSC_COMM_WORLD, "quadtree cubic", -1, PETSC_FALSE));
   PetscCall(RandomQuadtrees(PETSC_COMM_WORLD));
   PetscCall(PartitionIndependence(PETSC_COMM_WORLD));
+  PetscCall(Sizing(PETSC_COMM_WORLD));
   PetscCall(BadInput(PETSC_COMM_WORLD));
   PetscCall(PetscFinalize());
   return 0;
