@@ -27,6 +27,12 @@ typedef PetscReal (*PffVelocityFn)(const PetscReal x[3], PetscInt comp, PetscRea
 
 #define PFF_FLOW_NSTAGES 9
 
+/* -flow_model: two_phase, the PF-FLIP step with air particles and the two-phase projection (the default); liquid,
+   a free-surface liquid with liquid particles only and the variational tall-cell projection (src/tallcell/,
+   docs/tallcell.md), p = 0 in the air. */
+typedef enum { PFF_FLOW_TWO_PHASE, PFF_FLOW_LIQUID } PffFlowModel;
+PETSC_EXTERN const char *const PffFlowModels[];
+
 /* What one adaptation did (PF-FLIP Sec. 5.4, -adapt_levels). */
 typedef struct {
   PetscBool             adapted;                    /* the grid changed */
@@ -58,8 +64,10 @@ PETSC_EXTERN const char
    -gravity gx,gy,gz, -flow_cfl (0, 4], -flow_dt_max, -flow_alpha_phi (0, 10], -flow_delta_phi [0, 0.5),
    -flow_flip [0, 1], -flow_pressure (bool, default true), -flow_volume_correction [0, 1] (0 = off),
    -flow_volume_correction_max_displacement (cells, > 0), -flow_volume_correction_rtol (0, 1),
-   -flow_delete_bubbles (bool, default true), -flow_extrapolate_layers (>= 0; 0 = off), and the particle and
-   pressure options. */
+   -flow_delete_bubbles (bool, default true), -flow_extrapolate_layers (>= 0; 0 = off), -flow_model
+   two_phase|liquid (liquid: no air particles are seeded, the projection is PffTall's on quadtree tall cells, which
+   needs -partition_type columns and levels constant along y; no volume correction and no dynamic adaptivity yet),
+   and the particle and pressure (or tall_) options. */
 PETSC_EXTERN PetscErrorCode PffFlowCreate(PffGrid grid, PffFlow *flow);
 PETSC_EXTERN PetscErrorCode PffFlowSetFromOptions(PffFlow flow);
 /* Static solids (signed distance, negative inside); faces inside are closed. Before SetUp. */

@@ -145,6 +145,8 @@ static inline void PffBlockSideCell(PetscInt f, PetscInt layer, PetscInt u, Pets
    -grid_periodic x,z          periodic axes (any of x, y, z; others are walls)
    -grid_refine none|plane|sphere, -grid_refine_point, -grid_refine_normal, -grid_refine_radius,
    -grid_refine_band b         static refinement: level = floor(distance / (b block sizes))
+   -grid_refine_columns        each block column along y takes the finest level asked in it (a quadtree,
+                               for tall cells)
    -partition_type morton|metis|columns
    SetUp builds the raster, grades it, partitions it and allocates the channels; it validates every
    parameter first and allocates nothing when one is impossible. Destroy is NULL-safe. */
@@ -162,6 +164,8 @@ PETSC_EXTERN PetscErrorCode PffGridSetLevels(PffGrid grid, PetscInt nlevels);
 PETSC_EXTERN PetscErrorCode PffGridSetDomain(PffGrid grid, const PetscReal origin[3], PetscReal h0);
 PETSC_EXTERN PetscErrorCode PffGridSetPeriodic(PffGrid grid, const PetscBool periodic[3]);
 PETSC_EXTERN PetscErrorCode PffGridSetPartitionType(PffGrid grid, PffPartitionType type);
+/* The partitioner (-partition_type). Not collective. */
+PETSC_EXTERN PetscErrorCode PffGridGetPartitionType(PffGrid grid, PffPartitionType *type);
 /* Refinement by callback, evaluated per block on every rank (must be deterministic). */
 PETSC_EXTERN PetscErrorCode PffGridSetRefinementFunction(PffGrid grid, PffRefineFn fn, void *ctx);
 /* Refinement from an explicit requested-level map over the raster (copied); -1 = inactive. */

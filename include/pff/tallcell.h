@@ -42,7 +42,8 @@ typedef struct {
   PetscLogDouble     assembleTime, solveTime;
 } PffTallStats;
 
-/* Life cycle. Create borrows grid (set up, columns partition, column-constant levels, y not periodic).
+/* Life cycle. Create borrows grid (set up, columns partition, column-constant levels, y not periodic; Create
+   refuses another grid with one error naming the missing property, and so does Build after an adapt).
    SetFromOptions reads -tall_merge (merge the deep part of runs into tall cells, default true; false gives
    cubic cells everywhere), -tall_layer_fraction (band of cubic cells under each free surface as a fraction
    of the run's height, default 0.25), -tall_layer_min (at least this many cells, default 2), -tall_theta_min

@@ -62,9 +62,12 @@ PetscErrorCode PffFlowFaceVelocity_Private(PffFlow f, PetscReal dt)
       const float gd = (float)(dt * f->gravity[d]);
       PetscCall(PffFlowBlockData_Private(f, lb, d, 4, ch, a, &n3));
       float *m = a[0], *ut = a[1], *u = a[2], *open = a[3];
+      /* the liquid model has no air: a face no particle reaches is left at rest (the projection does not see it,
+         and the extrapolation of the liquid velocity fills the layers next to the surface) */
+      const PetscBool airAtRest = (PetscBool)(f->model == PFF_FLOW_LIQUID);
       for (PetscInt c = 0; c < n3; c++) {
         ut[c] = m[c] > 0 ? ut[c] / m[c] : 0.0f;
-        u[c]  = open[c] > 0 ? ut[c] + gd : 0.0f;
+        u[c]  = open[c] > 0 && (m[c] > 0 || !airAtRest) ? ut[c] + gd : 0.0f;
       }
     }
   PetscFunctionReturn(PETSC_SUCCESS);

@@ -1,6 +1,8 @@
 /* PffFlow life cycle and options. */
 #include "flowimpl.h"
 
+const char *const PffFlowModels[] = {"two_phase", "liquid", "PffFlowModel", "PFF_FLOW_", NULL};
+
 const char *const PffFlowStageNames[] = {"P2G",    "PhaseField", "Forces",     "Pressure", "G2P",
                                          "Advect", "Escaped",    "Correction", "Adapt",    NULL};
 
@@ -36,6 +38,8 @@ PetscErrorCode PffFlowCreate(PffGrid grid, PffFlow *flow)
   f->chMass = f->chMassRef = f->chUt = f->chU = f->chPhiF = f->chBeta = f->chOpen = f->chPhi = f->chP = f->chCdiv =
       f->chVort                                                                                       = -1;
   f->chUl = f->chUlMask = f->chVol = f->chVolRef = f->chQ = f->chUa = -1;
+  f->chLS = f->chDuL = -1;
+  f->model           = PFF_FLOW_TWO_PHASE;
   PetscCall(PffParticlesCreate(grid, &f->part));
   PetscCall(PffPressureCreate(grid, &f->press));
   *flow = f;
@@ -80,6 +84,8 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
                            "PffFlowSetFromOptions", f->volCorrRtol, &f->volCorrRtol, NULL));
   PetscCall(PffOptionsBool("-flow_delete_bubbles", "Delete escaped air particles deep in liquid (Sec. 3.4)",
                            "PffFlowSetFromOptions", f->deleteBubbles, &f->deleteBubbles, NULL));
+  PetscCall(PffOptionsEnum("-flow_model", "Flow model: two_phase (PF-FLIP) or liquid (free surface, tall cells)",
+                           "PffFlowSetFromOptions", PffFlowModels, (PetscEnum)f->model, (PetscEnum *)&f->model, NULL));
   PetscCall(PffOptionsInt("-flow_extrapolate_layers",
                           "Face layers the liquid velocity is extrapolated into the air for liquid particles (Sec. "
                           "3.7; 0: off)",
@@ -148,6 +154,18 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
              "-adapt_particle_weight %g is invalid: must be in [0, 1000]", (double)f->adapt.pweight);
   PetscCheck(f->adapt.imbalance >= 1 && PetscIsNormalReal(f->adapt.imbalance), f->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-adapt_imbalance %g is invalid: must be >= 1", (double)f->adapt.imbalance);
+  if (f->model == PFF_FLOW_LIQUID) {
+    /* what the liquid model does not have yet fails here, before any work */
+    PetscCheck(f->adapt.levels == 0, f->comm, PETSC_ERR_ARG_INCOMP,
+               "-adapt_levels %" PetscInt_FMT ": dynamic adaptivity is not available with -flow_model liquid",
+               f->adapt.levels);
+    PetscCheck(f->extrapLayers > 0, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+               "-flow_extrapolate_layers 0 is invalid with -flow_model liquid: G2P and advection near the surface read "
+               "the liquid velocity extrapolated into the air");
+    f->volCorr = 0; /* the two-phase correction measures both phases: not for a liquid alone (docs/tallcell.md) */
+    if (!f->tall) PetscCall(PffTallCreate(f->grid, &f->tall));
+    PetscCall(PffTallSetFromOptions(f->tall));
+  }
   PetscCall(PffParticlesSetFromOptions(f->part));
   PetscCall(PffPressureSetFromOptions(f->press));
   /* the advection stages read velocity up to about CFL cells beyond a particle's block, plus one cell
@@ -205,6 +223,11 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
     PetscCall(PffGridSetChannelOutput(f->grid, f->chUl, PETSC_FALSE));
     PetscCall(PffGridSetChannelOutput(f->grid, f->chUlMask, PETSC_FALSE));
   }
+  if (f->model == PFF_FLOW_LIQUID) {
+    PetscCall(PffGridAddChannel(f->grid, "levelset", PFF_CHANNEL_CELL, 1, &f->chLS));
+    PetscCall(PffGridAddChannel(f->grid, "du_liquid", PFF_CHANNEL_FACE, 1, &f->chDuL));
+    PetscCall(PffGridSetChannelOutput(f->grid, f->chDuL, PETSC_FALSE));
+  }
   /* the volume correction needs the projection and moves particles, so a prescribed field has none */
   if (!f->prescribed && f->usePressure && f->volCorr > 0) {
     PetscCall(PffGridAddChannel(f->grid, "volume", PFF_CHANNEL_FACE, 1, &f->chVol));
@@ -231,7 +254,7 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
   PetscCall(PffParticlesGetKernelSum(f->part, &f->rho0));
   PetscCall(PffFlowReset(f));
   PetscCall(PffFlowAdaptSetUp_Private(f));
-  if (!f->prescribed && f->usePressure) PetscCall(PffPressureSetUp(f->press));
+  if (!f->prescribed && f->usePressure && f->model == PFF_FLOW_TWO_PHASE) PetscCall(PffPressureSetUp(f->press));
   f->setupcalled = PETSC_TRUE;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -264,16 +287,40 @@ PetscErrorCode PffFlowDestroy(PffFlow *flow)
   if (!flow || !*flow) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PffParticlesDestroy(&(*flow)->part));
   PetscCall(PffPressureDestroy(&(*flow)->press));
+  PetscCall(PffTallDestroy(&(*flow)->tall));
   PetscCall(PffFlowAdaptDestroy_Private(*flow));
   PetscCall(PetscFree((*flow)->refLevel));
   PetscCall(PetscFree(*flow));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* The liquid model seeds no air: the scene's air particles are dropped. */
+typedef struct {
+  PffSeedFn fn;
+  void     *ctx;
+} PffLiquidSeedCtx;
+
+static PetscErrorCode PffLiquidSeed(const PetscReal x[3], PetscInt *type, PetscReal v[3], void *vctx)
+{
+  const PffLiquidSeedCtx *c = (const PffLiquidSeedCtx *)vctx;
+
+  PetscFunctionBeginUser;
+  PetscCall(c->fn(x, type, v, c->ctx));
+  if (*type == PFF_PARTICLE_AIR) *type = -1;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffFlowSeed(PffFlow f, PffSeedFn fn, void *ctx)
 {
+  PffLiquidSeedCtx lc = {fn, ctx};
+
   PetscFunctionBeginUser;
   PetscCheck(f->setupcalled, f->comm, PETSC_ERR_ORDER, "PffFlowSetUp() must come before PffFlowSeed()");
+  if (f->model == PFF_FLOW_LIQUID) {
+    PetscCall(PffFlowLiquidQuadtree_Private(f, fn, ctx));
+    fn  = PffLiquidSeed;
+    ctx = &lc;
+  }
   if (f->adapt.levels > 0)
     PetscCall(PffFlowAdaptSeed_Private(f, fn, ctx));
   else {

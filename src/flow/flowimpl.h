@@ -27,6 +27,9 @@ struct _n_PffFlow {
   PffParticles part;
   PffPressure  press;
   PetscBool    setupcalled;
+  PffFlowModel model;       /* -flow_model */
+  PffTall      tall;        /* the liquid model's projection (NULL for two_phase) */
+  PetscInt     chLS, chDuL; /* liquid model: level set from phi (cell), extrapolated velocity change (face) */
 
   /* physics and numerics */
   PetscReal rho[PFF_PARTICLE_NTYPES], nu[PFF_PARTICLE_NTYPES], gravity[3];
@@ -92,6 +95,9 @@ PETSC_INTERN PetscErrorCode PffFlowAdaptDestroy_Private(PffFlow);
 PETSC_INTERN PetscErrorCode PffFlowAdapt_Private(PffFlow, PffFlowAdaptStats *);
 PETSC_INTERN PetscErrorCode PffFlowAdaptSeed_Private(PffFlow, PffSeedFn, void *);
 /* flow.c */
+PETSC_INTERN PetscErrorCode PffFlowLiquidProject_Private(PffFlow, PetscReal dt, PffPressureStats *);
+PETSC_INTERN PetscErrorCode PffFlowLiquidG2P_Private(PffFlow, const PetscReal alpha[]);
+PETSC_INTERN PetscErrorCode PffFlowLiquidQuadtree_Private(PffFlow, PffSeedFn, void *);
 PETSC_INTERN PetscErrorCode PffFlowCheckTopology_Private(PffFlow);
 /* phase.c */
 PETSC_INTERN PetscErrorCode PffFlowPhaseField_Private(PffFlow);

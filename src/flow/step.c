@@ -219,7 +219,9 @@ PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
     PetscCall(PffStageEnd(st, PFF_STAGE_FORCES, t0));
 
     PetscCall(PffStageBegin(PFF_STAGE_PRESSURE, &t0));
-    if (f->usePressure) {
+    if (f->usePressure && f->model == PFF_FLOW_LIQUID)
+      PetscCall(PffFlowLiquidProject_Private(f, dt, &st->pressure));
+    else if (f->usePressure) {
       PetscCall(PffPressureSetCoefficients(f->press, f->chBeta, f->chOpen));
       PetscCall(PffPressureProject(f->press, f->chU, dt, -1, f->chP, &st->pressure));
       PetscCall(PffPressureCheckSolve(f->press, &st->pressure, "Pressure", f->step + 1, f->t,
@@ -234,7 +236,10 @@ PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
     PetscCall(PffGridHaloBegin(f->grid, f->chUt));
     PetscCall(PffGridHaloEnd(f->grid, f->chUt));
     PetscCall(PffFlowFlipRatios_Private(f, dt, alpha));
-    PetscCall(PffParticlesG2P(f->part, f->chU, f->chUt, alpha));
+    if (f->model == PFF_FLOW_LIQUID)
+      PetscCall(PffFlowLiquidG2P_Private(f, alpha));
+    else
+      PetscCall(PffParticlesG2P(f->part, f->chU, f->chUt, alpha));
     PetscCall(PffStageEnd(st, PFF_STAGE_G2P, t0));
 
     PetscCall(PffStageBegin(PFF_STAGE_ESCAPED, &t0));

@@ -95,6 +95,13 @@ PetscErrorCode PffGridSetPeriodic(PffGrid g, const PetscBool periodic[3])
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+PetscErrorCode PffGridGetPartitionType(PffGrid g, PffPartitionType *type)
+{
+  PetscFunctionBeginUser;
+  *type = g->ptype;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffGridSetPartitionType(PffGrid g, PffPartitionType type)
 {
   PetscFunctionBeginUser;
@@ -205,6 +212,9 @@ PetscErrorCode PffGridSetFromOptions(PffGrid g)
       PffOptionsReal("-grid_refine_radius", "Radius of the refinement sphere", NULL, g->rradius, &g->rradius, NULL));
   PetscCall(
       PffOptionsReal("-grid_refine_band", "Width of each level band, in block sizes", NULL, g->rband, &g->rband, NULL));
+  PetscCall(PffOptionsBool("-grid_refine_columns",
+                           "Every block column along y takes the finest level asked in it (a quadtree for tall cells)",
+                           NULL, g->rcolumns, &g->rcolumns, NULL));
   PetscOptionsEnd();
   PetscCheck(g->rband > 0, g->comm, PETSC_ERR_ARG_OUTOFRANGE, "-grid_refine_band %g is invalid: must be positive",
              (double)g->rband);

@@ -68,6 +68,7 @@ struct _n_PffGrid {
   PffPartitionType ptype;
   PffRefineType    rtype;
   PetscReal        rpoint[3], rnormal[3], rradius, rband;
+  PetscBool        rcolumns; /* -grid_refine_columns: each block column takes the finest level asked in it */
   PffRefineFn      refine;
   void            *refinectx;
   PetscInt        *usermap;

@@ -98,6 +98,17 @@ static PetscErrorCode PffGridRequestedLevels(PffGrid g)
                l, b, g->nlevels - 1);
     g->level[b] = l;
   }
+  if (g->rcolumns) /* the quadtree image of the map: the finest active level of each block column */
+    for (PetscInt k = 0; k < g->nb[2]; k++)
+      for (PetscInt i = 0; i < g->nb[0]; i++) {
+        PetscInt lmin = PETSC_MAX_INT;
+        for (PetscInt j = 0; j < g->nb[1]; j++) {
+          const PetscInt l = g->level[i + g->nb[0] * (j + g->nb[1] * k)];
+          if (l >= 0) lmin = PetscMin(lmin, l);
+        }
+        for (PetscInt j = 0; j < g->nb[1]; j++)
+          if (g->level[i + g->nb[0] * (j + g->nb[1] * k)] >= 0) g->level[i + g->nb[0] * (j + g->nb[1] * k)] = lmin;
+      }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -270,6 +270,33 @@ static PetscErrorCode BuildGhosts(PffTall tc)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+PetscErrorCode PffTallCheckGrid_Private(PffTall tc)
+{
+  const PetscInt    *level;
+  const PetscMPIInt *owner;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetRaster(tc->grid, NULL, &level, &owner));
+  for (PetscInt bc = 0; bc < tc->nbc; bc++) {
+    const PetscInt bi = bc % tc->nb[0], bk = bc / tc->nb[0], g0 = bi + tc->nb[0] * tc->nb[1] * bk;
+    PetscCheck(level[g0] >= 0, tc->comm, PETSC_ERR_ARG_WRONG,
+               "tallcell: inactive blocks are not supported (block column %" PetscInt_FMT ", %" PetscInt_FMT ")", bi,
+               bk);
+    for (PetscInt bj = 1; bj < tc->nb[1]; bj++) {
+      const PetscInt g = g0 + tc->nb[0] * bj;
+      PetscCheck(level[g] == level[g0], tc->comm, PETSC_ERR_ARG_WRONG,
+                 "tallcell: block column (%" PetscInt_FMT ", %" PetscInt_FMT ") changes level along y; the tall-cell "
+                 "grid needs levels constant along y (a column refinement map, not -grid_refine plane or sphere)",
+                 bi, bk);
+      PetscCheck(owner[g] == owner[g0], tc->comm, PETSC_ERR_ARG_WRONG,
+                 "tallcell: block column (%" PetscInt_FMT ", %" PetscInt_FMT ") lies on several ranks; the tall-cell "
+                 "grid needs -partition_type columns",
+                 bi, bk);
+    }
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffTallBuildColumns_Private(PffTall tc, PetscInt chPhi)
 {
   const PetscInt *level;
@@ -279,6 +306,7 @@ PetscErrorCode PffTallBuildColumns_Private(PffTall tc, PetscInt chPhi)
   PetscInt64      cnt[4] = {0, 0, 0, 0}, sum[4]; /* cells, tall cells, surface rows, liquid cells */
 
   PetscFunctionBeginUser;
+  PetscCall(PffTallCheckGrid_Private(tc));
   PetscCall(PffGridGetRaster(tc->grid, NULL, &level, NULL));
   /* block columns: level, owner, record offsets on the owner */
   PetscCall(PetscMalloc3(tc->nbc, &tc->bcLevel, tc->nbc, &tc->bcOwner, tc->nbc, &tc->bcOffset));
@@ -288,16 +316,8 @@ PetscErrorCode PffTallBuildColumns_Private(PffTall tc, PetscInt chPhi)
     PetscCall(PffGridGetRaster(tc->grid, NULL, NULL, &owner));
     for (PetscInt bc = 0; bc < tc->nbc; bc++) {
       const PetscInt bi = bc % tc->nb[0], bk = bc / tc->nb[0], g0 = bi + tc->nb[0] * tc->nb[1] * bk;
-      tc->bcLevel[bc] = level[g0];
-      tc->bcOwner[bc] = owner[g0];
-      for (PetscInt bj = 1; bj < tc->nb[1]; bj++) {
-        const PetscInt g = g0 + tc->nb[0] * bj;
-        PetscCheck(level[g] == level[g0] && owner[g] == owner[g0], tc->comm, PETSC_ERR_ARG_WRONG,
-                   "tallcell: block column (%" PetscInt_FMT ", %" PetscInt_FMT ") changes level or owner along y; the "
-                   "tall-cell grid needs levels constant along y and -partition_type columns",
-                   bi, bk);
-      }
-      PetscCheck(level[g0] >= 0, tc->comm, PETSC_ERR_ARG_WRONG, "tallcell: inactive blocks are not supported");
+      tc->bcLevel[bc]  = level[g0];
+      tc->bcOwner[bc]  = owner[g0];
       const PetscInt n = tc->n0 >> level[g0];
       tc->bcOffset[bc] = next[owner[g0]];
       next[owner[g0]] += n * n * tc->nb[1] * n;

@@ -18,6 +18,21 @@ PetscErrorCode PffTallCreate(PffGrid grid, PffTall *tcp)
 
   PetscFunctionBeginUser;
   PetscCheck(tcp != NULL && grid != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "tallcell: NULL argument");
+  {
+    /* the grid's properties first, so that a refusal leaves nothing allocated */
+    PffPartitionType pt;
+    PetscBool        periodic[3];
+    MPI_Comm         comm;
+    PetscCall(PffGridGetComm(grid, &comm));
+    PetscCall(PffGridGetPartitionType(grid, &pt));
+    PetscCall(PffGridGetSizes(grid, NULL, NULL, NULL, NULL, periodic));
+    PetscCheck(
+        pt == PFF_PARTITION_COLUMNS, comm, PETSC_ERR_ARG_INCOMP,
+        "tallcell: -partition_type %s: the tall-cell grid needs -partition_type columns (whole columns per rank)",
+        PffPartitionTypes[pt]);
+    PetscCheck(!periodic[1], comm, PETSC_ERR_ARG_INCOMP,
+               "tallcell: -grid_periodic: y (the vertical) must not be periodic");
+  }
   PetscCall(PetscNew(&tc));
   tc->grid          = grid;
   tc->merge         = PETSC_TRUE;
@@ -31,8 +46,12 @@ PetscErrorCode PffTallCreate(PffGrid grid, PffTall *tcp)
   PetscCallMPI(MPI_Comm_size(tc->comm, &tc->size));
   PetscCall(PffGridGetRaster(grid, tc->nb, NULL, NULL));
   PetscCall(PffGridGetSizes(grid, &tc->n0, NULL, tc->origin, &tc->h0, tc->periodic));
-  PetscCheck(!tc->periodic[1], tc->comm, PETSC_ERR_SUP, "tallcell: y (the vertical) must not be periodic");
   tc->nbc = tc->nb[0] * tc->nb[2];
+  {
+    PetscErrorCode ierr = PffTallCheckGrid_Private(tc);
+    if (ierr) PetscCall(PetscFree(tc));
+    PetscCall(ierr);
+  }
   PetscCall(KSPCreate(tc->comm, &tc->ksp));
   PetscCall(KSPSetOptionsPrefix(tc->ksp, "tall_"));
   PetscCall(KSPSetType(tc->ksp, KSPCG));
@@ -133,6 +152,8 @@ PetscErrorCode PffTallBuild(PffTall tc, PetscInt chPhi)
   PetscCall(PetscTime(&t0));
   PetscCall(PffTallBuildColumns_Private(tc, chPhi));
   PetscCall(PffTallBuildRows_Private(tc));
+  /* the system's size changes with the surface: the KSP keeps its type and options, not its set-up */
+  PetscCall(KSPReset(tc->ksp));
   PetscCall(KSPSetOperators(tc->ksp, tc->A, tc->A));
   tc->subPCDefaultApplied = PETSC_FALSE;
   PetscCall(PetscTime(&t1));

@@ -89,6 +89,7 @@ static inline PetscInt64 PffTallColumnKey(const struct _n_PffTall *tc, PetscInt 
   return ((PetscInt64)l * nx + gx) * nz + gz;
 }
 
+PETSC_INTERN PetscErrorCode PffTallCheckGrid_Private(PffTall);
 PETSC_INTERN PetscErrorCode PffTallBuildColumns_Private(PffTall, PetscInt chPhi);
 PETSC_INTERN PetscErrorCode PffTallBuildRows_Private(PffTall);
 PETSC_INTERN PetscErrorCode PffTallFreeBuild_Private(PffTall);

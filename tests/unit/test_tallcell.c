@@ -347,9 +347,8 @@ static PetscErrorCode BadInput(MPI_Comm comm)
     PetscCall(PffGridSetRefinementMap(t.grid, request));
     PetscCall(PffGridSetUp(t.grid));
     PetscCall(PffGridAddChannel(t.grid, "phi", PFF_CHANNEL_CELL, 1, &phi));
-    PetscCall(PffTallCreate(t.grid, &tc));
     PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
-    ierr = PffTallBuild(tc, phi);
+    ierr = PffTallCreate(t.grid, &tc);
     PetscCall(PetscPopErrorHandler());
     PetscCheck(ierr == PETSC_ERR_ARG_WRONG, comm, PETSC_ERR_PLIB, "levels along y: error %d", (int)ierr);
     PetscCall(PffTallDestroy(&tc));

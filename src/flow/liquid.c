@@ -1,0 +1,115 @@
+/* The liquid model (-flow_model liquid): a free-surface liquid on quadtree tall cells (docs/tallcell.md).
+
+   The step is PF-FLIP's without air: P2G of the liquid particles gives the phase field phi (Eq. 7) and u*;
+   the level set the tall cells need is psi = (1/2 - phi) 2 s (negative in the liquid, zero where phi = 1/2,
+   about a signed distance across the interface layer of two cells); PffTall projects u* with p = 0 in the air;
+   G2P and the advection read the liquid velocity and its change extrapolated into the air (Sec. 3.7), since
+   the air faces carry no projected velocity. */
+#include "flowimpl.h"
+
+static PetscErrorCode PffFlowLevelSet(PffFlow f)
+{
+  PetscInt nlocal;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo info;
+    float       *phi, *ls;
+    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+    PetscCall(PffGridGetBlockData(f->grid, f->chPhi, lb, 0, &phi));
+    PetscCall(PffGridGetBlockData(f->grid, f->chLS, lb, 0, &ls));
+    const PetscInt n3 = info.n * info.n * info.n;
+    const float    s2 = (float)(2 * info.h);
+    for (PetscInt c = 0; c < n3; c++) ls[c] = (0.5f - phi[c]) * s2;
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowLiquidProject_Private(PffFlow f, PetscReal dt, PffPressureStats *ps)
+{
+  PffTallStats ts;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffFlowLevelSet(f));
+  PetscCall(PffTallBuild(f->tall, f->chLS));
+  PetscCall(PffTallProject(f->tall, f->chU, dt, f->rho[PFF_PARTICLE_LIQUID], f->chP, &ts));
+  ps->its       = ts.its;
+  ps->rnorm     = ts.rnorm;
+  ps->reason    = ts.reason;
+  ps->setupTime = ts.assembleTime;
+  ps->solveTime = ts.solveTime;
+  PetscCheck(ts.reason > 0, f->comm, PETSC_ERR_NOT_CONVERGED,
+             "step %" PetscInt_FMT " (t = %g): the tall-cell pressure solve did not converge (%s, %" PetscInt_FMT
+             " iterations, relative residual %.3e); raise -tall_ksp_max_it or loosen -tall_ksp_rtol",
+             f->step + 1, (double)f->t, KSPConvergedReasons[ts.reason], ts.its, (double)ts.rnorm);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowLiquidG2P_Private(PffFlow f, const PetscReal alpha[])
+{
+  PetscFunctionBeginUser;
+  PetscCall(
+      PffExtrapolateLiquidVelocity(f->grid, f->chU, f->chPhiF, f->chOpen, f->extrapLayers, f->chUlMask, f->chUl, NULL));
+  PetscCall(PffExtrapolateLiquidVelocity(f->grid, f->chUt, f->chPhiF, f->chOpen, f->extrapLayers, f->chUlMask, f->chDuL,
+                                         NULL));
+  PetscCall(PffParticlesG2P(f->part, f->chUl, f->chDuL, alpha));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The quadtree at t = 0 (tall cells Sec. 4.1): the sizing function on the scene's initial liquid, sampled from the
+   seeding function (liquid fraction of 8 sub-cell points per cell, velocity at the face centres), then the grid
+   adapts to it before any particle exists, so that every particle is seeded at its block's level. Nothing when
+   the grid or -tall_levels has one level. Collective. */
+PetscErrorCode PffFlowLiquidQuadtree_Private(PffFlow f, PffSeedFn fn, void *ctx)
+{
+  PetscInt        nb[3], nlevels, nlocal, *map, nblocks, changed = 0, hist[PFF_GRID_MAX_LEVELS] = {0};
+  const PetscInt *level;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetSizes(f->grid, NULL, &nlevels, NULL, NULL, NULL));
+  if (nlevels < 2) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo info;
+    float       *phi, *ls, *u[3];
+    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+    PetscCall(PffGridGetBlockData(f->grid, f->chPhi, lb, 0, &phi));
+    PetscCall(PffGridGetBlockData(f->grid, f->chLS, lb, 0, &ls));
+    for (PetscInt d = 0; d < 3; d++) PetscCall(PffGridGetBlockData(f->grid, f->chU, lb, d, &u[d]));
+    const PetscInt n = info.n;
+    for (PetscInt k = 0; k < n; k++)
+      for (PetscInt j = 0; j < n; j++)
+        for (PetscInt i = 0; i < n; i++) {
+          const PetscInt c = i + n * (j + n * k), ijk[3] = {i, j, k};
+          PetscInt       liquid = 0, type;
+          PetscReal      x[3], v[3];
+          for (PetscInt q = 0; q < 8; q++) {
+            for (PetscInt a = 0; a < 3; a++)
+              x[a] = info.lo[a] + ((PetscReal)ijk[a] + 0.25 + 0.5 * ((q >> a) & 1)) * info.h;
+            PetscCall(fn(x, &type, v, ctx));
+            liquid += type == PFF_PARTICLE_LIQUID;
+          }
+          phi[c] = (float)liquid / 8.0f;
+          ls[c]  = (0.5f - phi[c]) * (float)(2 * info.h);
+          for (PetscInt d = 0; d < 3; d++) {
+            for (PetscInt a = 0; a < 3; a++) x[a] = info.lo[a] + ((PetscReal)ijk[a] + (a == d ? 0.0 : 0.5)) * info.h;
+            PetscCall(fn(x, &type, v, ctx));
+            u[d][c] = type == PFF_PARTICLE_LIQUID ? (float)v[d] : 0.0f;
+          }
+        }
+  }
+  PetscCall(PffGridGetRaster(f->grid, nb, &level, NULL));
+  nblocks = nb[0] * nb[1] * nb[2];
+  PetscCall(PetscMalloc1(nblocks, &map));
+  PetscCall(PffTallSizingLevels(f->tall, f->chLS, f->chU, map));
+  for (PetscInt b = 0; b < nblocks; b++) changed += map[b] != level[b];
+  if (changed) PetscCall(PffGridAdapt(f->grid, map));
+  PetscCall(PffGridGetRaster(f->grid, NULL, &level, NULL));
+  for (PetscInt c = 0; c < nb[0] * nb[2]; c++) hist[level[c % nb[0] + nb[0] * nb[1] * (c / nb[0])]]++;
+  PetscCall(PetscPrintf(f->comm, "tall cells: quadtree from the sizing function, block columns per level:"));
+  for (PetscInt l = 0; l < nlevels; l++) PetscCall(PetscPrintf(f->comm, " %" PetscInt_FMT, hist[l]));
+  PetscCall(PetscPrintf(f->comm, " (of %" PetscInt_FMT ")\n", nb[0] * nb[2]));
+  PetscCall(PetscFree(map));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
