@@ -10,6 +10,8 @@
      cell pressures (partition independence);
    - the sizing function: a flat pool at rest asks for the coarsest level everywhere (walls are not
      surfaces), a falling drop above it asks for the finest level over the drop and the coarsest far away;
+   - -grid_refine_columns turns a sphere refinement into a quadtree (levels constant along y) that the tall
+     cells accept;
    - bad input: levels that change along y, an out-of-range option.
    Sample run: mpiexec -n 4 ./test_tallcell     prints one line per check on rank 0. */
 #include "pfftest.h"
@@ -323,6 +325,53 @@ static PetscErrorCode Sizing(MPI_Comm comm)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* -grid_refine sphere with -grid_refine_columns: every block column takes its finest level. */
+static PetscErrorCode RefineColumns(MPI_Comm comm)
+{
+  PffGrid         grid;
+  PffTall         tc;
+  const PetscInt *level;
+  PetscInt        nb[3], hist[3] = {0, 0, 0};
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscOptionsSetValue(NULL, "-grid_cells", "64,32,64"));
+  PetscCall(PetscOptionsSetValue(NULL, "-grid_block_size", "8"));
+  PetscCall(PetscOptionsSetValue(NULL, "-grid_levels", "3"));
+  PetscCall(PetscOptionsSetValue(NULL, "-grid_refine", "sphere"));
+  PetscCall(PetscOptionsSetValue(NULL, "-grid_refine_point", "0.5,0.2,0.5"));
+  PetscCall(PetscOptionsSetValue(NULL, "-grid_refine_radius", "0.1"));
+  PetscCall(PetscOptionsSetValue(NULL, "-grid_refine_band", "0.5"));
+  PetscCall(PetscOptionsSetValue(NULL, "-grid_refine_columns", "true"));
+  PetscCall(PetscOptionsSetValue(NULL, "-partition_type", "columns"));
+  PetscCall(PffGridCreate(comm, &grid));
+  PetscCall(PffGridSetFromOptions(grid));
+  PetscCall(PffGridSetUp(grid));
+  const char *keys[] = {"-grid_cells",       "-grid_block_size",     "-grid_levels",
+                        "-grid_refine",      "-grid_refine_point",   "-grid_refine_radius",
+                        "-grid_refine_band", "-grid_refine_columns", "-partition_type"};
+  for (size_t k = 0; k < PETSC_STATIC_ARRAY_LENGTH(keys); k++) PetscCall(PetscOptionsClearValue(NULL, keys[k]));
+  PetscCall(PffGridGetRaster(grid, nb, &level, NULL));
+  for (PetscInt b = 0; b < nb[0] * nb[1] * nb[2]; b++) {
+    const PetscInt b0 = b % nb[0] + nb[0] * nb[1] * (b / (nb[0] * nb[1]));
+    PetscCheck(level[b] == level[b0], comm, PETSC_ERR_PLIB,
+               "refine columns: block %" PetscInt_FMT " at level %" PetscInt_FMT
+               ", its column's bottom at %" PetscInt_FMT,
+               b, level[b], level[b0]);
+    if (b == b0) hist[level[b]]++;
+  }
+  PetscCheck(hist[0] > 0 && hist[2] > 0, comm, PETSC_ERR_PLIB,
+             "refine columns: block columns per level %" PetscInt_FMT " %" PetscInt_FMT " %" PetscInt_FMT, hist[0],
+             hist[1], hist[2]);
+  PetscCall(PffTallCreate(grid, &tc));
+  PetscCall(PffTallDestroy(&tc));
+  PetscCall(PffGridDestroy(&grid));
+  PetscCall(PetscPrintf(comm,
+                        "refine columns: block columns per level %" PetscInt_FMT " / %" PetscInt_FMT " / %" PetscInt_FMT
+                        ", constant along y, accepted\n",
+                        hist[0], hist[1], hist[2]));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /* Bad input: one clear error each. */
 static PetscErrorCode BadInput(MPI_Comm comm)
 {
@@ -381,6 +430,7 @@ int main(int argc, char **argv)
   PetscCall(RandomQuadtrees(PETSC_COMM_WORLD));
   PetscCall(PartitionIndependence(PETSC_COMM_WORLD));
   PetscCall(Sizing(PETSC_COMM_WORLD));
+  PetscCall(RefineColumns(PETSC_COMM_WORLD));
   PetscCall(BadInput(PETSC_COMM_WORLD));
   PetscCall(PetscFinalize());
   return 0;

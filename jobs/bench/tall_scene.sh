@@ -1,0 +1,38 @@
+#!/usr/bin/env bash
+# A whole liquid simulation on the three discretisations of Narita et al. 2025 (Table 1: time per step): the water
+# drop of config/tall_drop_small.yaml (-flow_model liquid) on uniform cubic cells (-grid_levels 1 -tall_merge
+# false), uniform tall cells (-grid_levels 1) and quadtree tall cells (3 levels, the sizing function's quadtree),
+# 2 ranks x 1 thread, no frames. Usage: bash jobs/bench/tall_scene.sh [N [t_end]] (default 64 and 0.5 s; the
+# cell size follows N in the unit box). Appends the summaries to output/bench/tall_scene.txt and one CSV row per
+# method to docs/data/tall_scene_issue15.csv (commit, UTC time, load average, steps, seconds per step, the
+# Pressure stage's seconds per step, particles, liquid volume drift).
+set -euo pipefail
+source "$(dirname "${BASH_SOURCE[0]}")/../setup.sh"
+n=${1:-64}
+tend=${2:-0.5}
+h=$(awk -v n="$n" 'BEGIN{printf "%.10g", 1.0/n}')
+out=$PFF_ROOT/output/bench
+csv=$PFF_ROOT/docs/data/tall_scene_issue15.csv
+mkdir -p "$out"
+commit=$(git -C "$PFF_ROOT" describe --always --dirty)
+[ -f "$csv" ] || echo "commit,utc,load1,n,method,t_end,steps,wall_s,s_per_step,pressure_s_per_step,pressure_share,particles,liquid_volume_drift,max_abs_drift" > "$csv"
+for m in "uniform:-grid_levels 1 -tall_merge false" "tall:-grid_levels 1" "quadtree:"; do
+  name=${m%%:*}
+  read -r -a opts <<< "${m#*:}"
+  load=$(cut -d' ' -f1 /proc/loadavg)
+  utc=$(date -u +%FT%TZ)
+  log=$out/tall_scene_${n}_${name}.log
+  OMP_NUM_THREADS=1 "${PFF_MPIEXEC[@]}" -n 2 "$PFF_BUILD_DIR/bin/pfflip" -options_file_yaml "$PFF_ROOT/config/tall_drop_small.yaml" \
+    -grid_cells "$n,$n,$n" -grid_h "$h" -sim_t_end "$tend" -sim_frames false -output_dir "$out/tall_scene_${n}_${name}" \
+    ${opts[@]+"${opts[@]}"} > "$log" 2>&1
+  { echo "# $utc $commit load $(cut -d' ' -f1-3 /proc/loadavg) n=$n method=$name ${opts[*]+${opts[*]}}"; grep -E "^(summary|conservation|tall cells)" "$log"; } | tee -a "$out/tall_scene.txt"
+  steps=$(grep -oP "summary: \K[0-9]+(?= steps)" "$log")
+  wall=$(grep -oP "summary: .* wall \K[0-9.]+" "$log")
+  share=$(grep -oP "Pressure \K[0-9.]+(?=%)" "$log")
+  parts=$(grep -oP "conservation: liquid particles \K[0-9]+" "$log")
+  drift=$(grep -oP "liquid volume drift \K[-+0-9.e]+" "$log" | tail -1)
+  maxd=$(grep -oP "conservation: .*liquid volume drift [-+0-9.e]+ \(max \|drift\| \K[-+0-9.e]+" "$log")
+  awk -v c="$commit" -v u="$utc" -v l="$load" -v n="$n" -v m="$name" -v t="$tend" -v s="$steps" -v w="$wall" \
+      -v sh="$share" -v p="$parts" -v d="$drift" -v md="$maxd" \
+      'BEGIN{printf "%s,%s,%s,%s,%s,%s,%s,%s,%.4f,%.4f,%s,%s,%s,%s\n", c,u,l,n,m,t,s,w,w/s,w/s*sh/100,sh,p,d,md}' >> "$csv"
+done
