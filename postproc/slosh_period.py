@@ -25,9 +25,12 @@ def main():
     keep = t > 0
     t, cx = t[keep], cx[keep]
     x = cx - 0.5 * (cx.max() + cx.min())
+    # samples exactly on the mean carry no sign: a crossing is found between their neighbours
+    nz = x != 0
+    t, x = t[nz], x[nz]
     crossings = []
     for i in range(len(x) - 1):
-        if x[i] == 0 or x[i] * x[i + 1] < 0:
+        if x[i] * x[i + 1] < 0:
             crossings.append(t[i] + (t[i + 1] - t[i]) * x[i] / (x[i] - x[i + 1]))
     k = math.pi / a.length
     t1 = 2 * math.pi / math.sqrt(a.g * k * math.tanh(k * a.depth))

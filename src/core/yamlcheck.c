@@ -48,6 +48,7 @@ static const struct {
     {"partition", PFF_YAML_SECTION},
     {"fluid", PFF_YAML_SECTION},
     {"adapt", PFF_YAML_SECTION},
+    {"tall", PFF_YAML_SECTION},
     {"demo", PFF_YAML_SECTION},
     {"rt", PFF_YAML_SECTION},
     {"still", PFF_YAML_SECTION},
