@@ -64,6 +64,9 @@ PETSC_EXTERN PetscErrorCode PffTallSetMerge(PffTall tc, PetscBool merge);
    c_u (m/s per cell, default 0.05), -tall_levels (levels used, default the grid's). Halos of chPhi and chU are
    exchanged here. Collective; every rank gets the same map. */
 PETSC_EXTERN PetscErrorCode PffTallSizingLevels(PffTall tc, PetscInt chPhi, PetscInt chU, PetscInt level[]);
+/* Whether a user of the module (the liquid flow model) should build the quadtree from the sizing function
+   (-tall_sizing, default true; false keeps the grid's own map, e.g. -grid_refine ... -grid_refine_columns). */
+PETSC_EXTERN PetscErrorCode PffTallGetSizing(PffTall tc, PetscBool *sizing);
 
 /* Builds the columns, samples, rows and the operator from the level set in cell channel chPhi (negative in
    liquid); the ghost columns of neighbouring ranks come through one PetscSF. Collective. */

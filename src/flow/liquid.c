@@ -67,8 +67,11 @@ PetscErrorCode PffFlowLiquidQuadtree_Private(PffFlow f, PffSeedFn fn, void *ctx)
   const PetscInt *level;
 
   PetscFunctionBeginUser;
+  PetscBool sizing;
+
   PetscCall(PffGridGetSizes(f->grid, NULL, &nlevels, NULL, NULL, NULL));
-  if (nlevels < 2) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PffTallGetSizing(f->tall, &sizing));
+  if (nlevels < 2 || !sizing) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo info;

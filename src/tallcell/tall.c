@@ -41,6 +41,7 @@ PetscErrorCode PffTallCreate(PffGrid grid, PffTall *tcp)
   tc->thetaMin      = PFF_TALL_THETA_MIN_DEFAULT;
   tc->sizingKappa   = 0.3;
   tc->sizingU       = 0.05;
+  tc->sizing        = PETSC_TRUE;
   PetscCall(PffGridGetComm(grid, &tc->comm));
   PetscCallMPI(MPI_Comm_rank(tc->comm, &tc->rank));
   PetscCallMPI(MPI_Comm_size(tc->comm, &tc->size));
@@ -80,6 +81,9 @@ PetscErrorCode PffTallSetFromOptions(PffTall tc)
                            "PffTallSizingLevels", tc->sizingKappa, &tc->sizingKappa, NULL));
   PetscCall(PffOptionsReal("-tall_sizing_velocity", "Sizing: largest velocity jump across one cell (m/s), > 0",
                            "PffTallSizingLevels", tc->sizingU, &tc->sizingU, NULL));
+  PetscCall(PffOptionsBool(
+      "-tall_sizing", "The liquid model builds the quadtree from the sizing function at t = 0 (false: the grid's map)",
+      "PffTallGetSizing", tc->sizing, &tc->sizing, NULL));
   PetscCall(PffOptionsBoundedInt("-tall_levels", "Quadtree levels of the sizing function (0: the grid's)",
                                  "PffTallSizingLevels", tc->levels, &tc->levels, NULL, 0));
   PetscOptionsEnd();
@@ -93,6 +97,13 @@ PetscErrorCode PffTallSetFromOptions(PffTall tc)
   PetscCall(PffOptionsCheckReal(tc->comm, "-tall_ksp_rtol", 0, 1, PETSC_TRUE, "in (0, 1)"));
   PetscCall(PffOptionsCheckInt(tc->comm, "-tall_ksp_max_it", 1, PETSC_MAX_INT));
   PetscCall(KSPSetFromOptions(tc->ksp));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffTallGetSizing(PffTall tc, PetscBool *sizing)
+{
+  PetscFunctionBeginUser;
+  *sizing = tc->sizing;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -37,6 +37,7 @@ struct _n_PffTall {
   PetscInt  layerMin;
   PetscReal sizingKappa, sizingU; /* the sizing function's turn (rad) and velocity jump (m/s) per cell */
   PetscInt  levels;               /* quadtree levels the sizing function uses (0: the grid's) */
+  PetscBool sizing;               /* -tall_sizing: the liquid model builds the quadtree from the sizing function */
 
   /* raster */
   PetscInt     nb[3], n0;
