@@ -7,21 +7,47 @@
    the air faces carry no projected velocity. */
 #include "flowimpl.h"
 
+/* psi = (1/2 - phi) 2 s, except in holes: a cell below phi = 1/2 with at least 5 of its 6 face neighbours above it
+   is liquid (psi = -s / 4). Such one-cell voids open inside the liquid where the particles spread (inside a tall
+   cell the velocity is divergence-free only on average); read as air they would be free surfaces with p = 0 deep
+   in the liquid, and the pressure would pull the neighbouring faces into them at metres per second. */
 static PetscErrorCode PffFlowLevelSet(PffFlow f)
 {
   PetscInt nlocal;
 
   PetscFunctionBeginUser;
+  PetscCall(PffGridHaloBegin(f->grid, f->chPhi));
+  PetscCall(PffGridHaloEnd(f->grid, f->chPhi));
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
   for (PetscInt lb = 0; lb < nlocal; lb++) {
-    PffBlockInfo info;
-    float       *phi, *ls;
+    PffBlockInfo   info;
+    const PffView *v;
+    float         *phi, *ls;
     PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
     PetscCall(PffGridGetBlockData(f->grid, f->chPhi, lb, 0, &phi));
+    PetscCall(PffGridGetBlockViews(f->grid, f->chPhi, lb, 0, &v));
     PetscCall(PffGridGetBlockData(f->grid, f->chLS, lb, 0, &ls));
-    const PetscInt n3 = info.n * info.n * info.n;
+    const PetscInt n  = info.n;
     const float    s2 = (float)(2 * info.h);
-    for (PetscInt c = 0; c < n3; c++) ls[c] = (0.5f - phi[c]) * s2;
+    for (PetscInt k = 0; k < n; k++)
+      for (PetscInt j = 0; j < n; j++)
+        for (PetscInt i = 0; i < n; i++) {
+          const PetscInt c = i + n * (j + n * k);
+          ls[c]            = (0.5f - phi[c]) * s2;
+          if (phi[c] >= 0.5f) continue;
+          const PetscInt d[6][3] = {{-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
+          PetscInt       liquid  = 0;
+          for (PetscInt q = 0; q < 6; q++) {
+            const PetscInt ii = i + d[q][0], jj = j + d[q][1], kk = k + d[q][2];
+            const PetscInt r = PffRegionIndex(ii, jj, kk, n);
+            /* a wall counts as liquid: a void against a wall is enclosed too */
+            if (r != 13 && ((info.holes >> r) & 1))
+              liquid++;
+            else if (*PffViewsAt(v, ii, jj, kk, n) >= 0.5f)
+              liquid++;
+          }
+          if (liquid >= 5) ls[c] = -0.125f * s2;
+        }
   }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
