@@ -145,6 +145,9 @@ PETSC_EXTERN PetscErrorCode PffPressureGetDirichletDiagonal(PffPressure ps, Vec 
    SetCoefficients first. */
 PETSC_EXTERN PetscErrorCode PffPressureGetShellOperator(PffPressure ps, Mat *S);
 PETSC_EXTERN PetscErrorCode PffPressureGetKSP(PffPressure ps, KSP *ksp);
+/* For a KSP whose PC is block Jacobi (after PCSetUp, when the blocks exist): ICC(0) on every block, since the
+   pressure systems are symmetric positive definite, unless -<prefix>sub_pc_type was given. Collective. */
+PETSC_EXTERN PetscErrorCode PffKSPDefaultSubICC(KSP ksp, const char prefix[]);
 
 /* The adaptive multigrid preconditioner of PF-FLIP Sec. 6, -pressure_pc_type pffmg (a PCSHELL inside
    the pressure KSP; docs/pressure.md). Options, prefix pressure_: -pffmg_smoother rbgs|jacobi (two-stage

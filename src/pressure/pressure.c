@@ -294,16 +294,15 @@ PetscErrorCode PffPressureSetCoefficients(PffPressure ps, PetscInt chBeta, Petsc
 
 /* Block Jacobi: ICC(0) on the blocks unless the user chose -pressure_sub_pc_type (needs the sub-KSPs,
    which exist after PCSetUp and are set up at the first solve). */
-static PetscErrorCode PffPressureApplySubPCDefault(PffPressure ps)
+PetscErrorCode PffKSPDefaultSubICC(KSP ksp, const char prefix[])
 {
   PC        pc;
   PetscBool isbjacobi, userSet;
 
   PetscFunctionBeginUser;
-  if (ps->subPCDefaultApplied) PetscFunctionReturn(PETSC_SUCCESS);
-  PetscCall(KSPGetPC(ps->ksp, &pc));
+  PetscCall(KSPGetPC(ksp, &pc));
   PetscCall(PetscObjectTypeCompare((PetscObject)pc, PCBJACOBI, &isbjacobi));
-  PetscCall(PetscOptionsHasName(NULL, "pressure_", "-sub_pc_type", &userSet));
+  PetscCall(PetscOptionsHasName(NULL, prefix, "-sub_pc_type", &userSet));
   if (isbjacobi && !userSet) {
     KSP     *sub;
     PetscInt nsub;
@@ -314,6 +313,14 @@ static PetscErrorCode PffPressureApplySubPCDefault(PffPressure ps)
       PetscCall(PCSetType(subpc, PCICC));
     }
   }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffPressureApplySubPCDefault(PffPressure ps)
+{
+  PetscFunctionBeginUser;
+  if (ps->subPCDefaultApplied) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PffKSPDefaultSubICC(ps->ksp, "pressure_"));
   ps->subPCDefaultApplied = PETSC_TRUE;
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -195,26 +195,46 @@ static PetscErrorCode RowVelocity(PffTall tc, PetscInt chU, Vec urow)
 
 static PetscErrorCode ApplySubPCDefault(PffTall tc)
 {
-  PC        pc;
-  PetscBool isbj, userSet;
-
   PetscFunctionBeginUser;
   if (tc->subPCDefaultApplied) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(KSPSetUp(tc->ksp));
-  PetscCall(KSPGetPC(tc->ksp, &pc));
-  PetscCall(PetscObjectTypeCompare((PetscObject)pc, PCBJACOBI, &isbj));
-  PetscCall(PetscOptionsHasName(NULL, "tall_", "-sub_pc_type", &userSet));
-  if (isbj && !userSet) { /* ICC(0) on each rank's block: A is symmetric positive definite */
-    KSP     *sub;
-    PetscInt nsub;
-    PetscCall(PCBJacobiGetSubKSP(pc, &nsub, NULL, &sub));
-    for (PetscInt q = 0; q < nsub; q++) {
-      PC subpc;
-      PetscCall(KSPGetPC(sub[q], &subpc));
-      PetscCall(PCSetType(subpc, PCICC));
+  PetscCall(PffKSPDefaultSubICC(tc->ksp, "tall_"));
+  tc->subPCDefaultApplied = PETSC_TRUE;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Every owned cell of cell channel ch: the pressure of its column's function at the centre from the samples p
+   (0 in air; the upper half's segment holds the centre), or with p NULL the pressure-cell height. */
+static PetscErrorCode WriteCells(PffTall tc, PetscInt ch, const PetscScalar *p)
+{
+  PetscFunctionBeginUser;
+  for (PetscInt bc = 0; bc < tc->nbc; bc++) {
+    if (tc->bcOwner[bc] != tc->rank) continue;
+    const PetscInt  bi = bc % tc->nb[0], bk = bc / tc->nb[0], l = tc->bcLevel[bc], n = tc->n0 >> l, ny = tc->nb[1] * n;
+    const PetscReal s = tc->h0 * (PetscReal)(1 << l);
+    for (PetscInt bj = 0; bj < tc->nb[1]; bj++) {
+      PetscInt lb;
+      float   *data;
+      PetscCall(PffGridGetLocalIndex(tc->grid, bi + tc->nb[0] * (bj + tc->nb[1] * bk), &lb));
+      PetscCall(PffGridGetBlockData(tc->grid, ch, lb, 0, &data));
+      for (PetscInt ck = 0; ck < n; ck++)
+        for (PetscInt ci = 0; ci < n; ci++)
+          for (PetscInt cj = 0; cj < n; cj++) {
+            const PetscInt   j = bj * n + cj, rec = tc->bcOffset[bc] + (ck * n + ci) * ny + j;
+            const PetscInt  *ri = tc->ri + PFF_TALL_RI * rec;
+            const PetscReal *rr = tc->rr + PFF_TALL_RR * rec, yc = tc->origin[1] + (j + 0.5) * s;
+            PetscReal        v = 0;
+            if (!p)
+              v = tc->height[rec];
+            else if (ri[4] != PFF_TALL_AIR) {
+              const PetscInt  ia = ri[2], ib = ri[3];
+              const PetscReal t = rr[3] != rr[2] ? (yc - rr[2]) / (rr[3] - rr[2]) : 0;
+              v = (ia >= 0 ? (1 - t) * p[ia - tc->sstart] : 0) + (ib >= 0 && t != 0 ? t * p[ib - tc->sstart] : 0);
+            }
+            data[ci + n * (cj + n * ck)] = (float)v;
+          }
     }
   }
-  tc->subPCDefaultApplied = PETSC_TRUE;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -281,31 +301,7 @@ PetscErrorCode PffTallProject(PffTall tc, PetscInt chU, PetscReal dt, PetscReal 
   /* pressure at the cell centres */
   if (chP >= 0) {
     PetscCall(VecGetArrayRead(tc->p, &pa));
-    for (PetscInt bc = 0; bc < tc->nbc; bc++) {
-      if (tc->bcOwner[bc] != tc->rank) continue;
-      const PetscInt bi = bc % tc->nb[0], bk = bc / tc->nb[0], l = tc->bcLevel[bc], n = tc->n0 >> l, ny = tc->nb[1] * n;
-      const PetscReal s = tc->h0 * (PetscReal)(1 << l);
-      for (PetscInt bj = 0; bj < tc->nb[1]; bj++) {
-        PetscInt lb;
-        float   *data;
-        PetscCall(PffGridGetLocalIndex(tc->grid, bi + tc->nb[0] * (bj + tc->nb[1] * bk), &lb));
-        PetscCall(PffGridGetBlockData(tc->grid, chP, lb, 0, &data));
-        for (PetscInt ck = 0; ck < n; ck++)
-          for (PetscInt ci = 0; ci < n; ci++)
-            for (PetscInt cj = 0; cj < n; cj++) {
-              const PetscInt   j = bj * n + cj, rec = tc->bcOffset[bc] + (ck * n + ci) * ny + j;
-              const PetscInt  *ri = tc->ri + PFF_TALL_RI * rec;
-              const PetscReal *rr = tc->rr + PFF_TALL_RR * rec, yc = tc->origin[1] + (j + 0.5) * s;
-              PetscReal        pv = 0;
-              if (ri[4] != PFF_TALL_AIR) {
-                const PetscInt  ia = ri[2], ib = ri[3]; /* the upper half's segment holds the centre */
-                const PetscReal t = rr[3] != rr[2] ? (yc - rr[2]) / (rr[3] - rr[2]) : 0;
-                pv = (ia >= 0 ? (1 - t) * pa[ia - tc->sstart] : 0) + (ib >= 0 && t != 0 ? t * pa[ib - tc->sstart] : 0);
-              }
-              data[ci + n * (cj + n * ck)] = (float)pv;
-            }
-      }
-    }
+    PetscCall(WriteCells(tc, chP, pa));
     PetscCall(VecRestoreArrayRead(tc->p, &pa));
   }
   if (stats) {
@@ -399,19 +395,6 @@ PetscErrorCode PffTallWriteCellHeight(PffTall tc, PetscInt ch)
 {
   PetscFunctionBeginUser;
   PetscCheck(tc->built, tc->comm, PETSC_ERR_ORDER, "tallcell: call PffTallBuild() first");
-  for (PetscInt bc = 0; bc < tc->nbc; bc++) {
-    if (tc->bcOwner[bc] != tc->rank) continue;
-    const PetscInt bi = bc % tc->nb[0], bk = bc / tc->nb[0], n = tc->n0 >> tc->bcLevel[bc], ny = tc->nb[1] * n;
-    for (PetscInt bj = 0; bj < tc->nb[1]; bj++) {
-      PetscInt lb;
-      float   *data;
-      PetscCall(PffGridGetLocalIndex(tc->grid, bi + tc->nb[0] * (bj + tc->nb[1] * bk), &lb));
-      PetscCall(PffGridGetBlockData(tc->grid, ch, lb, 0, &data));
-      for (PetscInt ck = 0; ck < n; ck++)
-        for (PetscInt ci = 0; ci < n; ci++)
-          for (PetscInt cj = 0; cj < n; cj++)
-            data[ci + n * (cj + n * ck)] = tc->height[tc->bcOffset[bc] + (ck * n + ci) * ny + bj * n + cj];
-    }
-  }
+  PetscCall(WriteCells(tc, ch, NULL));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -171,6 +171,28 @@ static PetscErrorCode StillWater(MPI_Comm comm, const char *name, PetscInt unifo
   PetscCall(PffTallProject(pb.tc, pb.u, DT, RHO, pb.p, &pb.st));
   PetscCall(PffTallMaxRowVelocity(pb.tc, pb.u, &umax));
   PetscCall(PressureCheck(&pb, &sc, &err, &wsum));
+  { /* the cell-height channel for frames: > 0 exactly in the liquid, tall cells at least 3 high */
+    PetscInt  chH, bad = 0;
+    PetscReal hmax = 0;
+    PetscCall(PffGridAddChannel(pb.t.grid, "height", PFF_CHANNEL_CELL, 1, &chH));
+    PetscCall(PffTallWriteCellHeight(pb.tc, chH));
+    for (PetscInt lb = 0; lb < pb.t.nlocal; lb++) {
+      PffBlockInfo info;
+      float       *h, *phi;
+      PetscCall(PffGridGetBlockInfo(pb.t.grid, lb, &info));
+      PetscCall(PffGridGetBlockData(pb.t.grid, chH, lb, 0, &h));
+      PetscCall(PffGridGetBlockData(pb.t.grid, pb.phi, lb, 0, &phi));
+      for (PetscInt c = 0; c < info.n * info.n * info.n; c++) {
+        bad += (phi[c] < 0) != (h[c] > 0);
+        hmax = PetscMax(hmax, h[c]);
+      }
+    }
+    PetscCallMPI(MPIU_Allreduce(MPI_IN_PLACE, &bad, 1, MPIU_INT, MPI_SUM, comm));
+    PetscCallMPI(MPIU_Allreduce(MPI_IN_PLACE, &hmax, 1, MPIU_REAL, MPI_MAX, comm));
+    PetscCheck(!bad && (merge ? hmax >= 3 : hmax == 1), comm, PETSC_ERR_PLIB,
+               "still water, %s: cell heights: %" PetscInt_FMT " cells disagree with phi, max %g", name, bad,
+               (double)hmax);
+  }
   PetscCall(PetscPrintf(comm,
                         "still water, %s: %" PetscInt64_FMT " cells (%" PetscInt64_FMT " tall) for %" PetscInt64_FMT
                         " liquid cells, %" PetscInt64_FMT " samples, %" PetscInt_FMT " its, max |u| %.2e (bound %.2e), "
