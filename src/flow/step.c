@@ -159,7 +159,11 @@ static PetscErrorCode PffFlowAdvect(PffFlow f, PetscReal dt, PffFlowStepStats *s
   PetscBool extrapolated            = PETSC_FALSE;
 
   PetscFunctionBeginUser;
-  if (f->chUlMask >= 0) {
+  if (f->model == PFF_FLOW_LIQUID && !f->prescribed) {
+    /* the liquid model's G2P extrapolated this step's u into chUl already, and nothing changed u since */
+    ch[PFF_PARTICLE_LIQUID] = f->chUl;
+    extrapolated            = PETSC_TRUE;
+  } else if (f->chUlMask >= 0) {
     PetscInt64 faces = 0;
     PetscCall(PffExtrapolateLiquidVelocity(f->grid, f->chU, f->chPhiF, f->chOpen, f->extrapLayers, f->chUlMask, f->chUl,
                                            &faces));

@@ -350,6 +350,8 @@ PetscErrorCode PffTallBuildColumns_Private(PffTall tc, PetscInt chPhi)
             for (PetscInt j = 0; j < cg.ny; j++)
               if (phi[j] < 0) cnt[3] += (PetscInt64)1 << (3 * l);
           }
+          if (pass == 1)
+            for (PetscInt q = 0; q < ns; q++) tc->sampleS[total + q] = cg.s;
           total += ns;
         }
     }
@@ -357,6 +359,7 @@ PetscErrorCode PffTallBuildColumns_Private(PffTall tc, PetscInt chPhi)
       tc->nsamp = total;
       PetscCallMPI(MPI_Exscan(&total, &tc->sstart, 1, MPIU_INT, MPI_SUM, tc->comm));
       if (tc->rank == 0) tc->sstart = 0;
+      PetscCall(PetscMalloc1(tc->nsamp, &tc->sampleS));
     }
   }
   PetscCall(PetscFree3(phi, pts, lbOf));
@@ -365,23 +368,6 @@ PetscErrorCode PffTallBuildColumns_Private(PffTall tc, PetscInt chPhi)
   tc->tallCells   = sum[1];
   tc->nsurface    = cnt[2]; /* local until the horizontal rows are added (rows.c) */
   tc->liquidCells = sum[3];
-  PetscCall(PetscMalloc1(tc->nsamp, &tc->sampleS));
-  for (PetscInt bc = 0, q = 0; bc < tc->nbc; bc++) {
-    if (tc->bcOwner[bc] != tc->rank) continue;
-    const PetscInt  n = tc->n0 >> tc->bcLevel[bc], ny = tc->nb[1] * n;
-    const PetscReal s   = tc->h0 * (PetscReal)(1 << tc->bcLevel[bc]);
-    const PetscInt  off = tc->bcOffset[bc];
-    /* samples were numbered column by column in this order, bottom to top */
-    for (PetscInt c = 0; c < n * n; c++)
-      for (PetscInt j = 0; j < ny; j++) {
-        const PetscInt *r = tc->ri + PFF_TALL_RI * (off + c * ny + j);
-        if (r[4] == PFF_TALL_AIR) continue;
-        q += (r[4] == PFF_TALL_CUBIC) ? 1 : 0;
-        if (r[4] >= 0 && (j == 0 || tc->ri[PFF_TALL_RI * (off + c * ny + j - 1) + 4] != r[4])) q += 2;
-        tc->sampleS[q - 1] = s;
-        if (r[4] >= 0) tc->sampleS[q - 2] = s;
-      }
-  }
   PetscCall(BuildGhosts(tc));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
