@@ -19,12 +19,15 @@
                  of each side evaluated at the face's mid height (Eq. 2-4). Consecutive faces whose cells
                  on both sides lie in the same tall cells merge into one row (Eq. 5). A face between a
                  liquid and an air cell gets F = 1/theta and p = 0 on the air side.
-   The system [grad]^T V F [grad] p = (rho/dt) [grad]^T V u* (Eq. 1 with A = 1: no solids yet) is
+   With solids, every row carries [A], the mean open area fraction of its faces (rows of closed faces are
+   dropped), and cells wholly inside a solid have no sample: a run of liquid ends there at a wall.
+   The system [grad]^T V A F [grad] p = (rho/dt) [grad]^T V A u* (Eq. 1, static solids at rest) is
    symmetric positive definite and assembled as a MATMPIAIJ, solved by a PETSc KSP (prefix tall_,
    default CG with block Jacobi / ICC(0), rtol 1e-4). docs/tallcell.md has the derivation and choices. */
 #pragma once
 
 #include <pff/grid.h>
+#include <pff/particles.h>
 #include <petscksp.h>
 
 typedef struct _n_PffTall *PffTall;
@@ -67,6 +70,19 @@ PETSC_EXTERN PetscErrorCode PffTallSizingLevels(PffTall tc, PetscInt chPhi, Pets
 /* Whether a user of the module (the liquid flow model) should build the quadtree from the sizing function
    (-tall_sizing, default true; false keeps the grid's own map, e.g. -grid_refine ... -grid_refine_columns). */
 PETSC_EXTERN PetscErrorCode PffTallGetSizing(PffTall tc, PetscBool *sizing);
+
+/* Solids (Sec. 4.3.2, [A] of Eq. 1). Face channel chA holds every face's open area fraction in [0, 1]; cell
+   channel chSolid the solids' signed distance at the cell centre in cells, at most -1 for a cell wholly
+   inside (it has no sample; a run of liquid ends there as at a wall). Both -1 for no solid (the default).
+   A row's [A] is the mean fraction of its faces; a row of closed faces is dropped. Takes effect at the next
+   Build. */
+PETSC_EXTERN PetscErrorCode PffTallSetSolid(PffTall tc, PetscInt chA, PetscInt chSolid);
+/* Fills chA and chSolid for PffTallSetSolid from the signed distance fn (negative inside the solids): a face's
+   fraction from fn at its corners (exact for a planar boundary; lower domain walls 0), a cell's distance from
+   fn at its centre, set to at most -1 when all eight corners are inside. Exchanges both halos. Collective. */
+PETSC_EXTERN PetscErrorCode PffTallFillSolid(PffGrid grid, PffSolidFn fn, void *ctx, PetscInt chA, PetscInt chSolid);
+/* Open fraction of a square face from the signed distance at its corners phi[4], in cyclic order. */
+PETSC_EXTERN PetscReal PffTallOpenFraction(const PetscReal phi[4]);
 
 /* Builds the columns, samples, rows and the operator from the level set in cell channel chPhi (negative in
    liquid); the ghost columns of neighbouring ranks come through one PetscSF. Collective. */

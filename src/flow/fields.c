@@ -1,6 +1,6 @@
 /* Face-velocity fields of the step: u~* = P / m after P2G (Eq. 4), forces, the velocity change
-   du = u - u~* for FLIP (Eq. 11), open faces from walls and solids, the FLIP ratios per particle
-   type and level (Eq. 13, Sec. 5.3), escaped particles (Sec. 3.4) and vorticity for output. */
+   du = u - u~* for FLIP (Eq. 11), open faces from walls and solids (the liquid model: open area fractions), the FLIP
+   ratios per particle type and level (Eq. 13, Sec. 5.3), escaped particles (Sec. 3.4) and vorticity for output. */
 #include "flowimpl.h"
 
 /* Position of the lower comp-face (or the centre, comp < 0) of cell (i, j, k) of a block. */
@@ -17,6 +17,10 @@ PetscErrorCode PffFlowOpenFaces_Private(PffFlow f)
   PetscBool periodic[3];
 
   PetscFunctionBeginUser;
+  if (f->chSolidD >= 0) { /* the liquid model's variational pressure takes the open area fractions */
+    PetscCall(PffTallFillSolid(f->grid, f->solid, f->solidCtx, f->chOpen, f->chSolidD));
+    PetscFunctionReturn(PETSC_SUCCESS);
+  }
   PetscCall(PffGridGetSizes(f->grid, NULL, NULL, NULL, NULL, periodic));
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
   for (PetscInt lb = 0; lb < nlocal; lb++) {

@@ -38,8 +38,8 @@ PetscErrorCode PffFlowCreate(PffGrid grid, PffFlow *flow)
   f->chMass = f->chMassRef = f->chUt = f->chU = f->chPhiF = f->chBeta = f->chOpen = f->chPhi = f->chP = f->chCdiv =
       f->chVort                                                                                       = -1;
   f->chUl = f->chUlMask = f->chVol = f->chVolRef = f->chQ = f->chUa = -1;
-  f->chLS = f->chDuL = -1;
-  f->model           = PFF_FLOW_TWO_PHASE;
+  f->chLS = f->chDuL = f->chSolidD = -1;
+  f->model                         = PFF_FLOW_TWO_PHASE;
   PetscCall(PffParticlesCreate(grid, &f->part));
   PetscCall(PffPressureCreate(grid, &f->press));
   *flow = f;
@@ -227,6 +227,12 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
     PetscCall(PffGridAddChannel(f->grid, "levelset", PFF_CHANNEL_CELL, 1, &f->chLS));
     PetscCall(PffGridAddChannel(f->grid, "du_liquid", PFF_CHANNEL_FACE, 1, &f->chDuL));
     PetscCall(PffGridSetChannelOutput(f->grid, f->chDuL, PETSC_FALSE));
+    if (f->solid) { /* [A]: chOpen holds the open fractions, chSolidD the distance at the cell centres */
+      PetscCall(PffGridAddChannel(f->grid, "solid_distance", PFF_CHANNEL_CELL, 1, &f->chSolidD));
+      PetscCall(PffGridSetChannelOutput(f->grid, f->chSolidD, PETSC_FALSE));
+      PetscCall(PffGridSetChannelTransfer(f->grid, f->chSolidD, PFF_TRANSFER_NONE));
+      PetscCall(PffTallSetSolid(f->tall, f->chOpen, f->chSolidD));
+    }
   }
   /* the volume correction needs the projection and moves particles, so a prescribed field has none */
   if (!f->prescribed && f->usePressure && f->volCorr > 0) {

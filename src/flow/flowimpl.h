@@ -30,6 +30,7 @@ struct _n_PffFlow {
   PffFlowModel model;       /* -flow_model */
   PffTall      tall;        /* the liquid model's projection (NULL for two_phase) */
   PetscInt     chLS, chDuL; /* liquid model: level set from phi (cell), extrapolated velocity change (face) */
+  PetscInt     chSolidD;    /* liquid model with solids: solid distance at cell centres in cells (chOpen: fractions) */
 
   /* physics and numerics */
   PetscReal rho[PFF_PARTICLE_NTYPES], nu[PFF_PARTICLE_NTYPES], gravity[3];

@@ -7,13 +7,18 @@
    the air faces carry no projected velocity. */
 #include "flowimpl.h"
 
-/* psi = (1/2 - phi) 2 s, except in holes: a cell below phi = 1/2 with at least 5 of its 6 face neighbours above it
-   is liquid (psi = -s / 4). Such one-cell voids open inside the liquid where the particles spread (inside a tall
-   cell the velocity is divergence-free only on average); read as air they would be free surfaces with p = 0 deep
-   in the liquid, and the pressure would pull the neighbouring faces into them at metres per second. */
+/* psi = (1/2 - phi) 2 s, except
+   - in holes: a cell below phi = 1/2 with at least 5 of its 6 face neighbours above it is liquid (psi = -s / 4).
+     Such one-cell voids open inside the liquid where the particles spread (inside a tall cell the velocity is
+     divergence-free only on average); read as air they would be free surfaces with p = 0 deep in the liquid,
+     and the pressure would pull the neighbouring faces into them at metres per second;
+   - in cells whose centre lies inside a solid: the particles never go there, so psi is extrapolated, the mean
+     of the face neighbours' outside the solid (after Batty et al. 2007); read from the particles, a cell cut by
+     a solid wall would be air, a free surface with p = 0 at the wall. */
 static PetscErrorCode PffFlowLevelSet(PffFlow f)
 {
-  PetscInt nlocal;
+  const PetscInt d[6][3] = {{-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
+  PetscInt       nlocal;
 
   PetscFunctionBeginUser;
   PetscCall(PffGridHaloBegin(f->grid, f->chPhi));
@@ -21,12 +26,16 @@ static PetscErrorCode PffFlowLevelSet(PffFlow f)
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo   info;
-    const PffView *v;
-    float         *phi, *ls;
+    const PffView *v, *vs = NULL;
+    float         *phi, *ls, *sd = NULL;
     PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
     PetscCall(PffGridGetBlockData(f->grid, f->chPhi, lb, 0, &phi));
     PetscCall(PffGridGetBlockViews(f->grid, f->chPhi, lb, 0, &v));
     PetscCall(PffGridGetBlockData(f->grid, f->chLS, lb, 0, &ls));
+    if (f->chSolidD >= 0) {
+      PetscCall(PffGridGetBlockData(f->grid, f->chSolidD, lb, 0, &sd));
+      PetscCall(PffGridGetBlockViews(f->grid, f->chSolidD, lb, 0, &vs));
+    }
     const PetscInt n  = info.n;
     const float    s2 = (float)(2 * info.h);
     for (PetscInt k = 0; k < n; k++)
@@ -34,9 +43,22 @@ static PetscErrorCode PffFlowLevelSet(PffFlow f)
         for (PetscInt i = 0; i < n; i++) {
           const PetscInt c = i + n * (j + n * k);
           ls[c]            = (0.5f - phi[c]) * s2;
+          if (sd && sd[c] < 0) {
+            float    sum = 0;
+            PetscInt cnt = 0;
+            for (PetscInt q = 0; q < 6; q++) {
+              const PetscInt ii = i + d[q][0], jj = j + d[q][1], kk = k + d[q][2];
+              const PetscInt r = PffRegionIndex(ii, jj, kk, n);
+              if (r != 13 && ((info.holes >> r) & 1)) continue; /* a domain wall */
+              if (*PffViewsAt(vs, ii, jj, kk, n) < 0) continue;
+              sum += (0.5f - *PffViewsAt(v, ii, jj, kk, n)) * s2;
+              cnt++;
+            }
+            if (cnt) ls[c] = sum / (float)cnt;
+            continue;
+          }
           if (phi[c] >= 0.5f) continue;
-          const PetscInt d[6][3] = {{-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
-          PetscInt       liquid  = 0;
+          PetscInt liquid = 0;
           for (PetscInt q = 0; q < 6; q++) {
             const PetscInt ii = i + d[q][0], jj = j + d[q][1], kk = k + d[q][2];
             const PetscInt r = PffRegionIndex(ii, jj, kk, n);

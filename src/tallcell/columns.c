@@ -49,19 +49,19 @@ static PetscInt FaceCell(const ColumnGeom *cg, PetscInt j)
   return cg->ci + cg->n * ((j % cg->n) + cg->n * cg->ck);
 }
 
-static PetscErrorCode BuildColumn(PffTall tc, const ColumnGeom *cg, const PetscReal phi[], Point pts[], PetscInt *ri,
-                                  PetscReal *rr, float *height, PetscInt idBase, PetscBool rows, PetscInt *nsamp,
-                                  PetscInt64 *ncells, PetscInt64 *ntall, PetscInt64 *nsurface)
+static PetscErrorCode BuildColumn(PffTall tc, const ColumnGeom *cg, const PetscReal phi[], const PetscBool solid[],
+                                  Point pts[], PetscInt *ri, PetscReal *rr, float *height, PetscInt idBase,
+                                  PetscBool rows, PetscInt *nsamp, PetscInt64 *ncells, PetscInt64 *ntall)
 {
   const PetscReal s  = cg->s;
   PetscInt        id = 0, j = 0;
 
   PetscFunctionBeginUser;
   while (j < cg->ny) {
-    if (!(phi[j] < 0)) {
+    if (!(phi[j] < 0) || solid[j]) {
       if (ri) {
         for (PetscInt q = 0; q < 4; q++) ri[PFF_TALL_RI * j + q] = PFF_TALL_SURFACE;
-        ri[PFF_TALL_RI * j + 4] = PFF_TALL_AIR;
+        ri[PFF_TALL_RI * j + 4] = solid[j] ? PFF_TALL_SOLID : PFF_TALL_AIR;
         for (PetscInt q = 0; q < 4; q++) rr[PFF_TALL_RR * j + q] = 0;
         rr[PFF_TALL_RR * j + 4] = phi[j];
         height[j]               = 0;
@@ -70,10 +70,12 @@ static PetscErrorCode BuildColumn(PffTall tc, const ColumnGeom *cg, const PetscR
       continue;
     }
     const PetscInt j0 = j;
-    while (j < cg->ny && phi[j] < 0) j++;
-    const PetscInt  j1 = j - 1, m = j1 - j0 + 1;
-    const PetscBool lowSurf = (PetscBool)(j0 > 0), upSurf = (PetscBool)(j1 < cg->ny - 1);
-    const PetscInt  L  = PetscMax(tc->layerMin, (PetscInt)PetscCeilReal(tc->layerFraction * (PetscReal)m - 1e-9));
+    while (j < cg->ny && phi[j] < 0 && !solid[j]) j++;
+    const PetscInt j1 = j - 1, m = j1 - j0 + 1;
+    /* an end at a solid cell is a wall, like the floor */
+    const PetscBool lowSurf = (PetscBool)(j0 > 0 && !solid[j0 - 1]),
+                    upSurf  = (PetscBool)(j1 < cg->ny - 1 && !solid[j1 + 1]);
+    const PetscInt  L       = PetscMax(tc->layerMin, (PetscInt)PetscCeilReal(tc->layerFraction * (PetscReal)m - 1e-9));
     const PetscInt  lo = lowSurf ? PetscMin(L, m) : 0, up = upSurf ? PetscMin(L, m - lo) : 0, mid = m - lo - up;
     const PetscBool tall = (PetscBool)(tc->merge && mid >= 3);
     const PetscInt  t0 = j0 + lo, t1 = j0 + lo + mid - 1; /* the tall cell's sub-cells when tall */
@@ -138,8 +140,7 @@ static PetscErrorCode BuildColumn(PffTall tc, const ColumnGeom *cg, const PetscR
           lbs[0]     = cg->lbOf[j0 / cg->n];
           comps[0]   = 1;
           cells[0]   = FaceCell(cg, j0);
-          PetscCall(PffTallAddRow_Private(tc, &row, 1 / thLow, s * s * s, 1, lbs, comps, cells));
-          (*nsurface)++;
+          PetscCall(PffTallAddRow_Private(tc, &row, 1 / thLow, s * s * s, PETSC_TRUE, 1, lbs, comps, cells));
         } else if (pts[a + 1].id == PFF_TALL_SURFACE) {
           row.n      = 1;
           row.col[0] = pts[a].id;
@@ -147,8 +148,7 @@ static PetscErrorCode BuildColumn(PffTall tc, const ColumnGeom *cg, const PetscR
           lbs[0]     = cg->lbOf[(j1 + 1) / cg->n];
           comps[0]   = 1;
           cells[0]   = FaceCell(cg, j1 + 1);
-          PetscCall(PffTallAddRow_Private(tc, &row, 1 / thUp, s * s * s, 1, lbs, comps, cells));
-          (*nsurface)++;
+          PetscCall(PffTallAddRow_Private(tc, &row, 1 / thUp, s * s * s, PETSC_TRUE, 1, lbs, comps, cells));
         } else {
           const PetscReal d  = pts[a + 1].y - pts[a].y;
           const PetscInt  ka = (PetscInt)PetscFloorReal((pts[a].y - cg->y0) / s);
@@ -165,7 +165,7 @@ static PetscErrorCode BuildColumn(PffTall tc, const ColumnGeom *cg, const PetscR
             fc[q]    = 1;
             fcell[q] = FaceCell(cg, ka + 1 + q);
           }
-          PetscCall(PffTallAddRow_Private(tc, &row, 1, s * s * d, nf, fl, fc, fcell));
+          PetscCall(PffTallAddRow_Private(tc, &row, 1, s * s * d, PETSC_FALSE, nf, fl, fc, fcell));
           PetscCall(PetscFree3(fl, fc, fcell));
         }
       }
@@ -176,14 +176,20 @@ static PetscErrorCode BuildColumn(PffTall tc, const ColumnGeom *cg, const PetscR
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Reads phi of column (ci, ck) of owned block column (bi, bk) into phi[ny]. */
-static PetscErrorCode ReadColumn(PffTall tc, PetscInt chPhi, const ColumnGeom *cg, PetscReal phi[])
+/* Reads phi of column (ci, ck) of owned block column (bi, bk) into phi[ny], and into solid[ny] whether each
+   cell lies inside the solids (no flux can enter it: it gets no sample). */
+static PetscErrorCode ReadColumn(PffTall tc, PetscInt chPhi, const ColumnGeom *cg, PetscReal phi[], PetscBool solid[])
 {
   PetscFunctionBeginUser;
   for (PetscInt bj = 0; bj < tc->nb[1]; bj++) {
-    float *data;
+    float         *data, *sd = NULL;
+    const PetscInt base = cg->ci + cg->n * cg->n * cg->ck;
     PetscCall(PffGridGetBlockData(tc->grid, chPhi, cg->lbOf[bj], 0, &data));
-    for (PetscInt cj = 0; cj < cg->n; cj++) phi[bj * cg->n + cj] = data[cg->ci + cg->n * (cj + cg->n * cg->ck)];
+    if (tc->chSolid >= 0) PetscCall(PffGridGetBlockData(tc->grid, tc->chSolid, cg->lbOf[bj], 0, &sd));
+    for (PetscInt cj = 0; cj < cg->n; cj++) {
+      phi[bj * cg->n + cj]   = data[base + cg->n * cj];
+      solid[bj * cg->n + cj] = (PetscBool)(sd && sd[base + cg->n * cj] <= -1);
+    }
   }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -302,8 +308,9 @@ PetscErrorCode PffTallBuildColumns_Private(PffTall tc, PetscInt chPhi)
   const PetscInt *level;
   PetscInt       *next, *lbOf, nyMax = tc->nb[1] * tc->n0;
   PetscReal      *phi;
+  PetscBool      *solid;
   Point          *pts;
-  PetscInt64      cnt[4] = {0, 0, 0, 0}, sum[4]; /* cells, tall cells, surface rows, liquid cells */
+  PetscInt64      cnt[3] = {0, 0, 0}, sum[3]; /* cells, tall cells, liquid cells */
 
   PetscFunctionBeginUser;
   PetscCall(PffTallCheckGrid_Private(tc));
@@ -326,7 +333,7 @@ PetscErrorCode PffTallBuildColumns_Private(PffTall tc, PetscInt chPhi)
   tc->nrec = next[tc->rank];
   PetscCall(PetscFree(next));
   PetscCall(PetscMalloc3(PFF_TALL_RI * tc->nrec, &tc->ri, PFF_TALL_RR * tc->nrec, &tc->rr, tc->nrec, &tc->height));
-  PetscCall(PetscMalloc3(nyMax, &phi, nyMax + 2, &pts, tc->nb[1], &lbOf));
+  PetscCall(PetscMalloc4(nyMax, &phi, nyMax, &solid, nyMax + 2, &pts, tc->nb[1], &lbOf));
 
   /* pass 1: samples per rank, for the global numbering; pass 2: records and vertical rows */
   for (PetscInt pass = 0; pass < 2; pass++) {
@@ -340,15 +347,15 @@ PetscErrorCode PffTallBuildColumns_Private(PffTall tc, PetscInt chPhi)
         for (cg.ci = 0; cg.ci < n; cg.ci++) {
           const PetscInt off = tc->bcOffset[bc] + (cg.ck * n + cg.ci) * cg.ny;
           PetscInt       ns  = 0;
-          PetscCall(ReadColumn(tc, chPhi, &cg, phi));
+          PetscCall(ReadColumn(tc, chPhi, &cg, phi, solid));
           if (pass == 0) {
-            PetscInt64 c = 0, t = 0, sr = 0;
-            PetscCall(BuildColumn(tc, &cg, phi, pts, NULL, NULL, NULL, 0, PETSC_FALSE, &ns, &c, &t, &sr));
+            PetscInt64 c = 0, t = 0;
+            PetscCall(BuildColumn(tc, &cg, phi, solid, pts, NULL, NULL, NULL, 0, PETSC_FALSE, &ns, &c, &t));
           } else {
-            PetscCall(BuildColumn(tc, &cg, phi, pts, tc->ri + PFF_TALL_RI * off, tc->rr + PFF_TALL_RR * off,
-                                  tc->height + off, tc->sstart + total, PETSC_TRUE, &ns, &cnt[0], &cnt[1], &cnt[2]));
+            PetscCall(BuildColumn(tc, &cg, phi, solid, pts, tc->ri + PFF_TALL_RI * off, tc->rr + PFF_TALL_RR * off,
+                                  tc->height + off, tc->sstart + total, PETSC_TRUE, &ns, &cnt[0], &cnt[1]));
             for (PetscInt j = 0; j < cg.ny; j++)
-              if (phi[j] < 0) cnt[3] += (PetscInt64)1 << (3 * l);
+              if (phi[j] < 0 && !solid[j]) cnt[2] += (PetscInt64)1 << (3 * l);
           }
           if (pass == 1)
             for (PetscInt q = 0; q < ns; q++) tc->sampleS[total + q] = cg.s;
@@ -362,12 +369,11 @@ PetscErrorCode PffTallBuildColumns_Private(PffTall tc, PetscInt chPhi)
       PetscCall(PetscMalloc1(tc->nsamp, &tc->sampleS));
     }
   }
-  PetscCall(PetscFree3(phi, pts, lbOf));
-  PetscCallMPI(MPIU_Allreduce(cnt, sum, 4, MPIU_INT64, MPI_SUM, tc->comm));
+  PetscCall(PetscFree4(phi, solid, pts, lbOf));
+  PetscCallMPI(MPIU_Allreduce(cnt, sum, 3, MPIU_INT64, MPI_SUM, tc->comm));
   tc->cells       = sum[0];
   tc->tallCells   = sum[1];
-  tc->nsurface    = cnt[2]; /* local until the horizontal rows are added (rows.c) */
-  tc->liquidCells = sum[3];
+  tc->liquidCells = sum[2];
   PetscCall(BuildGhosts(tc));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

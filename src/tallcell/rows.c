@@ -10,14 +10,17 @@
    the mean of its faces (Eq. 5, the "collapsed" average of Fig. 4). */
 #include "tallimpl.h"
 
-PetscErrorCode PffTallAddRow_Private(PffTall tc, const PffTallRow *row, PetscReal F, PetscReal V, PetscInt nf,
-                                     const PetscInt lb[], const PetscInt comp[], const PetscInt cell[])
+PetscErrorCode PffTallAddRow_Private(PffTall tc, const PffTallRow *row, PetscReal F, PetscReal V, PetscBool surface,
+                                     PetscInt nf, const PetscInt lb[], const PetscInt comp[], const PetscInt cell[])
 {
+  PetscReal asum = 0;
+
   PetscFunctionBeginUser;
   if (tc->nrows == tc->rowsCap) {
     const PetscInt cap = PetscMax(1024, 2 * tc->rowsCap);
     PetscCall(PetscRealloc(sizeof(PetscReal) * cap, &tc->rowF));
     PetscCall(PetscRealloc(sizeof(PetscReal) * cap, &tc->rowV));
+    PetscCall(PetscRealloc(sizeof(PetscReal) * cap, &tc->rowA));
     PetscCall(PetscRealloc(sizeof(PetscInt) * (cap + 1), &tc->rowFace));
     PetscCall(PetscRealloc(sizeof(PffTallRow) * cap, &tc->rowEnt));
     if (!tc->rowsCap) tc->rowFace[0] = 0;
@@ -28,17 +31,30 @@ PetscErrorCode PffTallAddRow_Private(PffTall tc, const PffTallRow *row, PetscRea
     PetscCall(PetscRealloc(sizeof(PetscInt) * cap, &tc->faceLb));
     PetscCall(PetscRealloc(sizeof(PetscInt) * cap, &tc->faceComp));
     PetscCall(PetscRealloc(sizeof(PetscInt) * cap, &tc->faceCell));
+    PetscCall(PetscRealloc(sizeof(float) * cap, &tc->faceA));
     tc->facesCap = cap;
   }
   for (PetscInt q = 0; q < nf; q++) {
-    tc->faceLb[tc->nfaces]     = lb[q];
-    tc->faceComp[tc->nfaces]   = comp[q];
-    tc->faceCell[tc->nfaces++] = cell[q];
+    float a = 1;
+    if (tc->chA >= 0) {
+      float *data;
+      PetscCall(PffGridGetBlockData(tc->grid, tc->chA, lb[q], comp[q], &data));
+      a = PetscMax(0.0f, PetscMin(1.0f, data[cell[q]]));
+    }
+    tc->faceLb[tc->nfaces + q]   = lb[q];
+    tc->faceComp[tc->nfaces + q] = comp[q];
+    tc->faceCell[tc->nfaces + q] = cell[q];
+    tc->faceA[tc->nfaces + q]    = a;
+    asum += a;
   }
+  if (!(asum > 0)) PetscFunctionReturn(PETSC_SUCCESS); /* closed by solids: no flux, no row */
+  tc->nfaces += nf;
   tc->rowF[tc->nrows]      = F;
   tc->rowV[tc->nrows]      = V;
+  tc->rowA[tc->nrows]      = asum / (PetscReal)nf;
   tc->rowEnt[tc->nrows]    = *row;
   tc->rowFace[++tc->nrows] = tc->nfaces;
+  if (surface) tc->nsurface++; /* local count; summed in Build */
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -99,52 +115,60 @@ static void AddPressure(const PetscInt ri[], const PetscReal rr[], PetscReal yc,
   }
 }
 
-/* The lower side of a face: its columns (level, x, z) and weights. */
+/* The lower side of a face: its columns (level, x, z) and the distance of the centres. */
 typedef struct {
   PetscInt  nc, l, gx[2], gz[2];
-  PetscReal w, d; /* weight of each column, distance of the centres */
+  PetscReal d;
 } LowerSide;
 
 /* What the lower side has at height y. Its phi there is the mean over its columns of phi interpolated
-   linearly between the cell centres around y; the side is liquid where that is negative. When asked, adds
-   -scale w p_c(y) to row for every column c liquid at y, p_c from the liquid cell around y (the cell holding
-   y, or the neighbour towards y when that one is air: the run's function extrapolates to the surface).
-   Also returns, per lower column, the kinds of the lowest and highest cell touching [ylo, yhi]. */
+   linearly between the cell centres around y; the side is liquid where that is negative. A column whose cell
+   holding y lies wholly inside a solid is left out of the mean (*nside counts the others; 0: no lower side).
+   When asked, adds -scale p_c(y) / nside to row for every column c liquid at y, p_c from the liquid cell
+   around y (the cell holding y, or the neighbour towards y when that one is air: the run's function
+   extrapolates to the surface). Also returns, per lower column, the kinds of the lowest and highest cell
+   touching [ylo, yhi]. */
 static PetscErrorCode LowerAt(PffTall tc, const LowerSide *ls, PetscReal y, PetscReal ylo, PetscReal yhi,
-                              PetscReal scale, PffTallRow *row, PetscReal *phiMean, PetscInt kinds[4])
+                              PetscReal scale, PffTallRow *row, PetscReal *phiMean, PetscInt *nside, PetscInt kinds[4])
 {
-  const PetscReal s = tc->h0 * (PetscReal)(1 << ls->l), y0 = tc->origin[1];
-  const PetscInt  ny  = tc->nb[1] * (tc->n0 >> ls->l);
-  PetscReal       sum = 0;
+  const PetscReal  s = tc->h0 * (PetscReal)(1 << ls->l), y0 = tc->origin[1];
+  const PetscInt   ny = tc->nb[1] * (tc->n0 >> ls->l);
+  const PetscReal  t  = (y - y0) / s - 0.5;
+  const PetscInt   ja = PetscMax(0, PetscMin(ny - 1, (PetscInt)PetscFloorReal(t))), jb = PetscMin(ny - 1, ja + 1);
+  const PetscReal  f     = PetscMax(0.0, PetscMin(1.0, t - (PetscReal)ja));
+  const PetscBool  upper = (PetscBool)(f >= 0.5); /* the cell holding y is jb */
+  const PetscInt  *ra[2], *rb[2];
+  const PetscReal *xa[2], *xb[2];
+  PetscReal        sum = 0, phic[2];
+  PetscInt         n   = 0;
 
   PetscFunctionBeginUser;
   for (PetscInt c = 0; c < ls->nc; c++) {
-    const PetscReal  t  = (y - y0) / s - 0.5;
-    const PetscInt   ja = PetscMax(0, PetscMin(ny - 1, (PetscInt)PetscFloorReal(t))), jb = PetscMin(ny - 1, ja + 1);
-    const PetscReal  f = PetscMax(0.0, PetscMin(1.0, t - (PetscReal)ja));
-    const PetscInt  *ra, *rb;
-    const PetscReal *xa, *xb;
-    PetscCall(GetRecord(tc, ls->l, ls->gx[c], ls->gz[c], ja, &ra, &xa));
-    PetscCall(GetRecord(tc, ls->l, ls->gx[c], ls->gz[c], jb, &rb, &xb));
-    const PetscReal phic = (1 - f) * xa[4] + f * xb[4];
-    sum += phic;
-    if (row && phic < 0) {
-      const PetscBool upper = (PetscBool)(f >= 0.5); /* the cell holding y is jb */
-      const PetscBool useB  = upper ? (PetscBool)(rb[4] != PFF_TALL_AIR) : (PetscBool)(ra[4] == PFF_TALL_AIR);
-      AddPressure(useB ? rb : ra, useB ? xb : xa, y0 + ((PetscReal)(useB ? jb : ja) + 0.5) * s, y, -scale * ls->w, row);
-    }
-    if (kinds) {
-      const PetscInt jl = (PetscInt)PetscFloorReal((ylo - y0) / s + 1e-9),
-                     jh = (PetscInt)PetscCeilReal((yhi - y0) / s - 1e-9) - 1;
-      const PetscInt  *ri;
-      const PetscReal *rr;
-      PetscCall(GetRecord(tc, ls->l, ls->gx[c], ls->gz[c], jl, &ri, &rr));
-      kinds[2 * c] = ri[4];
-      PetscCall(GetRecord(tc, ls->l, ls->gx[c], ls->gz[c], jh, &ri, &rr));
-      kinds[2 * c + 1] = ri[4];
-    }
+    PetscCall(GetRecord(tc, ls->l, ls->gx[c], ls->gz[c], ja, &ra[c], &xa[c]));
+    PetscCall(GetRecord(tc, ls->l, ls->gx[c], ls->gz[c], jb, &rb[c], &xb[c]));
+    phic[c] = (1 - f) * xa[c][4] + f * xb[c][4];
+    if ((upper ? rb[c] : ra[c])[4] == PFF_TALL_SOLID) continue;
+    sum += phic[c];
+    n++;
   }
-  *phiMean = sum / (PetscReal)ls->nc;
+  for (PetscInt c = 0; row && c < ls->nc; c++) {
+    if ((upper ? rb[c] : ra[c])[4] == PFF_TALL_SOLID || !(phic[c] < 0)) continue;
+    const PetscBool useB = upper ? PffTallLiquidKind(rb[c][4]) : (PetscBool)!PffTallLiquidKind(ra[c][4]);
+    AddPressure(useB ? rb[c] : ra[c], useB ? xb[c] : xa[c], y0 + ((PetscReal)(useB ? jb : ja) + 0.5) * s, y,
+                -scale / (PetscReal)n, row);
+  }
+  for (PetscInt c = 0; kinds && c < ls->nc; c++) {
+    const PetscInt jl = (PetscInt)PetscFloorReal((ylo - y0) / s + 1e-9),
+                   jh = (PetscInt)PetscCeilReal((yhi - y0) / s - 1e-9) - 1;
+    const PetscInt  *ri;
+    const PetscReal *rr;
+    PetscCall(GetRecord(tc, ls->l, ls->gx[c], ls->gz[c], jl, &ri, &rr));
+    kinds[2 * c] = ri[4];
+    PetscCall(GetRecord(tc, ls->l, ls->gx[c], ls->gz[c], jh, &ri, &rr));
+    kinds[2 * c + 1] = ri[4];
+  }
+  *phiMean = n ? sum / (PetscReal)n : PETSC_MAX_REAL;
+  if (nside) *nside = n;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -194,7 +218,6 @@ static PetscErrorCode ColumnFaceRows(PffTall tc, PetscInt l, PetscInt gx, PetscI
     const PetscInt64 e0      = (PetscInt64)g[e] << l;
     ls.l                     = lnb;
     ls.nc                    = lnb == l - 1 ? 2 : 1;
-    ls.w                     = 1.0 / (PetscReal)ls.nc;
     ls.d                     = lnb == l ? s : (lnb > l ? 1.5 * s : 0.75 * s);
     for (PetscInt c = 0; c < ls.nc; c++) {
       const PetscInt tcell = (PetscInt)((e0 >> lnb) + c);
@@ -209,7 +232,8 @@ static PetscErrorCode ColumnFaceRows(PffTall tc, PetscInt l, PetscInt gx, PetscI
     PetscReal        phiL;
     PetscCall(GetRecord(tc, l, gx, gz, j, &ri, &rr));
     sig[5 * j] = ri[4];
-    PetscCall(LowerAt(tc, &ls, y0 + (j + 0.5) * s, y0 + j * s, y0 + (j + 1) * s, 0, NULL, &phiL, &sig[5 * j + 1]));
+    PetscCall(
+        LowerAt(tc, &ls, y0 + (j + 0.5) * s, y0 + j * s, y0 + (j + 1) * s, 0, NULL, &phiL, NULL, &sig[5 * j + 1]));
     for (PetscInt q = 1 + 2 * ls.nc; q < 5; q++) sig[5 * j + q] = 0;
     fl[j]    = lbOf[j / n];
     fc[j]    = a;
@@ -223,29 +247,59 @@ static PetscErrorCode ColumnFaceRows(PffTall tc, PetscInt l, PetscInt gx, PetscI
     const PetscInt  *ri;
     const PetscReal *rr;
     PetscReal        phiL;
+    PetscInt         nside;
     PffTallRow       row = {0};
     PetscCall(GetRecord(tc, l, gx, gz, PetscMin(ju, ny - 1), &ri, &rr));
-    const PetscBool uliq = (PetscBool)(ri[4] != PFF_TALL_AIR);
+    const PetscBool uliq = PffTallLiquidKind(ri[4]);
     const PetscReal phiU = rr[4];
-    PetscCall(LowerAt(tc, &ls, ym, ylo, yhi, 0, NULL, &phiL, NULL));
+    PetscCall(LowerAt(tc, &ls, ym, ylo, yhi, 0, NULL, &phiL, &nside, NULL));
     const PetscBool lliq = (PetscBool)(phiL < 0);
-    if (uliq || lliq) {
+    /* a solid on either side closes the face: its fraction is zero, and so is its row */
+    if ((uliq || lliq) && nside && ri[4] != PFF_TALL_SOLID) {
       PetscReal F = 1;
       if (uliq) AddPressure(ri, rr, y0 + (PetscMin(ju, ny - 1) + 0.5) * s, ym, 1 / ls.d, &row);
-      if (lliq && uliq) PetscCall(LowerAt(tc, &ls, ym, ylo, yhi, 1 / ls.d, &row, &phiL, NULL));
+      if (lliq && uliq) PetscCall(LowerAt(tc, &ls, ym, ylo, yhi, 1 / ls.d, &row, &phiL, NULL, NULL));
       if (uliq != lliq) {
         const PetscReal pl = uliq ? phiU : phiL, pa = uliq ? phiL : phiU, den = pl - pa;
         const PetscReal th = PetscMin(1.0, PetscMax(tc->thetaMin, den < 0 ? pl / den : 1));
         F                  = 1 / th;
-        if (lliq) PetscCall(LowerAt(tc, &ls, ym, ylo, yhi, 1 / ls.d, &row, &phiL, NULL));
-        tc->nsurface++; /* local count; summed in Build */
+        if (lliq) PetscCall(LowerAt(tc, &ls, ym, ylo, yhi, 1 / ls.d, &row, &phiL, NULL, NULL));
       }
       if (row.n)
-        PetscCall(PffTallAddRow_Private(tc, &row, F, s * (yhi - ylo) * ls.d, j1 - j0, &fl[j0], &fc[j0], &fcell[j0]));
+        PetscCall(PffTallAddRow_Private(tc, &row, F, s * (yhi - ylo) * ls.d, (PetscBool)(uliq != lliq), j1 - j0,
+                                        &fl[j0], &fc[j0], &fcell[j0]));
     }
     j0 = j1;
   }
   PetscCall(PetscFree4(sig, fl, fc, fcell));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* A sample whose rows the solids all closed (a liquid cell boxed in by closed faces) has an empty row in A: it
+   gets a unit diagonal, so that it solves to p = 0 (its right-hand side is zero) and the matrix stays
+   definite. */
+static PetscErrorCode IsolatedSamples(PffTall tc)
+{
+  Vec                diag;
+  const PetscScalar *d;
+  PetscInt           nzero = 0, any;
+
+  PetscFunctionBeginUser;
+  if (tc->chA < 0) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(MatCreateVecs(tc->A, &diag, NULL));
+  PetscCall(MatGetDiagonal(tc->A, diag));
+  PetscCall(VecGetArrayRead(diag, &d));
+  for (PetscInt i = 0; i < tc->nsamp; i++) nzero += d[i] == 0;
+  PetscCallMPI(MPIU_Allreduce(&nzero, &any, 1, MPIU_INT, MPI_SUM, tc->comm));
+  if (any) {
+    PetscCall(MatSetOption(tc->A, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_FALSE));
+    for (PetscInt i = 0; i < tc->nsamp; i++)
+      if (d[i] == 0) PetscCall(MatSetValue(tc->A, tc->sstart + i, tc->sstart + i, 1.0, INSERT_VALUES));
+    PetscCall(MatAssemblyBegin(tc->A, MAT_FINAL_ASSEMBLY));
+    PetscCall(MatAssemblyEnd(tc->A, MAT_FINAL_ASSEMBLY));
+  }
+  PetscCall(VecRestoreArrayRead(diag, &d));
+  PetscCall(VecDestroy(&diag));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -289,7 +343,7 @@ PetscErrorCode PffTallBuildRows_Private(PffTall tc)
     PetscScalar *sv;
     PetscCall(VecDuplicate(tc->urow, &sw));
     PetscCall(VecGetArray(sw, &sv));
-    for (PetscInt r = 0; r < tc->nrows; r++) sv[r] = PetscSqrtReal(tc->rowV[r] * tc->rowF[r]);
+    for (PetscInt r = 0; r < tc->nrows; r++) sv[r] = PetscSqrtReal(tc->rowV[r] * tc->rowA[r] * tc->rowF[r]);
     PetscCall(VecRestoreArray(sw, &sv));
     PetscCall(MatDuplicate(tc->G, MAT_COPY_VALUES, &B));
     PetscCall(MatDiagonalScale(B, sw, NULL));
@@ -297,6 +351,7 @@ PetscErrorCode PffTallBuildRows_Private(PffTall tc)
     PetscCall(MatDestroy(&B));
     PetscCall(VecDestroy(&sw));
   }
+  PetscCall(IsolatedSamples(tc));
   {
     PetscInt64 loc = tc->nsurface;
     PetscCallMPI(MPIU_Allreduce(&loc, &tc->nsurface, 1, MPIU_INT64, MPI_SUM, tc->comm));

@@ -42,6 +42,8 @@ PetscErrorCode PffTallCreate(PffGrid grid, PffTall *tcp)
   tc->sizingKappa   = 0.3;
   tc->sizingU       = 0.05;
   tc->sizing        = PETSC_TRUE;
+  tc->chA           = -1;
+  tc->chSolid       = -1;
   PetscCall(PffGridGetComm(grid, &tc->comm));
   PetscCallMPI(MPI_Comm_rank(tc->comm, &tc->rank));
   PetscCallMPI(MPI_Comm_size(tc->comm, &tc->size));
@@ -125,6 +127,8 @@ PetscErrorCode PffTallFreeBuild_Private(PffTall tc)
   PetscCall(PetscFree(tc->sampleS));
   PetscCall(PetscFree(tc->rowF));
   PetscCall(PetscFree(tc->rowV));
+  PetscCall(PetscFree(tc->rowA));
+  PetscCall(PetscFree(tc->faceA));
   PetscCall(PetscFree(tc->rowFace));
   PetscCall(PetscFree(tc->rowEnt));
   PetscCall(PetscFree(tc->faceLb));
@@ -132,6 +136,7 @@ PetscErrorCode PffTallFreeBuild_Private(PffTall tc)
   PetscCall(PetscFree(tc->faceCell));
   tc->nrows = tc->rowsCap = tc->nfaces = tc->facesCap = 0;
   tc->nghost = tc->nrec = tc->nsamp = 0;
+  tc->nsurface                      = 0;
   PetscCall(MatDestroy(&tc->G));
   PetscCall(MatDestroy(&tc->A));
   PetscCall(VecDestroy(&tc->p));
@@ -173,7 +178,8 @@ PetscErrorCode PffTallBuild(PffTall tc, PetscInt chPhi)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* u*_row: the mean of each row's faces in chU. */
+/* u*_row: the mean of each row's faces in chU, weighted by their open fractions (the flux through the
+   row's open area over that area). */
 static PetscErrorCode RowVelocity(PffTall tc, PetscInt chU, Vec urow)
 {
   PetscScalar *u;
@@ -181,13 +187,14 @@ static PetscErrorCode RowVelocity(PffTall tc, PetscInt chU, Vec urow)
   PetscFunctionBeginUser;
   PetscCall(VecGetArray(urow, &u));
   for (PetscInt r = 0; r < tc->nrows; r++) {
-    PetscReal sum = 0;
+    PetscReal sum = 0, asum = 0;
     for (PetscInt f = tc->rowFace[r]; f < tc->rowFace[r + 1]; f++) {
       float *data;
       PetscCall(PffGridGetBlockData(tc->grid, chU, tc->faceLb[f], tc->faceComp[f], &data));
-      sum += data[tc->faceCell[f]];
+      sum += tc->faceA[f] * data[tc->faceCell[f]];
+      asum += tc->faceA[f];
     }
-    u[r] = sum / (PetscReal)(tc->rowFace[r + 1] - tc->rowFace[r]);
+    u[r] = sum / asum;
   }
   PetscCall(VecRestoreArray(urow, &u));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -226,7 +233,7 @@ static PetscErrorCode WriteCells(PffTall tc, PetscInt ch, const PetscScalar *p)
             PetscReal        v = 0;
             if (!p)
               v = tc->height[rec];
-            else if (ri[4] != PFF_TALL_AIR) {
+            else if (PffTallLiquidKind(ri[4])) {
               const PetscInt  ia = ri[2], ib = ri[3];
               const PetscReal t = rr[3] != rr[2] ? (yc - rr[2]) / (rr[3] - rr[2]) : 0;
               v = (ia >= 0 ? (1 - t) * p[ia - tc->sstart] : 0) + (ib >= 0 && t != 0 ? t * p[ib - tc->sstart] : 0);
@@ -255,7 +262,7 @@ PetscErrorCode PffTallProject(PffTall tc, PetscInt chU, PetscReal dt, PetscReal 
     const PetscScalar *u;
     PetscCall(VecGetArrayRead(tc->urow, &u));
     PetscCall(VecGetArray(tc->w, &w));
-    for (PetscInt r = 0; r < tc->nrows; r++) w[r] = tc->rowV[r] * u[r] * rho / dt;
+    for (PetscInt r = 0; r < tc->nrows; r++) w[r] = tc->rowV[r] * tc->rowA[r] * u[r] * rho / dt;
     PetscCall(VecRestoreArray(tc->w, &w));
     PetscCall(VecRestoreArrayRead(tc->urow, &u));
   }
@@ -293,6 +300,7 @@ PetscErrorCode PffTallProject(PffTall tc, PetscInt chU, PetscReal dt, PetscReal 
     const PetscReal du = dt / rho * tc->rowF[r] * g[r];
     for (PetscInt f = tc->rowFace[r]; f < tc->rowFace[r + 1]; f++) {
       float *data;
+      if (!(tc->faceA[f] > 0)) continue; /* a closed face keeps the solid's velocity */
       PetscCall(PffGridGetBlockData(tc->grid, chU, tc->faceLb[f], tc->faceComp[f], &data));
       data[tc->faceCell[f]] = (float)(data[tc->faceCell[f]] - du);
     }
@@ -329,7 +337,7 @@ PetscErrorCode PffTallMaxDivergence(PffTall tc, PetscInt chU, PetscReal *maxdiv)
   PetscCall(RowVelocity(tc, chU, tc->urow));
   PetscCall(VecGetArrayRead(tc->urow, &u));
   PetscCall(VecGetArray(tc->w, &w));
-  for (PetscInt r = 0; r < tc->nrows; r++) w[r] = tc->rowV[r] * u[r];
+  for (PetscInt r = 0; r < tc->nrows; r++) w[r] = tc->rowV[r] * tc->rowA[r] * u[r];
   PetscCall(VecRestoreArray(tc->w, &w));
   PetscCall(VecRestoreArrayRead(tc->urow, &u));
   PetscCall(VecDuplicate(tc->p, &div));

@@ -15,6 +15,7 @@
 
 #define PFF_TALL_SURFACE (-1) /* segment point: the free surface, p = 0 */
 #define PFF_TALL_AIR (-2)     /* record kind: an air cell */
+#define PFF_TALL_SOLID (-3)   /* record kind: a cell inside the solids (chSolid <= -1) */
 #define PFF_TALL_CUBIC (-1)   /* record kind: a cubic cell (otherwise the id of its tall cell's lowest sample) */
 #define PFF_TALL_RI 5         /* ints per record: 4 segment ids, kind */
 #define PFF_TALL_RR 5         /* reals per record: 4 segment heights, phi */
@@ -38,6 +39,7 @@ struct _n_PffTall {
   PetscReal sizingKappa, sizingU; /* the sizing function's turn (rad) and velocity jump (m/s) per cell */
   PetscInt  levels;               /* quadtree levels the sizing function uses (0: the grid's) */
   PetscBool sizing;               /* -tall_sizing: the liquid model builds the quadtree from the sizing function */
+  PetscInt  chA, chSolid;         /* solids: face open fractions, cell-centre distance in cells (-1: none) */
 
   /* raster */
   PetscInt     nb[3], n0;
@@ -67,10 +69,11 @@ struct _n_PffTall {
 
   /* rows: local rows 0 .. nrows - 1, global rstart + r */
   PetscInt    nrows, rstart, rowsCap;
-  PetscReal  *rowF, *rowV; /* [nrows] F (1 or 1 / theta) and V (area times distance) */
-  PetscInt   *rowFace;     /* [nrows + 1] CSR into the face list */
+  PetscReal  *rowF, *rowV, *rowA; /* [nrows] F (1 or 1 / theta), V (area times distance), A (open fraction) */
+  PetscInt   *rowFace;            /* [nrows + 1] CSR into the face list */
   PetscInt    nfaces, facesCap;
   PetscInt   *faceLb, *faceComp, *faceCell; /* [nfaces] local block, component, cell index in the block */
+  float      *faceA;                        /* [nfaces] open fraction of the face */
   PffTallRow *rowEnt;                       /* [nrows] entries (global sample ids) */
   PetscInt64  nsurface;                     /* global free-surface rows: none leaves A singular */
 
@@ -94,5 +97,12 @@ PETSC_INTERN PetscErrorCode PffTallCheckGrid_Private(PffTall);
 PETSC_INTERN PetscErrorCode PffTallBuildColumns_Private(PffTall, PetscInt chPhi);
 PETSC_INTERN PetscErrorCode PffTallBuildRows_Private(PffTall);
 PETSC_INTERN PetscErrorCode PffTallFreeBuild_Private(PffTall);
-PETSC_INTERN PetscErrorCode PffTallAddRow_Private(PffTall, const PffTallRow *, PetscReal F, PetscReal V, PetscInt nf,
-                                                  const PetscInt lb[], const PetscInt comp[], const PetscInt cell[]);
+PETSC_INTERN PetscErrorCode PffTallAddRow_Private(PffTall, const PffTallRow *, PetscReal F, PetscReal V,
+                                                  PetscBool surface, PetscInt nf, const PetscInt lb[],
+                                                  const PetscInt comp[], const PetscInt cell[]);
+
+/* Whether a record kind is a liquid cell (cubic or part of a tall cell). */
+static inline PetscBool PffTallLiquidKind(PetscInt kind)
+{
+  return (PetscBool)(kind >= PFF_TALL_CUBIC);
+}

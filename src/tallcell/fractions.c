@@ -1,0 +1,106 @@
+/* Solid fractions of the variational pressure (tall cells Sec. 4.3.2, [A] of Eq. 1, after Ando & Batty 2020):
+   the open area fraction of every face from a solid signed distance, and the distance at every cell centre.
+
+   A cell inside the solids (all eight corners, hence all six faces closed) gets a centre distance of at most
+   -1 cell, which PffTall reads as "no sample"; any other cell's centre lies less than sqrt(3)/2 cells deep.
+   A face's fraction comes from the distance at its four corners: the square is cut into four triangles
+   around its centre (the corners' mean there) and the distance is linear on each triangle, so a planar
+   solid boundary gets its exact fraction and a curved one a second-order one. The nodes of a block are
+   evaluated once and shared by the faces that meet there. */
+#include "tallimpl.h"
+#include <pff/particles.h>
+
+/* Area fraction of a triangle where the linear function through its vertex values a, b, c is positive. */
+static PetscReal TriangleOpen(PetscReal a, PetscReal b, PetscReal c)
+{
+  const PetscInt np = (a > 0) + (b > 0) + (c > 0);
+
+  if (np == 0) return 0;
+  if (np == 3) return 1;
+  /* rotate so that a is the vertex alone on its side */
+  if (np == 1) {
+    if (b > 0) return TriangleOpen(b, c, a);
+    if (c > 0) return TriangleOpen(c, a, b);
+    return (a / (a - b)) * (a / (a - c));
+  }
+  if (!(b > 0)) return TriangleOpen(b, c, a);
+  if (!(c > 0)) return TriangleOpen(c, a, b);
+  return 1 - (a / (a - b)) * (a / (a - c)); /* a <= 0 alone: its corner is the closed part */
+}
+
+PetscReal PffTallOpenFraction(const PetscReal phi[4])
+{
+  const PetscReal m   = 0.25 * (phi[0] + phi[1] + phi[2] + phi[3]);
+  PetscReal       sum = 0;
+
+  for (PetscInt q = 0; q < 4; q++) sum += TriangleOpen(phi[q], phi[(q + 1) % 4], m);
+  return 0.25 * sum;
+}
+
+PetscErrorCode PffTallFillSolid(PffGrid grid, PffSolidFn fn, void *ctx, PetscInt chA, PetscInt chSolid)
+{
+  PetscInt   nlocal, n0;
+  PetscBool  periodic[3];
+  PetscReal *node;
+
+  PetscFunctionBeginUser;
+  PetscCheck(fn != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "tallcell: no solid distance function");
+  PetscCall(PffGridGetSizes(grid, &n0, NULL, NULL, NULL, periodic));
+  PetscCall(PetscMalloc1((n0 + 1) * (n0 + 1) * (n0 + 1), &node));
+  PetscCall(PffGridGetLocalBlocks(grid, &nlocal));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo info;
+    float       *a[3], *sd;
+    PetscReal    x[3], g[3];
+    PetscCall(PffGridGetBlockInfo(grid, lb, &info));
+    const PetscInt n = info.n, m = n + 1;
+    for (PetscInt k = 0; k <= n; k++)
+      for (PetscInt j = 0; j <= n; j++)
+        for (PetscInt i = 0; i <= n; i++) {
+          const PetscInt ijk[3] = {i, j, k};
+          for (PetscInt d = 0; d < 3; d++) x[d] = info.lo[d] + (PetscReal)ijk[d] * info.h;
+          node[i + m * (j + m * k)] = fn(x, g, ctx);
+        }
+    for (PetscInt d = 0; d < 3; d++) PetscCall(PffGridGetBlockData(grid, chA, lb, d, &a[d]));
+    PetscCall(PffGridGetBlockData(grid, chSolid, lb, 0, &sd));
+    for (PetscInt k = 0; k < n; k++)
+      for (PetscInt j = 0; j < n; j++)
+        for (PetscInt i = 0; i < n; i++) {
+          const PetscInt c = i + n * (j + n * k), ijk[3] = {i, j, k};
+          for (PetscInt d = 0; d < 3; d++) {
+            const PetscInt e1 = (d + 1) % 3, e2 = (d + 2) % 3;
+            PetscInt       q[3] = {i, j, k};
+            PetscReal      phi[4];
+            for (PetscInt v = 0; v < 4; v++) { /* corners in cyclic order */
+              q[e1]  = ijk[e1] + (v == 1 || v == 2);
+              q[e2]  = ijk[e2] + (v >= 2);
+              phi[v] = node[q[0] + m * (q[1] + m * q[2])];
+            }
+            const PetscBool wall = (PetscBool)(!periodic[d] && info.ijk[d] == 0 && ijk[d] == 0);
+            a[d][c]              = wall ? 0.0f : (float)PffTallOpenFraction(phi);
+          }
+          PetscBool inside = PETSC_TRUE; /* all eight corners: then all six faces are closed */
+          for (PetscInt v = 0; v < 8; v++)
+            inside = (PetscBool)(inside && node[(i + (v & 1)) + m * ((j + ((v >> 1) & 1)) + m * (k + (v >> 2)))] <= 0);
+          for (PetscInt d = 0; d < 3; d++) x[d] = info.lo[d] + ((PetscReal)ijk[d] + 0.5) * info.h;
+          sd[c] = (float)(fn(x, g, ctx) / info.h);
+          if (inside) sd[c] = PetscMin(sd[c], -1.0f);
+        }
+  }
+  PetscCall(PetscFree(node));
+  PetscCall(PffGridHaloBegin(grid, chA));
+  PetscCall(PffGridHaloEnd(grid, chA));
+  PetscCall(PffGridHaloBegin(grid, chSolid));
+  PetscCall(PffGridHaloEnd(grid, chSolid));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffTallSetSolid(PffTall tc, PetscInt chA, PetscInt chSolid)
+{
+  PetscFunctionBeginUser;
+  PetscCheck((chA < 0) == (chSolid < 0), tc->comm, PETSC_ERR_ARG_WRONG,
+             "tallcell: give both the face fractions and the cell distances of the solids, or neither");
+  tc->chA     = chA;
+  tc->chSolid = chSolid;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
