@@ -1,18 +1,24 @@
 #!/usr/bin/env bash
 # A whole liquid simulation on the three discretisations of Narita et al. 2025 (Table 1: time per step): the water
-# drop of config/tall_drop_small.yaml (-flow_model liquid) on uniform cubic cells (-grid_levels 1 -tall_merge
-# false), uniform tall cells (-grid_levels 1) and quadtree tall cells (3 levels, the sizing function's quadtree),
-# 2 ranks x 1 thread, no frames. Usage: bash jobs/bench/tall_scene.sh [N [t_end]] (default 64 and 0.5 s; the
-# cell size follows N in the unit box). Appends the summaries to output/bench/tall_scene.txt and one CSV row per
-# method to docs/data/tall_scene_issue15.csv (commit, UTC time, load average, steps, seconds per step, the
-# Pressure stage's seconds per step, particles, liquid volume drift).
+# drop of config/tall_drop_small.yaml or the breaking dam with pillars of config/tall_dam_small.yaml
+# (-flow_model liquid) on uniform cubic cells (-grid_levels 1 -tall_merge false), uniform tall cells
+# (-grid_levels 1) and quadtree tall cells (3 levels, the sizing function's quadtree), 2 ranks x 1 thread, no
+# frames. Usage: bash jobs/bench/tall_scene.sh [N [t_end [drop|dam]]] (default 64, 0.5 s, drop; N cells across
+# the unit box, the dam's tank is 3N/4 high). Appends the summaries to output/bench/tall_scene.txt and one CSV row
+# per method to docs/data/tall_scene_issue15.csv (drop) or docs/data/tall_dam_issue15.csv (dam): commit, UTC time,
+# load average, steps, seconds per step, the Pressure stage's seconds per step, particles, liquid volume drift.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/../setup.sh"
 n=${1:-64}
 tend=${2:-0.5}
+scene=${3:-drop}
 h=$(awk -v n="$n" 'BEGIN{printf "%.10g", 1.0/n}')
 out=$PFF_ROOT/output/bench
-csv=$PFF_ROOT/docs/data/tall_scene_issue15.csv
+case $scene in
+  drop) cfg=tall_drop_small.yaml; cells="$n,$n,$n"; csv=$PFF_ROOT/docs/data/tall_scene_issue15.csv; tag=tall_scene ;;
+  dam) cfg=tall_dam_small.yaml; cells="$n,$((3 * n / 4)),$n"; csv=$PFF_ROOT/docs/data/tall_dam_issue15.csv; tag=tall_dam ;;
+  *) echo "tall_scene.sh: unknown scene '$scene' (drop or dam)" >&2; exit 2 ;;
+esac
 mkdir -p "$out"
 commit=$(git -C "$PFF_ROOT" describe --always --dirty)
 [ -f "$csv" ] || echo "commit,utc,load1,n,method,t_end,steps,wall_s,s_per_step,pressure_s_per_step,pressure_share,particles,liquid_volume_drift,max_abs_drift" > "$csv"
@@ -21,11 +27,11 @@ for m in "uniform:-grid_levels 1 -tall_merge false" "tall:-grid_levels 1" "quadt
   read -r -a opts <<< "${m#*:}"
   load=$(cut -d' ' -f1 /proc/loadavg)
   utc=$(date -u +%FT%TZ)
-  log=$out/tall_scene_${n}_${name}.log
-  OMP_NUM_THREADS=1 "${PFF_MPIEXEC[@]}" -n 2 "$PFF_BUILD_DIR/bin/pfflip" -options_file_yaml "$PFF_ROOT/config/tall_drop_small.yaml" \
-    -grid_cells "$n,$n,$n" -grid_h "$h" -sim_t_end "$tend" -sim_frames false -output_dir "$out/tall_scene_${n}_${name}" \
+  log=$out/${tag}_${n}_${name}.log
+  OMP_NUM_THREADS=1 "${PFF_MPIEXEC[@]}" -n 2 "$PFF_BUILD_DIR/bin/pfflip" -options_file_yaml "$PFF_ROOT/config/$cfg" \
+    -grid_cells "$cells" -grid_h "$h" -sim_t_end "$tend" -sim_frames false -output_dir "$out/${tag}_${n}_${name}" \
     ${opts[@]+"${opts[@]}"} > "$log" 2>&1
-  { echo "# $utc $commit load $(cut -d' ' -f1-3 /proc/loadavg) n=$n method=$name ${opts[*]+${opts[*]}}"; grep -E "^(summary|conservation|tall cells)" "$log"; } | tee -a "$out/tall_scene.txt"
+  { echo "# $utc $commit load $(cut -d' ' -f1-3 /proc/loadavg) scene=$scene n=$n method=$name ${opts[*]+${opts[*]}}"; grep -E "^(summary|conservation|tall cells)" "$log"; } | tee -a "$out/tall_scene.txt"
   steps=$(grep -oP "summary: \K[0-9]+(?= steps)" "$log")
   wall=$(grep -oP "summary: .* wall \K[0-9.]+" "$log")
   share=$(grep -oP "Pressure \K[0-9.]+(?=%)" "$log")
