@@ -84,6 +84,25 @@ PETSC_EXTERN PetscErrorCode PffTallFillSolid(PffGrid grid, PffSolidFn fn, void *
 /* Open fraction of a square face from the signed distance at its corners phi[4], in cyclic order. */
 PETSC_EXTERN PetscReal PffTallOpenFraction(const PetscReal phi[4]);
 
+/* A rigid body coupled two-way through the pressure (Sec. 4.4, Eq. 6-14). The body must also be in the solid
+   fractions (PffTallSetSolid): the open fractions exclude it. */
+typedef struct {
+  PffSolidFn fn;            /* signed distance to the body, negative inside, world frame */
+  void      *ctx;           /* for fn */
+  PetscReal  lo[3], hi[3];  /* world bounding box */
+  PetscReal  X[3];          /* centre of mass */
+  PetscReal  mass;          /* > 0 */
+  PetscReal  inertia[3][3]; /* inertia tensor about X, world frame, symmetric positive definite */
+  PetscReal  w[6];          /* in: (v, omega) before the projection, w*; out (Project): after, w* + dt M^-1 J p */
+  PetscReal  force[6];      /* out (Project): the pressure's force and torque about X, J p (Eq. 6-7) */
+} PffTallBody;
+
+/* Couples the n bodies (borrowed; read at Build, w and force written by Project) two-way: the system becomes
+   ([grad]^T V A F [grad] + rho J^T M^-1 J) p = (rho/dt)([grad]^T V A u* - J^T w*) (Eq. 14), solved with the
+   KSP on a PETSc MATLRC operator preconditioned by the liquid part. n = 0 removes them. Takes effect at the next
+   Build. */
+PETSC_EXTERN PetscErrorCode PffTallSetBodies(PffTall tc, PetscInt n, PffTallBody bodies[]);
+
 /* Builds the columns, samples, rows and the operator from the level set in cell channel chPhi (negative in
    liquid); the ghost columns of neighbouring ranks come through one PetscSF. Collective. */
 PETSC_EXTERN PetscErrorCode PffTallBuild(PffTall tc, PetscInt chPhi);

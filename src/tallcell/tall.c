@@ -137,6 +137,7 @@ PetscErrorCode PffTallFreeBuild_Private(PffTall tc)
   tc->nrows = tc->rowsCap = tc->nfaces = tc->facesCap = 0;
   tc->nghost = tc->nrec = tc->nsamp = 0;
   tc->nsurface                      = 0;
+  PetscCall(PffTallFreeBodies_Private(tc));
   PetscCall(MatDestroy(&tc->G));
   PetscCall(MatDestroy(&tc->A));
   PetscCall(VecDestroy(&tc->p));
@@ -168,9 +169,10 @@ PetscErrorCode PffTallBuild(PffTall tc, PetscInt chPhi)
   PetscCall(PetscTime(&t0));
   PetscCall(PffTallBuildColumns_Private(tc, chPhi));
   PetscCall(PffTallBuildRows_Private(tc));
+  PetscCall(PffTallBuildBodies_Private(tc));
   /* the system's size changes with the surface: the KSP keeps its type and options, not its set-up */
   PetscCall(KSPReset(tc->ksp));
-  PetscCall(KSPSetOperators(tc->ksp, tc->A, tc->A));
+  PetscCall(KSPSetOperators(tc->ksp, tc->N ? tc->N : tc->A, tc->A));
   tc->subPCDefaultApplied = PETSC_FALSE;
   PetscCall(PetscTime(&t1));
   tc->assembleTime = t1 - t0;
@@ -267,6 +269,7 @@ PetscErrorCode PffTallProject(PffTall tc, PetscInt chU, PetscReal dt, PetscReal 
     PetscCall(VecRestoreArrayRead(tc->urow, &u));
   }
   PetscCall(MatMultTranspose(tc->G, tc->w, tc->b));
+  PetscCall(PffTallBodiesRHS_Private(tc, dt, rho));
   if (!tc->nsurface) {
     MatNullSpace nsp;
     PetscCall(MatGetNullSpace(tc->A, &nsp));
@@ -285,7 +288,7 @@ PetscErrorCode PffTallProject(PffTall tc, PetscInt chU, PetscReal dt, PetscReal 
     Vec       r;
     PetscReal bn;
     PetscCall(VecDuplicate(tc->b, &r));
-    PetscCall(MatMult(tc->A, tc->p, r));
+    PetscCall(MatMult(tc->N ? tc->N : tc->A, tc->p, r));
     PetscCall(VecAYPX(r, -1, tc->b));
     PetscCall(VecNorm(r, NORM_INFINITY, &res));
     PetscCall(VecNorm(r, NORM_2, &rnorm));
@@ -293,6 +296,7 @@ PetscErrorCode PffTallProject(PffTall tc, PetscInt chU, PetscReal dt, PetscReal 
     rnorm = bn > 0 ? rnorm / bn : rnorm;
     PetscCall(VecDestroy(&r));
   }
+  PetscCall(PffTallBodiesUpdate_Private(tc, dt));
   /* velocity update on every face of every row */
   PetscCall(MatMult(tc->G, tc->p, tc->grow));
   PetscCall(VecGetArrayRead(tc->grow, &g));

@@ -79,6 +79,12 @@ struct _n_PffTall {
 
   PetscInt64 cells, tallCells, liquidCells; /* global counts */
 
+  /* rigid bodies (bodies.c): borrowed array; per built body 6 Vecs J (samples), U = J^T L, N = A + U rho U^T */
+  PetscInt     nbodies, nbodiesBuilt;
+  PffTallBody *bodies;
+  Vec         *J, lrcC;
+  Mat          U, N;
+
   Mat            G, A;
   Vec            p, b, urow, grow, w; /* samples: p, b; rows: u*, G p, work */
   KSP            ksp;
@@ -97,6 +103,10 @@ PETSC_INTERN PetscErrorCode PffTallCheckGrid_Private(PffTall);
 PETSC_INTERN PetscErrorCode PffTallBuildColumns_Private(PffTall, PetscInt chPhi);
 PETSC_INTERN PetscErrorCode PffTallBuildRows_Private(PffTall);
 PETSC_INTERN PetscErrorCode PffTallFreeBuild_Private(PffTall);
+PETSC_INTERN PetscErrorCode PffTallBuildBodies_Private(PffTall);
+PETSC_INTERN PetscErrorCode PffTallBodiesRHS_Private(PffTall, PetscReal dt, PetscReal rho);
+PETSC_INTERN PetscErrorCode PffTallBodiesUpdate_Private(PffTall, PetscReal dt);
+PETSC_INTERN PetscErrorCode PffTallFreeBodies_Private(PffTall);
 PETSC_INTERN PetscErrorCode PffTallAddRow_Private(PffTall, const PffTallRow *, PetscReal F, PetscReal V,
                                                   PetscBool surface, PetscInt nf, const PetscInt lb[],
                                                   const PetscInt comp[], const PetscInt cell[]);

@@ -22,6 +22,9 @@ typedef struct {
    box through the surface with liquid under it (an overhang, as under a floating body). Solid 2: a wall
    across the tank, 0.12 thick around z = 1/2. Solid 3: a round tank, solid outside the vertical cylinder of
    radius 0.4 around x = z = 1/2. ctx is the Scene. */
+/* The floating box of solid 4: its bottom at a cell centre of the finest level (13.5 h), its sides between faces. */
+static const PetscReal FLOAT_LO[3] = {0.4, 0.421875, 0.4}, FLOAT_HI[3] = {0.6, 0.621875, 0.6};
+
 static PetscReal Obstacles(const PetscReal x[3], PetscReal grad[3], void *ctx)
 {
   const PetscReal box[4][2][3] = {{{0.1, -1, 0.55}, {0.35, 0.25, 0.8}},
@@ -31,6 +34,16 @@ static PetscReal Obstacles(const PetscReal x[3], PetscReal grad[3], void *ctx)
   const Scene    *sc           = (const Scene *)ctx;
   PetscReal       dmin         = PETSC_MAX_REAL;
   if (sc->solid == 3) return 0.4 - PetscSqrtReal(PetscSqr(x[0] - 0.5) + PetscSqr(x[2] - 0.5));
+  if (sc->solid == 4) {
+    PetscReal out = 0, in = -PETSC_MAX_REAL;
+    for (PetscInt a = 0; a < 3; a++) {
+      const PetscReal q = PetscAbsReal(x[a] - 0.5 * (FLOAT_LO[a] + FLOAT_HI[a])) - 0.5 * (FLOAT_HI[a] - FLOAT_LO[a]);
+      out += PetscSqr(PetscMax(q, 0.0));
+      in = PetscMax(in, q);
+    }
+    if (grad) grad[0] = grad[1] = grad[2] = 0;
+    return in > 0 ? PetscSqrtReal(out) : in;
+  }
   for (PetscInt b = sc->solid == 2 ? 3 : 0; b < (sc->solid == 2 ? 4 : 3); b++) {
     PetscReal q[3], out = 0, in = -PETSC_MAX_REAL;
     for (PetscInt a = 0; a < 3; a++) {
@@ -209,7 +222,8 @@ static PetscErrorCode PressureCheck(Problem *pb, const Scene *sc, PetscReal *err
 /* Still water on 4 x 4 x 4 blocks: u* = -g dt; after one projection every row is at rest (|u| <= 1e-6 sqrt(g H)),
    p = rho g (H - y) at every liquid cell centre, and the cell-height channel is positive exactly in the liquid
    outside the solids. */
-static PetscErrorCode StillWater(MPI_Comm comm, const char *name, PetscInt uniform, PetscBool merge, const Scene *scIn)
+static PETSC_UNUSED PetscErrorCode StillWater(MPI_Comm comm, const char *name, PetscInt uniform, PetscBool merge,
+                                              const Scene *scIn)
 {
   const PetscInt nb[3] = {4, 4, 4};
   Scene          sc    = *scIn;
@@ -269,7 +283,7 @@ static PetscErrorCode StillWater(MPI_Comm comm, const char *name, PetscInt unifo
 
 /* Symmetric positive definite on random quadtrees (wavy surface, drop, air pocket; with the obstacles of
    Obstacles() when solid is 1); the projection of a random u* is divergence-free. */
-static PetscErrorCode RandomQuadtrees(MPI_Comm comm, PetscInt solid)
+static PETSC_UNUSED PetscErrorCode RandomQuadtrees(MPI_Comm comm, PetscInt solid)
 {
   const PetscInt nb[3] = {4, 2, 4};
 
