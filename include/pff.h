@@ -15,3 +15,4 @@
 #include <pff/io.h>
 #include <pff/scene.h>
 #include <pff/tallcell.h>
+#include <pff/bodies.h>

@@ -10,7 +10,7 @@ PFF_ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 PFF_BUILD_DIR=${PFF_BUILD_DIR:-$PFF_ROOT/build}
 PFF_BUILD_TYPE=${PFF_BUILD_TYPE:-Release}
 
-PFF_PACKAGES="gcc make cmake pkg-config git openmpi-bin libopenmpi-dev petsc-dev libhdf5-openmpi-dev libmetis-dev libyaml-dev
+PFF_PACKAGES="gcc g++ make cmake pkg-config git openmpi-bin libopenmpi-dev petsc-dev libhdf5-openmpi-dev libmetis-dev libyaml-dev libbullet-dev
   clang-format python3-h5py python3-numpy python3-matplotlib"
 case " ${PFF_CMAKE_ARGS:-} " in
 *-DPFF_PETSC64=ON*) PFF_PACKAGES="$PFF_PACKAGES libpetsc64-real-dev" ;;

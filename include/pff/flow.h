@@ -5,6 +5,7 @@
 
 #include <pff/particles.h>
 #include <pff/pressure.h>
+#include <pff/bodies.h>
 
 typedef struct _n_PffFlow *PffFlow;
 
@@ -102,6 +103,8 @@ PETSC_EXTERN PetscErrorCode PffFlowGetAdaptLevels(PffFlow flow, PetscInt *levels
    continues. Collective. */
 PETSC_EXTERN PetscErrorCode PffFlowAdaptSetMap(PffFlow flow, const PetscInt level[]);
 PETSC_EXTERN PetscErrorCode PffFlowGetGrid(PffFlow flow, PffGrid *grid);
+/* The liquid model's rigid bodies (-body_<i>_*, include/pff/bodies.h), or NULL. */
+PETSC_EXTERN PetscErrorCode PffFlowGetBodies(PffFlow flow, PffBodies *bodies);
 PETSC_EXTERN PetscErrorCode PffFlowGetDensities(PffFlow flow, PetscReal rho[PFF_PARTICLE_NTYPES]);
 /* Whether escaped gas particles are deleted (-flow_delete_bubbles); without deletion the
    bubblesDeleted of PffFlowStepStats counts the candidates only. Not collective. */

@@ -65,6 +65,7 @@ static const struct {
     {"liquid", PFF_YAML_REGION},
     {"gas", PFF_YAML_REGION},
     {"solid", PFF_YAML_REGION},
+    {"body", PFF_YAML_REGION},
     /* PETSc */
     {"ksp", PFF_YAML_SECTION},
     {"pc", PFF_YAML_SECTION},

@@ -165,6 +165,22 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
     f->volCorr = 0; /* the two-phase correction measures both phases: not for a liquid alone (docs/tallcell.md) */
     if (!f->tall) PetscCall(PffTallCreate(f->grid, &f->tall));
     PetscCall(PffTallSetFromOptions(f->tall));
+    if (!f->bodies) {
+      PetscInt  cells[3];
+      PetscReal origin[3], h, lo[3], hi[3];
+      PetscCall(PffGridGetSizes(f->grid, NULL, NULL, origin, &h, NULL));
+      PetscCall(PffGridGetCells(f->grid, cells));
+      for (PetscInt a = 0; a < 3; a++) {
+        lo[a] = origin[a];
+        hi[a] = origin[a] + (PetscReal)cells[a] * h;
+      }
+      PetscCall(PffBodiesCreateFromOptions(f->comm, lo, hi, f->gravity, &f->bodies));
+    }
+  } else {
+    PetscBool has;
+    PetscCall(PetscOptionsHasName(NULL, NULL, "-body_0_type", &has));
+    PetscCheck(!has, f->comm, PETSC_ERR_ARG_INCOMP,
+               "-body_0_type: rigid bodies need the liquid model (-flow_model liquid, quadtree tall cells)");
   }
   PetscCall(PffParticlesSetFromOptions(f->part));
   PetscCall(PffPressureSetFromOptions(f->press));
@@ -227,6 +243,12 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
     PetscCall(PffGridAddChannel(f->grid, "levelset", PFF_CHANNEL_CELL, 1, &f->chLS));
     PetscCall(PffGridAddChannel(f->grid, "du_liquid", PFF_CHANNEL_FACE, 1, &f->chDuL));
     PetscCall(PffGridSetChannelOutput(f->grid, f->chDuL, PETSC_FALSE));
+    if (f->bodies) { /* the solid the fractions and the particles see is the union of the static ones and the bodies */
+      f->staticSolid    = f->solid;
+      f->staticSolidCtx = f->solidCtx;
+      f->solid          = PffFlowLiquidSolid_Private;
+      f->solidCtx       = f;
+    }
     if (f->solid) { /* [A]: chOpen holds the open fractions, chSolidD the distance at the cell centres */
       PetscCall(PffGridAddChannel(f->grid, "solid_distance", PFF_CHANNEL_CELL, 1, &f->chSolidD));
       PetscCall(PffGridSetChannelOutput(f->grid, f->chSolidD, PETSC_FALSE));
@@ -287,6 +309,13 @@ PetscErrorCode PffFlowCheckTopology_Private(PffFlow f)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+PetscErrorCode PffFlowGetBodies(PffFlow f, PffBodies *bodies)
+{
+  PetscFunctionBeginUser;
+  *bodies = f->bodies;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffFlowDestroy(PffFlow *flow)
 {
   PetscFunctionBeginUser;
@@ -294,16 +323,18 @@ PetscErrorCode PffFlowDestroy(PffFlow *flow)
   PetscCall(PffParticlesDestroy(&(*flow)->part));
   PetscCall(PffPressureDestroy(&(*flow)->press));
   PetscCall(PffTallDestroy(&(*flow)->tall));
+  PetscCall(PffBodiesDestroy(&(*flow)->bodies));
   PetscCall(PffFlowAdaptDestroy_Private(*flow));
   PetscCall(PetscFree((*flow)->refLevel));
   PetscCall(PetscFree(*flow));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* The liquid model seeds no air: the scene's air particles are dropped. */
+/* The liquid model seeds no air and nothing inside its bodies: those particles are dropped. */
 typedef struct {
   PffSeedFn fn;
   void     *ctx;
+  PffBodies bodies;
 } PffLiquidSeedCtx;
 
 static PetscErrorCode PffLiquidSeed(const PetscReal x[3], PetscInt *type, PetscReal v[3], void *vctx)
@@ -312,20 +343,20 @@ static PetscErrorCode PffLiquidSeed(const PetscReal x[3], PetscInt *type, PetscR
 
   PetscFunctionBeginUser;
   PetscCall(c->fn(x, type, v, c->ctx));
-  if (*type == PFF_PARTICLE_AIR) *type = -1;
+  if (*type == PFF_PARTICLE_AIR || (c->bodies && PffBodiesDistance(x, NULL, c->bodies) < 0)) *type = -1;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
 PetscErrorCode PffFlowSeed(PffFlow f, PffSeedFn fn, void *ctx)
 {
-  PffLiquidSeedCtx lc = {fn, ctx};
+  PffLiquidSeedCtx lc = {fn, ctx, f->bodies};
 
   PetscFunctionBeginUser;
   PetscCheck(f->setupcalled, f->comm, PETSC_ERR_ORDER, "PffFlowSetUp() must come before PffFlowSeed()");
   if (f->model == PFF_FLOW_LIQUID) {
-    PetscCall(PffFlowLiquidQuadtree_Private(f, fn, ctx));
     fn  = PffLiquidSeed;
     ctx = &lc;
+    PetscCall(PffFlowLiquidQuadtree_Private(f, fn, ctx));
   }
   if (f->adapt.levels > 0)
     PetscCall(PffFlowAdaptSeed_Private(f, fn, ctx));

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <pff.h>
+#include <pff/bodies.h>
 #include <pff/flow.h>
 
 /* Dynamic adaptivity (adapt.c). */
@@ -31,6 +32,9 @@ struct _n_PffFlow {
   PffTall      tall;        /* the liquid model's projection (NULL for two_phase) */
   PetscInt     chLS, chDuL; /* liquid model: level set from phi (cell), extrapolated velocity change (face) */
   PetscInt     chSolidD;    /* liquid model with solids: solid distance at cell centres in cells (chOpen: fractions) */
+  PffBodies    bodies;      /* liquid model: rigid bodies (NULL: none) */
+  PffSolidFn   staticSolid; /* with bodies, the scene's static solids; solid is then the union with the bodies */
+  void        *staticSolidCtx;
 
   /* physics and numerics */
   PetscReal rho[PFF_PARTICLE_NTYPES], nu[PFF_PARTICLE_NTYPES], gravity[3];
@@ -109,6 +113,7 @@ PETSC_INTERN PetscErrorCode PffFlowCorrectionVelocity_Private(PffFlow, PetscReal
 /* fields.c */
 PETSC_INTERN PetscErrorCode PffFlowFaceVelocity_Private(PffFlow, PetscReal dt);
 PETSC_INTERN PetscErrorCode PffFlowOpenFaces_Private(PffFlow);
+PETSC_INTERN PetscReal      PffFlowLiquidSolid_Private(const PetscReal x[3], PetscReal grad[3], void *ctx);
 PETSC_INTERN PetscErrorCode PffFlowPrescribe_Private(PffFlow, PetscReal t);
 PETSC_INTERN PetscErrorCode PffFlowVelocityChange_Private(PffFlow);
 PETSC_INTERN PetscErrorCode PffFlowVorticity_Private(PffFlow);

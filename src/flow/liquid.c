@@ -74,14 +74,40 @@ static PetscErrorCode PffFlowLevelSet(PffFlow f)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* The static solids and the bodies: the smaller distance (ctx is the flow). */
+PetscReal PffFlowLiquidSolid_Private(const PetscReal x[3], PetscReal grad[3], void *ctx)
+{
+  const PffFlow f = (const PffFlow)ctx;
+  PetscReal     g[3];
+  PetscReal     d = PffBodiesDistance(x, grad, f->bodies);
+
+  if (f->staticSolid) {
+    const PetscReal ds = f->staticSolid(x, g, f->staticSolidCtx);
+    if (ds < d) {
+      d = ds;
+      if (grad)
+        for (PetscInt a = 0; a < 3; a++) grad[a] = g[a];
+    }
+  }
+  return d;
+}
+
 PetscErrorCode PffFlowLiquidProject_Private(PffFlow f, PetscReal dt, PffPressureStats *ps)
 {
   PffTallStats ts;
 
   PetscFunctionBeginUser;
+  if (f->bodies) { /* Algorithm 1, line 7: the bodies move (gravity, contacts); their fractions follow */
+    PffTallBody *tb;
+    PetscInt     nb;
+    PetscCall(PffBodiesAdvance(f->bodies, dt, &nb, &tb));
+    PetscCall(PffTallSetBodies(f->tall, nb, tb));
+    PetscCall(PffFlowOpenFaces_Private(f));
+  }
   PetscCall(PffFlowLevelSet(f));
   PetscCall(PffTallBuild(f->tall, f->chLS));
   PetscCall(PffTallProject(f->tall, f->chU, dt, f->rho[PFF_PARTICLE_LIQUID], f->chP, &ts));
+  if (f->bodies) PetscCall(PffBodiesUpdateVelocities(f->bodies)); /* line 11 */
   ps->its       = ts.its;
   ps->rnorm     = ts.rnorm;
   ps->reason    = ts.reason;
@@ -102,6 +128,30 @@ PetscErrorCode PffFlowLiquidG2P_Private(PffFlow f, const PetscReal alpha[])
   PetscCall(PffExtrapolateLiquidVelocity(f->grid, f->chUt, f->chPhiF, f->chOpen, f->extrapLayers, f->chUlMask, f->chDuL,
                                          NULL));
   PetscCall(PffParticlesG2P(f->part, f->chUl, f->chDuL, alpha));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The block columns within a block of a body's bounding box get the finest level (the paper refines near bodies,
+   Fig. 1): J reads cell-centre pressures, so the buoyancy is resolved to the cell size there. */
+static PetscErrorCode PffFlowLiquidRefineBodies(PffFlow f, const PetscInt nb[3], PetscInt map[])
+{
+  PetscInt     n, n0;
+  PetscReal    origin[3], h;
+  PffTallBody *tb;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetSizes(f->grid, &n0, NULL, origin, &h, NULL));
+  PetscCall(PffBodiesAdvance(f->bodies, 0, &n, &tb)); /* a zero step: the poses and bounding boxes */
+  for (PetscInt i = 0; i < n; i++) {
+    const PetscReal blen = (PetscReal)n0 * h;
+    const PetscInt  i0   = PetscMax(0, (PetscInt)PetscFloorReal((tb[i].lo[0] - origin[0]) / blen) - 1);
+    const PetscInt  i1   = PetscMin(nb[0] - 1, (PetscInt)PetscFloorReal((tb[i].hi[0] - origin[0]) / blen) + 1);
+    const PetscInt  k0   = PetscMax(0, (PetscInt)PetscFloorReal((tb[i].lo[2] - origin[2]) / blen) - 1);
+    const PetscInt  k1   = PetscMin(nb[2] - 1, (PetscInt)PetscFloorReal((tb[i].hi[2] - origin[2]) / blen) + 1);
+    for (PetscInt bk = k0; bk <= k1; bk++)
+      for (PetscInt bj = 0; bj < nb[1]; bj++)
+        for (PetscInt bi = i0; bi <= i1; bi++) map[bi + nb[0] * (bj + nb[1] * bk)] = 0;
+  }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -154,6 +204,7 @@ PetscErrorCode PffFlowLiquidQuadtree_Private(PffFlow f, PffSeedFn fn, void *ctx)
   nblocks = nb[0] * nb[1] * nb[2];
   PetscCall(PetscMalloc1(nblocks, &map));
   PetscCall(PffTallSizingLevels(f->tall, f->chLS, f->chU, map));
+  if (f->bodies) PetscCall(PffFlowLiquidRefineBodies(f, nb, map));
   for (PetscInt b = 0; b < nblocks; b++) changed += map[b] != level[b];
   if (changed) PetscCall(PffGridAdapt(f->grid, map));
   PetscCall(PffGridGetRaster(f->grid, NULL, &level, NULL));

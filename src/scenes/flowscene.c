@@ -407,6 +407,7 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
   PetscInt         step, frame = 0;
   PetscLogDouble   total[PFF_FLOW_NSTAGES] = {0}, stepTime = 0, tstart, tnow;
   PetscBool        deleteBubbles;
+  PffBodies        bodies;
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_rank(s->comm, &rank));
@@ -439,8 +440,12 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
   }
   PetscCall(PffFlowGetTime(fs->flow, &t, &step));
   PetscCall(PetscMemzero(&st, sizeof(st)));
+  PetscCall(PffFlowGetBodies(fs->flow, &bodies));
+  PetscCheck(!bodies || !fs->restarted, s->comm, PETSC_ERR_SUP,
+             "-sim_restart: checkpoints do not hold the rigid bodies yet (-body_<i>_*); start the run again");
   if (!fs->restarted) {
     PetscCall(PffFlowSceneDiagRow(fs, step, t, &st, 0));
+    if (bodies) PetscCall(PffBodiesWriteCSV(bodies, s->outdir, step, t));
     PetscCall(PffFlowSceneWriteFrame(fs, frame++));
     nextOut = every > 0 ? t + every : tEnd;
   } else {
@@ -462,6 +467,7 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
     stepTime += t1 - t0;
     if (deleteBubbles) fs->bubblesDeletedRun += st.bubblesDeleted;
     PetscCall(PffFlowSceneDiagRow(fs, step, t - st.dt, &st, t1 - t0));
+    if (bodies) PetscCall(PffBodiesWriteCSV(bodies, s->outdir, step, t));
     PetscCall(PetscSNPrintf(extra, sizeof(extra),
                             "dt %.3e  CFL %.2f  particles %" PetscInt64_FMT "  ksp %" PetscInt_FMT
                             " %.1e  bubbles %" PetscInt64_FMT "  droplets %" PetscInt64_FMT,

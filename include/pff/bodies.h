@@ -1,0 +1,44 @@
+/* bodies: rigid bodies that float in the liquid model, coupled two-way through the tall-cell pressure (Narita et
+   al. 2025 Sec. 4.4; docs/tallcell.md, "Rigid bodies"). Bullet (libbullet-dev) holds their state and does gravity
+   and the contacts between bodies and with the tank's walls; the liquid's pressure changes their velocity in the
+   projection (Eq. 14). Every rank holds every body (they are few), and every rank's Bullet world takes the same
+   inputs, so the states agree. Bodies are read from the options database:
+
+     -body_<i>_type box|sphere      i = 0, 1, ... without gaps, at most PFF_BODIES_MAX
+     -body_<i>_center x,y,z         centre of mass (m); the body must lie inside the domain
+     -body_<i>_size sx,sy,sz        a box's full extents (m), > 0
+     -body_<i>_radius r             a sphere's radius (m), > 0
+     -body_<i>_density rho          kg/m^3, > 0
+     -body_<i>_velocity vx,vy,vz    initial velocity (m/s), default 0
+
+   In a YAML scene: body_0: {type: box, center: "0.5,0.6,0.5", size: "0.2,0.2,0.2", density: 500}. */
+#pragma once
+
+#include <pff/tallcell.h>
+
+#define PFF_BODIES_MAX 16
+
+typedef struct _n_PffBodies *PffBodies;
+
+/* Creates the bodies in the box [lo, hi] with gravity g from the options (Bullet's world and walls); *bodies is
+   NULL when no -body_0_type is given. Bad input (a body outside the domain, a non-positive density or size, an
+   unknown type, a gap in the numbering) fails with one error naming the key. Collective. */
+PETSC_EXTERN PetscErrorCode PffBodiesCreateFromOptions(MPI_Comm comm, const PetscReal lo[3], const PetscReal hi[3],
+                                                       const PetscReal g[3], PffBodies *bodies);
+PETSC_EXTERN PetscErrorCode PffBodiesDestroy(PffBodies *bodies);
+PETSC_EXTERN PetscErrorCode PffBodiesGetCount(PffBodies bodies, PetscInt *n);
+/* Signed distance to the union of the bodies at their current poses (negative inside) and its gradient (grad
+   may be NULL); a PffSolidFn with ctx the PffBodies. */
+PETSC_EXTERN PetscReal PffBodiesDistance(const PetscReal x[3], PetscReal grad[3], void *ctx);
+/* Algorithm 1, line 7: advances gravity, contacts and poses by dt in Bullet, and fills the tall-cell view of
+   every body (pose, mass, world inertia, w* = the velocity after it) for PffTallSetBodies. Not collective (every
+   rank does the same). */
+PETSC_EXTERN PetscErrorCode PffBodiesAdvance(PffBodies bodies, PetscReal dt, PetscInt *n, PffTallBody **tall);
+/* Line 11: takes the velocities the projection left in the tall-cell view back into Bullet. */
+PETSC_EXTERN PetscErrorCode PffBodiesUpdateVelocities(PffBodies bodies);
+/* Body i's centre of mass, quaternion (w, x, y, z), velocity and angular velocity. */
+PETSC_EXTERN PetscErrorCode PffBodiesGetState(PffBodies bodies, PetscInt i, PetscReal x[3], PetscReal q[4],
+                                              PetscReal v[3], PetscReal omega[3]);
+/* Appends one line per body to <dir>/bodies.csv on rank 0 (header on step 0): step, t, body, x, y, z, q, v, omega,
+   the pressure's last force and torque. Collective. */
+PETSC_EXTERN PetscErrorCode PffBodiesWriteCSV(PffBodies bodies, const char dir[], PetscInt step, PetscReal t);

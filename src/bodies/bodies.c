@@ -1,0 +1,306 @@
+/* Rigid bodies of the liquid model (include/pff/bodies.h, docs/tallcell.md "Rigid bodies"): options, poses and
+   distances; Bullet (bullet.cpp) integrates them. */
+#include <pff.h>
+#include <pff/bodies.h>
+#include "bullet.h"
+
+typedef enum { PFF_BODY_BOX, PFF_BODY_SPHERE } PffBodyType;
+static const char *const PffBodyTypes[] = {"box", "sphere", "PffBodyType", "PFF_BODY_", NULL};
+
+typedef struct {
+  PffBodyType type;
+  PetscReal   half[3]; /* a box's half extents; a sphere's radius in half[0] */
+  PetscReal   inertia[3];
+  PetscReal   x[3], q[4], R[3][3]; /* pose: centre, quaternion (w, x, y, z), rotation body -> world */
+} PffBody;
+
+struct _n_PffBodies {
+  MPI_Comm        comm;
+  PetscMPIInt     rank;
+  PetscInt        n;
+  PffBody         body[PFF_BODIES_MAX];
+  PffTallBody     tall[PFF_BODIES_MAX];
+  PffBulletWorld *world;
+};
+
+static void Rotation(const PetscReal q[4], PetscReal R[3][3])
+{
+  const PetscReal w = q[0], x = q[1], y = q[2], z = q[3];
+  R[0][0] = 1 - 2 * (y * y + z * z);
+  R[0][1] = 2 * (x * y - w * z);
+  R[0][2] = 2 * (x * z + w * y);
+  R[1][0] = 2 * (x * y + w * z);
+  R[1][1] = 1 - 2 * (x * x + z * z);
+  R[1][2] = 2 * (y * z - w * x);
+  R[2][0] = 2 * (x * z - w * y);
+  R[2][1] = 2 * (y * z + w * x);
+  R[2][2] = 1 - 2 * (x * x + y * y);
+}
+
+/* Signed distance to one body (negative inside) and its world gradient (grad may be NULL). */
+static PetscReal BodyDistance(const PetscReal x[3], PetscReal grad[3], void *ctx)
+{
+  const PffBody *b = (const PffBody *)ctx;
+  PetscReal      l[3], gl[3] = {0, 0, 0}, d;
+
+  for (PetscInt a = 0; a < 3; a++) /* local coordinates R^T (x - X) */
+    l[a] = b->R[0][a] * (x[0] - b->x[0]) + b->R[1][a] * (x[1] - b->x[1]) + b->R[2][a] * (x[2] - b->x[2]);
+  if (b->type == PFF_BODY_SPHERE) {
+    const PetscReal r = PetscSqrtReal(l[0] * l[0] + l[1] * l[1] + l[2] * l[2]);
+    d                 = r - b->half[0];
+    for (PetscInt a = 0; a < 3; a++) gl[a] = r > 0 ? l[a] / r : (a == 1);
+  } else {
+    PetscReal qd[3], out = 0, in = -PETSC_MAX_REAL;
+    PetscInt  amax = 0;
+    for (PetscInt a = 0; a < 3; a++) {
+      qd[a] = PetscAbsReal(l[a]) - b->half[a];
+      out += PetscSqr(PetscMax(qd[a], 0.0));
+      if (qd[a] > in) {
+        in   = qd[a];
+        amax = a;
+      }
+    }
+    if (in > 0) {
+      d = PetscSqrtReal(out);
+      for (PetscInt a = 0; a < 3; a++) gl[a] = qd[a] > 0 ? PetscSign(l[a]) * qd[a] / d : 0;
+    } else {
+      d        = in;
+      gl[amax] = l[amax] >= 0 ? 1 : -1;
+    }
+  }
+  if (grad)
+    for (PetscInt a = 0; a < 3; a++) grad[a] = b->R[a][0] * gl[0] + b->R[a][1] * gl[1] + b->R[a][2] * gl[2];
+  return d;
+}
+
+PetscReal PffBodiesDistance(const PetscReal x[3], PetscReal grad[3], void *ctx)
+{
+  const PffBodies bs   = (const PffBodies)ctx;
+  PetscReal       dmin = PETSC_MAX_REAL, g[3];
+
+  if (grad) grad[0] = grad[1] = grad[2] = 0;
+  for (PetscInt i = 0; i < bs->n; i++) {
+    const PetscReal d = BodyDistance(x, g, (void *)&bs->body[i]);
+    if (d < dmin) {
+      dmin = d;
+      if (grad)
+        for (PetscInt a = 0; a < 3; a++) grad[a] = g[a];
+    }
+  }
+  return dmin;
+}
+
+/* Reads body i; *found is false when -body_<i>_type is absent. */
+static PetscErrorCode ReadBody(PetscOptionItems *PetscOptionsObject, PetscInt i, const PetscReal lo[3],
+                               const PetscReal hi[3], PffBody *b, PetscReal *density, PetscReal v[3], PetscBool *found)
+{
+  char      key[64];
+  PetscEnum type = (PetscEnum)PFF_BODY_BOX;
+  PetscInt  n;
+  PetscBool set;
+  PetscReal ext[3] = {0, 0, 0};
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscSNPrintf(key, sizeof(key), "-body_%" PetscInt_FMT "_type", i));
+  PetscCall(
+      PffOptionsEnum(key, "Rigid body: box or sphere", "PffBodiesCreateFromOptions", PffBodyTypes, type, &type, found));
+  if (!*found) PetscFunctionReturn(PETSC_SUCCESS);
+  b->type = (PffBodyType)type;
+  PetscCall(PetscSNPrintf(key, sizeof(key), "-body_%" PetscInt_FMT "_center", i));
+  n = 3;
+  PetscCall(
+      PffOptionsRealArray(key, "Rigid body: centre of mass x,y,z (m)", "PffBodiesCreateFromOptions", b->x, &n, &set));
+  PetscCheck(set && n == 3, PETSC_COMM_WORLD, PETSC_ERR_USER_INPUT, "%s: give the body's centre as x,y,z", key);
+  if (b->type == PFF_BODY_BOX) {
+    PetscCall(PetscSNPrintf(key, sizeof(key), "-body_%" PetscInt_FMT "_size", i));
+    n = 3;
+    PetscCall(
+        PffOptionsRealArray(key, "Rigid body: a box's extents x,y,z (m)", "PffBodiesCreateFromOptions", ext, &n, &set));
+    PetscCheck(set && n == 3 && ext[0] > 0 && ext[1] > 0 && ext[2] > 0, PETSC_COMM_WORLD, PETSC_ERR_USER_INPUT,
+               "%s: give the box's three extents, each > 0", key);
+    for (PetscInt a = 0; a < 3; a++) b->half[a] = 0.5 * ext[a];
+  } else {
+    PetscReal r = 0;
+    PetscCall(PetscSNPrintf(key, sizeof(key), "-body_%" PetscInt_FMT "_radius", i));
+    PetscCall(PffOptionsReal(key, "Rigid body: a sphere's radius (m)", "PffBodiesCreateFromOptions", r, &r, &set));
+    PetscCheck(set && r > 0, PETSC_COMM_WORLD, PETSC_ERR_USER_INPUT, "%s: give the sphere's radius, > 0", key);
+    b->half[0] = b->half[1] = b->half[2] = r;
+  }
+  PetscCall(PetscSNPrintf(key, sizeof(key), "-body_%" PetscInt_FMT "_density", i));
+  *density = 0;
+  PetscCall(PffOptionsReal(key, "Rigid body: density (kg/m^3)", "PffBodiesCreateFromOptions", *density, density, &set));
+  PetscCheck(set && *density > 0 && PetscIsNormalReal(*density), PETSC_COMM_WORLD, PETSC_ERR_USER_INPUT,
+             "%s: give the body's density, > 0 (got %g)", key, (double)*density);
+  PetscCall(PetscSNPrintf(key, sizeof(key), "-body_%" PetscInt_FMT "_velocity", i));
+  n = 3;
+  PetscCall(PffOptionsRealArray(key, "Rigid body: initial velocity (m/s)", "PffBodiesCreateFromOptions", v, &n, &set));
+  PetscCheck(!set || n == 3, PETSC_COMM_WORLD, PETSC_ERR_USER_INPUT, "%s: give three components", key);
+  for (PetscInt a = 0; a < 3; a++)
+    PetscCheck(b->x[a] - b->half[a] >= lo[a] && b->x[a] + b->half[a] <= hi[a], PETSC_COMM_WORLD, PETSC_ERR_USER_INPUT,
+               "-body_%" PetscInt_FMT "_center: the body [%g, %g] along %c lies outside the domain [%g, %g]", i,
+               (double)(b->x[a] - b->half[a]), (double)(b->x[a] + b->half[a]), "xyz"[a], (double)lo[a], (double)hi[a]);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffBodiesCreateFromOptions(MPI_Comm comm, const PetscReal lo[3], const PetscReal hi[3],
+                                          const PetscReal g[3], PffBodies *bodies)
+{
+  PffBodies bs;
+  PetscReal density[PFF_BODIES_MAX], v[PFF_BODIES_MAX][3];
+
+  PetscFunctionBeginUser;
+  *bodies = NULL;
+  PetscCall(PetscNew(&bs));
+  bs->comm = comm;
+  PetscCallMPI(MPI_Comm_rank(comm, &bs->rank));
+  PetscCall(PetscMemzero(v, sizeof(v)));
+  PetscOptionsBegin(comm, NULL, "Rigid bodies of the liquid model", "PffBodies");
+  for (PetscInt i = 0; i < PFF_BODIES_MAX; i++) {
+    PetscBool found;
+    PetscCall(ReadBody(PetscOptionsObject, i, lo, hi, &bs->body[i], &density[i], v[i], &found));
+    if (!found) break;
+    bs->n++;
+  }
+  PetscOptionsEnd();
+  for (PetscInt j = bs->n + 1; j <= PFF_BODIES_MAX; j++) {
+    char      key[64];
+    PetscBool has;
+    PetscCall(PetscSNPrintf(key, sizeof(key), "-body_%" PetscInt_FMT "_type", j));
+    PetscCall(PetscOptionsHasName(NULL, NULL, key, &has));
+    PetscCheck(!has, comm, PETSC_ERR_USER_INPUT,
+               "%s: bodies are numbered from 0 without gaps (-body_%" PetscInt_FMT "_type is missing), at most %d", key,
+               bs->n, PFF_BODIES_MAX);
+  }
+  if (!bs->n) {
+    PetscCall(PetscFree(bs));
+    PetscFunctionReturn(PETSC_SUCCESS);
+  }
+  {
+    const double gd[3] = {g[0], g[1], g[2]}, lod[3] = {lo[0], lo[1], lo[2]}, hid[3] = {hi[0], hi[1], hi[2]};
+    bs->world = PffBulletCreate(gd, lod, hid);
+    PetscCheck(bs->world, comm, PETSC_ERR_MEM, "bodies: Bullet could not create its world");
+  }
+  for (PetscInt i = 0; i < bs->n; i++) {
+    PffBody     *b       = &bs->body[i];
+    const double size[3] = {b->half[0], b->half[1], b->half[2]}, x[3] = {b->x[0], b->x[1], b->x[2]};
+    double       inertia[3], zero[3] = {0, 0, 0}, vi[3] = {v[i][0], v[i][1], v[i][2]};
+    const double volume =
+        b->type == PFF_BODY_BOX ? 8 * size[0] * size[1] * size[2] : 4.0 / 3.0 * PETSC_PI * size[0] * size[0] * size[0];
+    PffTallBody *t = &bs->tall[i];
+    t->mass        = density[i] * volume;
+    PetscCheck(PffBulletAddBody(bs->world, b->type == PFF_BODY_BOX ? PFF_BULLET_BOX : PFF_BULLET_SPHERE, size, t->mass,
+                                x, inertia) == i,
+               comm, PETSC_ERR_PLIB, "bodies: Bullet numbered a body out of order");
+    PffBulletSetVelocity(bs->world, (int)i, vi, zero);
+    for (PetscInt a = 0; a < 3; a++) b->inertia[a] = inertia[a];
+    b->q[0] = 1;
+    Rotation(b->q, b->R);
+    t->fn  = BodyDistance;
+    t->ctx = b;
+  }
+  *bodies = bs;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffBodiesDestroy(PffBodies *bodies)
+{
+  PetscFunctionBeginUser;
+  if (!bodies || !*bodies) PetscFunctionReturn(PETSC_SUCCESS);
+  PffBulletDestroy((*bodies)->world);
+  PetscCall(PetscFree(*bodies));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffBodiesGetCount(PffBodies bs, PetscInt *n)
+{
+  PetscFunctionBeginUser;
+  *n = bs ? bs->n : 0;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffBodiesGetState(PffBodies bs, PetscInt i, PetscReal x[3], PetscReal q[4], PetscReal v[3],
+                                 PetscReal omega[3])
+{
+  double xd[3], qd[4], vd[3], wd[3];
+
+  PetscFunctionBeginUser;
+  PetscCheck(i >= 0 && i < bs->n, bs->comm, PETSC_ERR_ARG_OUTOFRANGE, "bodies: no body %" PetscInt_FMT, i);
+  PffBulletGetState(bs->world, (int)i, xd, qd, vd, wd);
+  for (PetscInt a = 0; a < 3; a++) {
+    if (x) x[a] = xd[a];
+    if (v) v[a] = vd[a];
+    if (omega) omega[a] = wd[a];
+  }
+  for (PetscInt a = 0; a < 4 && q; a++) q[a] = qd[a];
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffBodiesAdvance(PffBodies bs, PetscReal dt, PetscInt *n, PffTallBody **tall)
+{
+  PetscFunctionBeginUser;
+  PffBulletStep(bs->world, dt);
+  for (PetscInt i = 0; i < bs->n; i++) {
+    PffBody     *b = &bs->body[i];
+    PffTallBody *t = &bs->tall[i];
+    PetscReal    v[3], w[3];
+    PetscCall(PffBodiesGetState(bs, i, b->x, b->q, v, w));
+    Rotation(b->q, b->R);
+    for (PetscInt a = 0; a < 3; a++) {
+      PetscReal reach = 0; /* half-width of the world bounding box along a */
+      for (PetscInt c = 0; c < 3; c++) reach += PetscAbsReal(b->R[a][c]) * b->half[c];
+      if (b->type == PFF_BODY_SPHERE) reach = b->half[0];
+      t->X[a]         = b->x[a];
+      t->lo[a]        = b->x[a] - reach;
+      t->hi[a]        = b->x[a] + reach;
+      t->w[a]         = v[a];
+      t->w[3 + a]     = w[a];
+      t->force[a]     = 0;
+      t->force[3 + a] = 0;
+    }
+    for (PetscInt r = 0; r < 3; r++) /* I_world = R diag(I) R^T */
+      for (PetscInt c = 0; c < 3; c++) {
+        t->inertia[r][c] = 0;
+        for (PetscInt k = 0; k < 3; k++) t->inertia[r][c] += b->R[r][k] * b->inertia[k] * b->R[c][k];
+      }
+  }
+  *n    = bs->n;
+  *tall = bs->tall;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffBodiesUpdateVelocities(PffBodies bs)
+{
+  PetscFunctionBeginUser;
+  for (PetscInt i = 0; i < bs->n; i++) {
+    const double v[3] = {bs->tall[i].w[0], bs->tall[i].w[1], bs->tall[i].w[2]};
+    const double w[3] = {bs->tall[i].w[3], bs->tall[i].w[4], bs->tall[i].w[5]};
+    PffBulletSetVelocity(bs->world, (int)i, v, w);
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffBodiesWriteCSV(PffBodies bs, const char dir[], PetscInt step, PetscReal t)
+{
+  char  path[PETSC_MAX_PATH_LEN];
+  FILE *fp;
+
+  PetscFunctionBeginUser;
+  if (bs->rank) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PetscSNPrintf(path, sizeof(path), "%s/bodies.csv", dir));
+  fp = fopen(path, step == 0 ? "w" : "a");
+  PetscCheck(fp, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "bodies: cannot write %s", path);
+  if (step == 0) fprintf(fp, "step,t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz\n");
+  for (PetscInt i = 0; i < bs->n; i++) {
+    PetscReal x[3], q[4], v[3], w[3];
+    PetscCall(PffBodiesGetState(bs, i, x, q, v, w));
+    fprintf(fp, "%" PetscInt_FMT ",%.9e,%" PetscInt_FMT, step, (double)t, i);
+    for (PetscInt a = 0; a < 3; a++) fprintf(fp, ",%.9e", (double)x[a]);
+    for (PetscInt a = 0; a < 4; a++) fprintf(fp, ",%.9e", (double)q[a]);
+    for (PetscInt a = 0; a < 3; a++) fprintf(fp, ",%.9e", (double)v[a]);
+    for (PetscInt a = 0; a < 3; a++) fprintf(fp, ",%.9e", (double)w[a]);
+    for (PetscInt a = 0; a < 6; a++) fprintf(fp, ",%.9e", (double)bs->tall[i].force[a]);
+    fprintf(fp, "\n");
+  }
+  PetscCheck(fclose(fp) == 0, PETSC_COMM_SELF, PETSC_ERR_FILE_WRITE, "bodies: cannot write %s", path);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
