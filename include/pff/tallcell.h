@@ -68,8 +68,10 @@ PETSC_EXTERN PetscErrorCode PffTallSetMerge(PffTall tc, PetscBool merge);
    exchanged here. Collective; every rank gets the same map. */
 PETSC_EXTERN PetscErrorCode PffTallSizingLevels(PffTall tc, PetscInt chPhi, PetscInt chU, PetscInt level[]);
 /* Whether a user of the module (the liquid flow model) should build the quadtree from the sizing function
-   (-tall_sizing, default true; false keeps the grid's own map, e.g. -grid_refine ... -grid_refine_columns). */
-PETSC_EXTERN PetscErrorCode PffTallGetSizing(PffTall tc, PetscBool *sizing);
+   (-tall_sizing, default true; false keeps the grid's own map, e.g. -grid_refine ... -grid_refine_columns), and
+   every how many steps it rebuilds it during the run (-tall_quadtree_interval, Algorithm 1 lines 2-5; default 0:
+   only at t = 0; always 0 without the sizing function). Either may be NULL. */
+PETSC_EXTERN PetscErrorCode PffTallGetSizing(PffTall tc, PetscBool *sizing, PetscInt *interval);
 
 /* Solids (Sec. 4.3.2, [A] of Eq. 1). Face channel chA holds every face's open area fraction in [0, 1]; cell
    channel chSolid the solids' signed distance at the cell centre in cells, at most -1 for a cell wholly

@@ -399,6 +399,10 @@ static PetscErrorCode BlockWork(PffFlow f)
 PetscErrorCode PffFlowAdaptSetMap(PffFlow f, const PetscInt level[])
 {
   PetscFunctionBeginUser;
+  if (f->model == PFF_FLOW_LIQUID) { /* the quadtree's map: the grid follows it (particles come later) */
+    PetscCall(PffGridAdapt(f->grid, level));
+    PetscFunctionReturn(PETSC_SUCCESS);
+  }
   PetscCheck(f->adapt.levels > 0, f->comm, PETSC_ERR_ARG_WRONGSTATE, "PffFlowAdaptSetMap needs -adapt_levels");
   PetscCall(AdaptGrid(f, level, NULL));
   PetscFunctionReturn(PETSC_SUCCESS);

@@ -38,8 +38,8 @@ PetscErrorCode PffFlowCreate(PffGrid grid, PffFlow *flow)
   f->chMass = f->chMassRef = f->chUt = f->chU = f->chPhiF = f->chBeta = f->chOpen = f->chPhi = f->chP = f->chCdiv =
       f->chVort                                                                                       = -1;
   f->chUl = f->chUlMask = f->chVol = f->chVolRef = f->chQ = f->chUa = -1;
-  f->chLS = f->chDuL = f->chSolidD = -1;
-  f->model                         = PFF_FLOW_TWO_PHASE;
+  f->chLS = f->chDuL = f->chSolidD = f->chLSs = -1;
+  f->model                                    = PFF_FLOW_TWO_PHASE;
   PetscCall(PffParticlesCreate(grid, &f->part));
   PetscCall(PffPressureCreate(grid, &f->press));
   *flow = f;
@@ -243,6 +243,15 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
     PetscCall(PffGridAddChannel(f->grid, "levelset", PFF_CHANNEL_CELL, 1, &f->chLS));
     PetscCall(PffGridAddChannel(f->grid, "du_liquid", PFF_CHANNEL_FACE, 1, &f->chDuL));
     PetscCall(PffGridSetChannelOutput(f->grid, f->chDuL, PETSC_FALSE));
+    {
+      PetscInt every;
+      PetscCall(PffTallGetSizing(f->tall, NULL, &every));
+      if (every > 0) { /* the smoothed level set the sizing function reads during the run */
+        PetscCall(PffGridAddChannel(f->grid, "levelset_sizing", PFF_CHANNEL_CELL, 1, &f->chLSs));
+        PetscCall(PffGridSetChannelOutput(f->grid, f->chLSs, PETSC_FALSE));
+        PetscCall(PffGridSetChannelTransfer(f->grid, f->chLSs, PFF_TRANSFER_NONE));
+      }
+    }
     if (f->bodies) { /* the solid the fractions and the particles see is the union of the static ones and the bodies */
       f->staticSolid    = f->solid;
       f->staticSolidCtx = f->solidCtx;
@@ -371,6 +380,13 @@ PetscErrorCode PffFlowGetAdaptLevels(PffFlow f, PetscInt *levels)
 {
   PetscFunctionBeginUser;
   *levels = f->adapt.levels;
+  if (f->model == PFF_FLOW_LIQUID) { /* the quadtree of the sizing function: a level map of its own */
+    PetscBool sizing;
+    PetscInt  nlevels;
+    PetscCall(PffTallGetSizing(f->tall, &sizing, NULL));
+    PetscCall(PffGridGetSizes(f->grid, NULL, &nlevels, NULL, NULL, NULL));
+    *levels = sizing && nlevels > 1 ? nlevels : 0;
+  }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -32,6 +32,7 @@ struct _n_PffFlow {
   PffTall      tall;        /* the liquid model's projection (NULL for two_phase) */
   PetscInt     chLS, chDuL; /* liquid model: level set from phi (cell), extrapolated velocity change (face) */
   PetscInt     chSolidD;    /* liquid model with solids: solid distance at cell centres in cells (chOpen: fractions) */
+  PetscInt     chLSs;       /* liquid model, quadtree during the run: the level set smoothed for the sizing function */
   PffBodies    bodies;      /* liquid model: rigid bodies (NULL: none) */
   PffSolidFn   staticSolid; /* with bodies, the scene's static solids; solid is then the union with the bodies */
   void        *staticSolidCtx;
@@ -114,6 +115,7 @@ PETSC_INTERN PetscErrorCode PffFlowCorrectionVelocity_Private(PffFlow, PetscReal
 PETSC_INTERN PetscErrorCode PffFlowFaceVelocity_Private(PffFlow, PetscReal dt);
 PETSC_INTERN PetscErrorCode PffFlowOpenFaces_Private(PffFlow);
 PETSC_INTERN PetscReal      PffFlowLiquidSolid_Private(const PetscReal x[3], PetscReal grad[3], void *ctx);
+PETSC_INTERN PetscErrorCode PffFlowLiquidQuadtreeStep_Private(PffFlow, PffFlowAdaptStats *);
 PETSC_INTERN PetscErrorCode PffFlowPrescribe_Private(PffFlow, PetscReal t);
 PETSC_INTERN PetscErrorCode PffFlowVelocityChange_Private(PffFlow);
 PETSC_INTERN PetscErrorCode PffFlowVorticity_Private(PffFlow);

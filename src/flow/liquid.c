@@ -168,7 +168,7 @@ PetscErrorCode PffFlowLiquidQuadtree_Private(PffFlow f, PffSeedFn fn, void *ctx)
   PetscBool sizing;
 
   PetscCall(PffGridGetSizes(f->grid, NULL, &nlevels, NULL, NULL, NULL));
-  PetscCall(PffTallGetSizing(f->tall, &sizing));
+  PetscCall(PffTallGetSizing(f->tall, &sizing, NULL));
   if (nlevels < 2 || !sizing) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
   for (PetscInt lb = 0; lb < nlocal; lb++) {
@@ -212,6 +212,89 @@ PetscErrorCode PffFlowLiquidQuadtree_Private(PffFlow f, PffSeedFn fn, void *ctx)
   PetscCall(PetscPrintf(f->comm, "tall cells: quadtree from the sizing function, block columns per level:"));
   for (PetscInt l = 0; l < nlevels; l++) PetscCall(PetscPrintf(f->comm, " %" PetscInt_FMT, hist[l]));
   PetscCall(PetscPrintf(f->comm, " (of %" PetscInt_FMT ")\n", nb[0] * nb[2]));
+  PetscCall(PetscFree(map));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The level set the sizing function reads during the run: the mean of psi over each cell's 27 neighbours. psi
+   comes from the particles (PffFlowLevelSet), and its curvature at the scale of a cell is the particles' noise
+   (a still pool's surface turns by more than the sizing's 0.3 rad per cell); the mean keeps the surface where
+   it is and the curvature of its shape. At t = 0 the sizing reads the scene's exact shape instead. */
+static PetscErrorCode SmoothLevelSet(PffFlow f)
+{
+  PetscInt nlocal;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridHaloBegin(f->grid, f->chLS));
+  PetscCall(PffGridHaloEnd(f->grid, f->chLS));
+  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo   info;
+    const PffView *v;
+    float         *out;
+    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+    PetscCall(PffGridGetBlockViews(f->grid, f->chLS, lb, 0, &v));
+    PetscCall(PffGridGetBlockData(f->grid, f->chLSs, lb, 0, &out));
+    const PetscInt n = info.n;
+    for (PetscInt k = 0; k < n; k++)
+      for (PetscInt j = 0; j < n; j++)
+        for (PetscInt i = 0; i < n; i++) {
+          float    sum = 0;
+          PetscInt cnt = 0;
+          for (PetscInt dk = -1; dk <= 1; dk++)
+            for (PetscInt dj = -1; dj <= 1; dj++)
+              for (PetscInt di = -1; di <= 1; di++) {
+                const PetscInt r = PffRegionIndex(i + di, j + dj, k + dk, n);
+                if (r != 13 && ((info.holes >> r) & 1)) continue; /* beyond a wall */
+                sum += *PffViewsAt(v, i + di, j + dj, k + dk, n);
+                cnt++;
+              }
+          out[i + n * (j + n * k)] = sum / (float)cnt;
+        }
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Algorithm 1, lines 2-5: the quadtree from the sizing function on the previous step's cells (its level set and
+   velocity), with the block columns at bodies at the finest level. When it changes, every particle takes its
+   block's new level (split into 8 children, or coarsened probabilistically with the survivors taking the
+   removed volume: PF-FLIP Sec. 5.1's operations, the same on any rank count), then the grid adapts (grading,
+   re-partition by columns, channels moved). Collective. */
+PetscErrorCode PffFlowLiquidQuadtreeStep_Private(PffFlow f, PffFlowAdaptStats *st)
+{
+  PetscInt          nb[3], nblocks, changed = 0, nlocal, *map;
+  const PetscInt   *level;
+  PetscBool         periodic[3];
+  PffParticleArrays pa;
+  int8_t           *target;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetRaster(f->grid, nb, &level, NULL));
+  PetscCall(PffGridGetSizes(f->grid, NULL, NULL, NULL, NULL, periodic));
+  nblocks = nb[0] * nb[1] * nb[2];
+  PetscCall(PetscMalloc1(nblocks, &map));
+  PetscCall(SmoothLevelSet(f));
+  PetscCall(PffTallSizingLevels(f->tall, f->chLSs, f->chUl, map));
+  if (f->bodies) PetscCall(PffFlowLiquidRefineBodies(f, nb, map));
+  PetscCall(PffGradeLevels(nb, periodic, map));
+  for (PetscInt b = 0; b < nblocks; b++) changed += map[b] != level[b];
+  if (changed) {
+    PetscCall(PffParticlesGetArrays(f->part, &pa));
+    PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+    PetscCall(PetscMalloc1(PetscMax(1, pa.start[nlocal]), &target));
+    for (PetscInt lb = 0; lb < nlocal; lb++) {
+      PffBlockInfo info;
+      PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+      for (PetscInt i = pa.start[lb]; i < pa.start[lb + 1]; i++) target[i] = (int8_t)map[info.gid];
+    }
+    /* no deferral: the particles follow the quadtree at once (the counters reach the delay of 1 now) */
+    PetscCall(PffParticlesAdaptCounters(f->part, target, 1));
+    PetscCall(PffParticlesAdaptLevels(f->part, target, 1, (uint64_t)f->step + 1, &st->particles));
+    PetscCall(PetscFree(target));
+    PetscCall(PffGridAdapt(f->grid, map));
+    st->adapted = PETSC_TRUE;
+    PetscCall(PffGridGetAdaptInfo(f->grid, &st->grid));
+  }
   PetscCall(PetscFree(map));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -196,6 +196,16 @@ PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
     PetscCall(PffFlowAdapt_Private(f, &st->adapt));
     PetscCall(PffStageEnd(st, PFF_STAGE_ADAPT, t0));
   }
+  if (f->model == PFF_FLOW_LIQUID && f->step > 0) {
+    PetscInt every, nlevels;
+    PetscCall(PffTallGetSizing(f->tall, NULL, &every));
+    PetscCall(PffGridGetSizes(f->grid, NULL, &nlevels, NULL, NULL, NULL));
+    if (every > 0 && nlevels > 1 && f->step % every == 0) {
+      PetscCall(PffStageBegin(PFF_STAGE_ADAPT, &t0));
+      PetscCall(PffFlowLiquidQuadtreeStep_Private(f, &st->adapt));
+      PetscCall(PffStageEnd(st, PFF_STAGE_ADAPT, t0));
+    }
+  }
   PetscCall(PffFlowCheckTopology_Private(f));
   PetscCall(PffGridGetSizes(f->grid, NULL, NULL, NULL, &h0, NULL));
   if (f->prescribed)

@@ -1,6 +1,7 @@
 /* The quadtree from a sizing function (tall cells Sec. 4.1).
 
-   The sizing function is evaluated on the current cells, near the free surface only (|phi| < 1.5 s):
+   The sizing function is evaluated on the current cells, at the free surface only (|phi| < 1.5 s and a sign
+   change of phi towards a face neighbour):
    the wanted cell size there is h_t = min(c_kappa / |kappa|, c_u / |grad u|), so that the surface turns by at
    most c_kappa radians and the velocity changes by at most c_u m/s across one cell (Ando et al. 2013 use
    curvature and velocity variation). A vertical scan takes the smallest h_t of every block column (the
@@ -62,6 +63,11 @@ PetscErrorCode PffTallSizingLevels(PffTall tc, PetscInt chPhi, PetscInt chU, Pet
 #define P(a, b, c) At(vp, info.holes, n, i + (a), j + (b), k + (c))
           const PetscReal p0 = P(0, 0, 0);
           if (PetscAbsReal(p0) >= 1.5 * s) continue;
+          /* a surface cell: the level set changes sign towards a face neighbour (a level set from particles is
+             only a distance across the interface layer, |phi| < s also deep inside, where it is noise) */
+          if (!((P(1, 0, 0) < 0) != (p0 < 0) || (P(-1, 0, 0) < 0) != (p0 < 0) || (P(0, 1, 0) < 0) != (p0 < 0) ||
+                (P(0, -1, 0) < 0) != (p0 < 0) || (P(0, 0, 1) < 0) != (p0 < 0) || (P(0, 0, -1) < 0) != (p0 < 0)))
+            continue;
           /* curvature div(grad phi / |grad phi|) from central differences */
           const PetscReal px = (P(1, 0, 0) - P(-1, 0, 0)) / (2 * s), py = (P(0, 1, 0) - P(0, -1, 0)) / (2 * s),
                           pz  = (P(0, 0, 1) - P(0, 0, -1)) / (2 * s);

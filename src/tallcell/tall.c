@@ -42,6 +42,7 @@ PetscErrorCode PffTallCreate(PffGrid grid, PffTall *tcp)
   tc->sizingKappa   = 0.3;
   tc->sizingU       = 0.05;
   tc->sizing        = PETSC_TRUE;
+  tc->quadInterval  = 0;
   tc->chA           = -1;
   tc->chSolid       = -1;
   PetscCall(PffGridGetComm(grid, &tc->comm));
@@ -88,6 +89,9 @@ PetscErrorCode PffTallSetFromOptions(PffTall tc)
       "PffTallGetSizing", tc->sizing, &tc->sizing, NULL));
   PetscCall(PffOptionsBoundedInt("-tall_levels", "Quadtree levels of the sizing function (0: the grid's)",
                                  "PffTallSizingLevels", tc->levels, &tc->levels, NULL, 0));
+  PetscCall(PffOptionsBoundedInt("-tall_quadtree_interval",
+                                 "The liquid model rebuilds the quadtree every this many steps (0: only at t = 0)",
+                                 "PffTallGetSizing", tc->quadInterval, &tc->quadInterval, NULL, 0));
   PetscOptionsEnd();
   PetscCheck(tc->sizingKappa > 0 && tc->sizingU > 0, tc->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-tall_sizing_curvature and -tall_sizing_velocity must be positive (%g, %g)", (double)tc->sizingKappa,
@@ -102,10 +106,11 @@ PetscErrorCode PffTallSetFromOptions(PffTall tc)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode PffTallGetSizing(PffTall tc, PetscBool *sizing)
+PetscErrorCode PffTallGetSizing(PffTall tc, PetscBool *sizing, PetscInt *interval)
 {
   PetscFunctionBeginUser;
-  *sizing = tc->sizing;
+  if (sizing) *sizing = tc->sizing;
+  if (interval) *interval = tc->sizing ? tc->quadInterval : 0;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -39,6 +39,7 @@ struct _n_PffTall {
   PetscReal sizingKappa, sizingU; /* the sizing function's turn (rad) and velocity jump (m/s) per cell */
   PetscInt  levels;               /* quadtree levels the sizing function uses (0: the grid's) */
   PetscBool sizing;               /* -tall_sizing: the liquid model builds the quadtree from the sizing function */
+  PetscInt  quadInterval;         /* -tall_quadtree_interval: and rebuilds it every this many steps (0: never) */
   PetscInt  chA, chSolid;         /* solids: face open fractions, cell-centre distance in cells (-1: none) */
 
   /* raster */
