@@ -30,6 +30,9 @@ PETSC_EXTERN PetscErrorCode PffBodiesGetCount(PffBodies bodies, PetscInt *n);
 /* Signed distance to the union of the bodies at their current poses (negative inside) and its gradient (grad
    may be NULL); a PffSolidFn with ctx the PffBodies. */
 PETSC_EXTERN PetscReal PffBodiesDistance(const PetscReal x[3], PetscReal grad[3], void *ctx);
+/* The velocity v + omega x (x - X) of the body whose inside holds x (the nearest, when bodies overlap), in vel;
+   returns whether x lies inside a body (vel untouched otherwise). Not collective. */
+PETSC_EXTERN PetscBool PffBodiesVelocityAt(PffBodies bodies, const PetscReal x[3], PetscReal vel[3]);
 /* Algorithm 1, line 7: advances gravity, contacts and poses by dt in Bullet, and fills the tall-cell view of
    every body (pose, mass, world inertia, w* = the velocity after it) for PffTallSetBodies. Not collective (every
    rank does the same). */

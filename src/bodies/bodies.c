@@ -90,6 +90,29 @@ PetscReal PffBodiesDistance(const PetscReal x[3], PetscReal grad[3], void *ctx)
   return dmin;
 }
 
+PetscBool PffBodiesVelocityAt(PffBodies bs, const PetscReal x[3], PetscReal vel[3])
+{
+  PetscReal dmin = 0;
+  PetscInt  in   = -1;
+
+  for (PetscInt i = 0; i < bs->n; i++) {
+    const PetscReal d = BodyDistance(x, NULL, (void *)&bs->body[i]);
+    if (d < dmin) {
+      dmin = d;
+      in   = i;
+    }
+  }
+  if (in < 0) return PETSC_FALSE;
+  {
+    const PffTallBody *t    = &bs->tall[in];
+    const PetscReal    r[3] = {x[0] - t->X[0], x[1] - t->X[1], x[2] - t->X[2]};
+    vel[0]                  = t->w[0] + t->w[4] * r[2] - t->w[5] * r[1];
+    vel[1]                  = t->w[1] + t->w[5] * r[0] - t->w[3] * r[2];
+    vel[2]                  = t->w[2] + t->w[3] * r[1] - t->w[4] * r[0];
+  }
+  return PETSC_TRUE;
+}
+
 /* Reads body i; *found is false when -body_<i>_type is absent. */
 static PetscErrorCode ReadBody(PetscOptionItems *PetscOptionsObject, PetscInt i, const PetscReal lo[3],
                                const PetscReal hi[3], PffBody *b, PetscReal *density, PetscReal v[3], PetscBool *found)

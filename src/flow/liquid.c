@@ -92,6 +92,37 @@ PetscReal PffFlowLiquidSolid_Private(const PetscReal x[3], PetscReal grad[3], vo
   return d;
 }
 
+/* In face channel ch, faces the solids close wholly and whose centre lies inside a body move with the body (v +
+   omega x r along the face's axis): G2P and the advection near a moving body read the body's motion there, as
+   the projection's flux balance does through J, instead of rest. */
+static PetscErrorCode BodyFaceVelocities(PffFlow f, PetscInt ch)
+{
+  PetscInt nlocal;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+    const PetscInt n = info.n;
+    for (PetscInt d = 0; d < 3; d++) {
+      float *u, *open;
+      PetscCall(PffGridGetBlockData(f->grid, ch, lb, d, &u));
+      PetscCall(PffGridGetBlockData(f->grid, f->chOpen, lb, d, &open));
+      for (PetscInt k = 0; k < n; k++)
+        for (PetscInt j = 0; j < n; j++)
+          for (PetscInt i = 0; i < n; i++) {
+            const PetscInt c = i + n * (j + n * k), ijk[3] = {i, j, k};
+            PetscReal      x[3], vel[3];
+            if (open[c] > 0) continue;
+            for (PetscInt a = 0; a < 3; a++) x[a] = info.lo[a] + ((PetscReal)ijk[a] + (a == d ? 0.0 : 0.5)) * info.h;
+            if (PffBodiesVelocityAt(f->bodies, x, vel)) u[c] = (float)vel[d];
+          }
+    }
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffFlowLiquidProject_Private(PffFlow f, PetscReal dt, PffPressureStats *ps)
 {
   PffTallStats ts;
@@ -127,6 +158,11 @@ PetscErrorCode PffFlowLiquidG2P_Private(PffFlow f, const PetscReal alpha[])
       PffExtrapolateLiquidVelocity(f->grid, f->chU, f->chPhiF, f->chOpen, f->extrapLayers, f->chUlMask, f->chUl, NULL));
   PetscCall(PffExtrapolateLiquidVelocity(f->grid, f->chUt, f->chPhiF, f->chOpen, f->extrapLayers, f->chUlMask, f->chDuL,
                                          NULL));
+  if (f->bodies) {
+    PetscCall(BodyFaceVelocities(f, f->chUl));
+    PetscCall(PffGridHaloBegin(f->grid, f->chUl));
+    PetscCall(PffGridHaloEnd(f->grid, f->chUl));
+  }
   PetscCall(PffParticlesG2P(f->part, f->chUl, f->chDuL, alpha));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
