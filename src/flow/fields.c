@@ -3,14 +3,6 @@
    ratios per particle type and level (Eq. 13, Sec. 5.3), escaped particles (Sec. 3.4) and vorticity for output. */
 #include "flowimpl.h"
 
-/* Position of the lower comp-face (or the centre, comp < 0) of cell (i, j, k) of a block. */
-static inline void PffFacePosition(const PffBlockInfo *info, PetscInt i, PetscInt j, PetscInt k, PetscInt comp,
-                                   PetscReal x[3])
-{
-  const PetscInt ijk[3] = {i, j, k};
-  for (int a = 0; a < 3; a++) x[a] = info->lo[a] + info->h * ((PetscReal)ijk[a] + (a == comp ? 0.0 : 0.5));
-}
-
 PetscErrorCode PffFlowOpenFaces_Private(PffFlow f)
 {
   PetscInt  nlocal;

@@ -114,6 +114,14 @@ PETSC_INTERN PetscErrorCode PffFlowCorrectionVelocity_Private(PffFlow, PetscReal
 /* fields.c */
 PETSC_INTERN PetscErrorCode PffFlowFaceVelocity_Private(PffFlow, PetscReal dt);
 PETSC_INTERN PetscErrorCode PffFlowOpenFaces_Private(PffFlow);
+
+/* Position of the lower comp-face (or the centre, comp < 0) of cell (i, j, k) of a block. */
+static inline void PffFacePosition(const PffBlockInfo *info, PetscInt i, PetscInt j, PetscInt k, PetscInt comp,
+                                   PetscReal x[3])
+{
+  const PetscInt ijk[3] = {i, j, k};
+  for (int a = 0; a < 3; a++) x[a] = info->lo[a] + info->h * ((PetscReal)ijk[a] + (a == comp ? 0.0 : 0.5));
+}
 PETSC_INTERN PetscReal      PffFlowLiquidSolid_Private(const PetscReal x[3], PetscReal grad[3], void *ctx);
 PETSC_INTERN PetscErrorCode PffFlowLiquidQuadtreeStep_Private(PffFlow, PffFlowAdaptStats *);
 PETSC_INTERN PetscErrorCode PffFlowPrescribe_Private(PffFlow, PetscReal t);

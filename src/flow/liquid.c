@@ -112,10 +112,10 @@ static PetscErrorCode BodyFaceVelocities(PffFlow f, PetscInt ch)
       for (PetscInt k = 0; k < n; k++)
         for (PetscInt j = 0; j < n; j++)
           for (PetscInt i = 0; i < n; i++) {
-            const PetscInt c = i + n * (j + n * k), ijk[3] = {i, j, k};
+            const PetscInt c = i + n * (j + n * k);
             PetscReal      x[3], vel[3];
             if (open[c] > 0) continue;
-            for (PetscInt a = 0; a < 3; a++) x[a] = info.lo[a] + ((PetscReal)ijk[a] + (a == d ? 0.0 : 0.5)) * info.h;
+            PffFacePosition(&info, i, j, k, d, x);
             if (PffBodiesVelocityAt(f->bodies, x, vel)) u[c] = (float)vel[d];
           }
     }
