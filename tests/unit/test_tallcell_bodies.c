@@ -8,6 +8,13 @@
      of gravity leaves the box at rest and the liquid too (|v_y|, |u| <= 1e-6 g dt on uniform cells, 1e-2 g dt on
      the quadtree, where the sideways force and torque move it a little); half that mass rises, twice that mass
      sinks.
+   - impact: the box, 0.23 m under the surface, moving down at 1 m/s through the liquid at rest, no gravity; one
+     coupled projection slows it, and the momentum it loses goes into the liquid and the floor:
+     m dv + rho sum_faces s^3 A du_y = dt sum_floor p s^2 to 2 % of m dv (the liquid's momentum from its y-faces,
+     the floor's impulse from the bottom cells' pressure, whose gradient vanishes at the floor), no sideways
+     momentum on uniform cells (5 % of m dv on the asymmetric random quadtree: the side walls take it); on the
+     three discretisations. (With the box through the surface the balance is off by 27 %: the free-surface
+     rows' ghost-fluid factor 1/theta does not conserve the discrete momentum; docs/tallcell.md.)
    Sample run: mpiexec -n 2 ./test_tallcell_bodies     prints one line per check on rank 0. */
 #include "talltest.h"
 
@@ -96,12 +103,70 @@ static PetscErrorCode FloatingBox(MPI_Comm comm, const char *name, PetscInt unif
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Momentum balance of one impulsive projection: the box falls at 1 m/s into the still pool, no gravity. */
+static PetscErrorCode Impact(MPI_Comm comm, const char *name, PetscInt uniform, PetscBool merge)
+{
+  const PetscInt  nb[3] = {4, 4, 4};
+  const PetscReal v0    = -1.0;
+  Scene           sc    = {0.85, 0, 4}; /* the box 0.23 m under the surface */
+  Problem         pb;
+  PffTallBody     body;
+  PetscReal       mom[4] = {0, 0, 0, 0}; /* liquid momentum x, y, z; floor impulse (y) */
+
+  PetscFunctionBeginUser;
+  PetscCall(BoxBody(&sc, 500 * 0.2 * 0.2 * 0.2, &body));
+  body.w[1] = v0;
+  PetscCall(ProblemCreate(comm, nb, uniform, 11, merge, &sc, &pb));
+  PetscCall(PffTallSetBodies(pb.tc, 1, &body));
+  PetscCall(PffTallBuild(pb.tc, pb.phi));
+  /* u* = 0 everywhere: the projection's change is the new velocity */
+  PetscCall(PffTallProject(pb.tc, pb.u, DT, RHO, pb.p, &pb.st));
+  PetscCheck(pb.st.reason > 0, comm, PETSC_ERR_PLIB, "impact, %s: the coupled solve did not converge", name);
+  for (PetscInt lb = 0; lb < pb.t.nlocal; lb++) {
+    PffBlockInfo info;
+    float       *p, *a[3], *u[3];
+    PetscCall(PffGridGetBlockInfo(pb.t.grid, lb, &info));
+    PetscCall(PffGridGetBlockData(pb.t.grid, pb.p, lb, 0, &p));
+    for (PetscInt d = 0; d < 3; d++) {
+      PetscCall(PffGridGetBlockData(pb.t.grid, pb.A, lb, d, &a[d]));
+      PetscCall(PffGridGetBlockData(pb.t.grid, pb.u, lb, d, &u[d]));
+    }
+    const PetscInt  n = info.n;
+    const PetscReal s = info.h;
+    for (PetscInt c = 0; c < n * n * n; c++) {
+      for (PetscInt d = 0; d < 3; d++) mom[d] += RHO * s * s * s * a[d][c] * u[d][c];
+      if (info.ijk[1] == 0 && (c / n) % n == 0) mom[3] += DT * p[c] * s * s; /* a bottom cell */
+    }
+  }
+  PetscCallMPI(MPIU_Allreduce(MPI_IN_PLACE, mom, 4, MPIU_REAL, MPI_SUM, comm));
+  {
+    const PetscReal dpb = body.mass * (body.w[1] - v0), sum = dpb + mom[1];
+    PetscCall(PetscPrintf(comm,
+                          "impact, %s: box momentum change %.4f, liquid %.4f, floor impulse %.4f kg m/s: balance off "
+                          "by %.2f %% of the box's; liquid sideways %.1e, %.1e\n",
+                          name, (double)dpb, (double)mom[1], (double)mom[3], (double)(100 * (sum - mom[3]) / dpb),
+                          (double)mom[0], (double)mom[2]));
+    PetscCheck(dpb > 0 && PetscAbsReal(sum - mom[3]) <= 0.02 * dpb, comm, PETSC_ERR_PLIB,
+               "impact, %s: box %g + liquid %g kg m/s against the floor's impulse %g", name, (double)dpb,
+               (double)mom[1], (double)mom[3]);
+    /* sideways: the side walls take what an asymmetric discretisation (the random quadtree) gives the liquid */
+    const PetscReal side = (uniform >= 0 ? 1e-3 : 5e-2) * dpb;
+    PetscCheck(PetscAbsReal(mom[0]) <= side && PetscAbsReal(mom[2]) <= side, comm, PETSC_ERR_PLIB,
+               "impact, %s: sideways liquid momentum %g, %g", name, (double)mom[0], (double)mom[2]);
+  }
+  PetscCall(ProblemDestroy(&pb));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 int main(int argc, char **argv)
 {
   PetscCall(PetscInitialize(&argc, &argv, NULL, NULL));
   PetscCall(FloatingBox(PETSC_COMM_WORLD, "uniform cubic", 0, PETSC_FALSE, 5e-3));
   PetscCall(FloatingBox(PETSC_COMM_WORLD, "uniform tall", 0, PETSC_TRUE, 5e-3));
   PetscCall(FloatingBox(PETSC_COMM_WORLD, "quadtree tall", -1, PETSC_TRUE, 0.05));
+  PetscCall(Impact(PETSC_COMM_WORLD, "uniform cubic", 0, PETSC_FALSE));
+  PetscCall(Impact(PETSC_COMM_WORLD, "uniform tall", 0, PETSC_TRUE));
+  PetscCall(Impact(PETSC_COMM_WORLD, "quadtree tall", -1, PETSC_TRUE));
   PetscCall(PetscFinalize());
   return 0;
 }
