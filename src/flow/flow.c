@@ -38,8 +38,8 @@ PetscErrorCode PffFlowCreate(PffGrid grid, PffFlow *flow)
   f->chMass = f->chMassRef = f->chUt = f->chU = f->chPhiF = f->chBeta = f->chOpen = f->chPhi = f->chP = f->chCdiv =
       f->chVort                                                                                       = -1;
   f->chUl = f->chUlMask = f->chVol = f->chVolRef = f->chQ = f->chUa = -1;
-  f->chLS = f->chDuL = f->chSolidD = f->chLSs = -1;
-  f->model                                    = PFF_FLOW_TWO_PHASE;
+  f->chLS = f->chDuL = f->chSolidD = f->chLSs = f->chTallH = -1;
+  f->model                                                 = PFF_FLOW_TWO_PHASE;
   PetscCall(PffParticlesCreate(grid, &f->part));
   PetscCall(PffPressureCreate(grid, &f->press));
   *flow = f;
@@ -241,6 +241,9 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
   }
   if (f->model == PFF_FLOW_LIQUID) {
     PetscCall(PffGridAddChannel(f->grid, "levelset", PFF_CHANNEL_CELL, 1, &f->chLS));
+    /* frames show the tall cells: the pressure cell's height in cells (1 cubic, m tall, 0 air) */
+    PetscCall(PffGridAddChannel(f->grid, "tall_height", PFF_CHANNEL_CELL, 1, &f->chTallH));
+    PetscCall(PffGridSetChannelTransfer(f->grid, f->chTallH, PFF_TRANSFER_NONE));
     PetscCall(PffGridAddChannel(f->grid, "du_liquid", PFF_CHANNEL_FACE, 1, &f->chDuL));
     PetscCall(PffGridSetChannelOutput(f->grid, f->chDuL, PETSC_FALSE));
     {

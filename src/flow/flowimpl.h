@@ -33,6 +33,7 @@ struct _n_PffFlow {
   PetscInt     chLS, chDuL; /* liquid model: level set from phi (cell), extrapolated velocity change (face) */
   PetscInt     chSolidD;    /* liquid model with solids: solid distance at cell centres in cells (chOpen: fractions) */
   PetscInt     chLSs;       /* liquid model, quadtree during the run: the level set smoothed for the sizing function */
+  PetscInt     chTallH;     /* liquid model: the tall cells' heights, for frames */
   PffBodies    bodies;      /* liquid model: rigid bodies (NULL: none) */
   PffSolidFn   staticSolid; /* with bodies, the scene's static solids; solid is then the union with the bodies */
   void        *staticSolidCtx;

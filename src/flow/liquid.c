@@ -138,6 +138,7 @@ PetscErrorCode PffFlowLiquidProject_Private(PffFlow f, PetscReal dt, PffPressure
   PetscCall(PffFlowLevelSet(f));
   PetscCall(PffTallBuild(f->tall, f->chLS));
   PetscCall(PffTallProject(f->tall, f->chU, dt, f->rho[PFF_PARTICLE_LIQUID], f->chP, &ts));
+  PetscCall(PffTallWriteCellHeight(f->tall, f->chTallH));
   if (f->bodies) PetscCall(PffBodiesUpdateVelocities(f->bodies)); /* line 11 */
   ps->its       = ts.its;
   ps->rnorm     = ts.rnorm;
