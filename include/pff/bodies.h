@@ -33,15 +33,18 @@ PETSC_EXTERN PetscReal PffBodiesDistance(const PetscReal x[3], PetscReal grad[3]
 /* The velocity v + omega x (x - X) of the body whose inside holds x (the nearest, when bodies overlap), in vel;
    returns whether x lies inside a body (vel untouched otherwise). Not collective. */
 PETSC_EXTERN PetscBool PffBodiesVelocityAt(PffBodies bodies, const PetscReal x[3], PetscReal vel[3]);
-/* Algorithm 1, line 7: advances gravity, contacts and poses by dt in Bullet, and fills the tall-cell view of
-   every body (pose, mass, world inertia, w* = the velocity after it) for PffTallSetBodies. Not collective (every
-   rank does the same). */
+/* The tall-cell view of every body at its current state (pose, bounding box, mass, world inertia, velocity as w*,
+   force zeroed) for PffTallSetBodies. Not collective (every rank holds the same). */
+PETSC_EXTERN PetscErrorCode PffBodiesGetTall(PffBodies bodies, PetscInt *n, PffTallBody **tall);
+/* Algorithm 1, line 7: advances gravity, contacts and poses by dt in Bullet, then PffBodiesGetTall (w* is the
+   velocity after the advance). Not collective (every rank does the same). */
 PETSC_EXTERN PetscErrorCode PffBodiesAdvance(PffBodies bodies, PetscReal dt, PetscInt *n, PffTallBody **tall);
 /* Line 11: takes the velocities the projection left in the tall-cell view back into Bullet. */
 PETSC_EXTERN PetscErrorCode PffBodiesUpdateVelocities(PffBodies bodies);
 /* Body i's centre of mass, quaternion (w, x, y, z), velocity and angular velocity. */
 PETSC_EXTERN PetscErrorCode PffBodiesGetState(PffBodies bodies, PetscInt i, PetscReal x[3], PetscReal q[4],
                                               PetscReal v[3], PetscReal omega[3]);
-/* Appends one line per body to <dir>/bodies.csv on rank 0 (header on step 0): step, t, body, x, y, z, q, v, omega,
-   the pressure's last force and torque. Collective. */
+/* Appends one line per body to <dir>/bodies.csv on rank 0 (created with its header at the first call, kept open
+   until PffBodiesDestroy, flushed every call): step, t, body, x, y, z, q, v, omega, the pressure's last force and
+   torque. Not collective. */
 PETSC_EXTERN PetscErrorCode PffBodiesWriteCSV(PffBodies bodies, const char dir[], PetscInt step, PetscReal t);

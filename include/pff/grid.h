@@ -174,6 +174,8 @@ PETSC_EXTERN PetscErrorCode PffGridSetRefinementMap(PffGrid grid, const PetscInt
 /* Finest-level cells per axis as set (-grid_cells); also before SetUp, e.g. to place a refinement
    function's geometry in the domain. Not collective. */
 PETSC_EXTERN PetscErrorCode PffGridGetCells(PffGrid grid, PetscInt cells[3]);
+/* The domain [lo, hi] (origin to origin + cells h0), from the set parameters: also before set-up. Not collective. */
+PETSC_EXTERN PetscErrorCode PffGridGetDomain(PffGrid grid, PetscReal lo[3], PetscReal hi[3]);
 
 /* The grid's (duplicated) communicator; borrowed. Not collective. */
 PETSC_EXTERN PetscErrorCode PffGridGetComm(PffGrid grid, MPI_Comm *comm);

@@ -2,6 +2,7 @@
    distances; Bullet (bullet.cpp) integrates them. */
 #include <pff.h>
 #include <pff/bodies.h>
+#include <pff/shapes.h>
 #include "bullet.h"
 
 typedef enum { PFF_BODY_BOX, PFF_BODY_SPHERE } PffBodyType;
@@ -21,6 +22,7 @@ struct _n_PffBodies {
   PffBody         body[PFF_BODIES_MAX];
   PffTallBody     tall[PFF_BODIES_MAX];
   PffBulletWorld *world;
+  FILE           *csv; /* rank 0: bodies.csv, open from the first row to PffBodiesDestroy */
 };
 
 static void Rotation(const PetscReal q[4], PetscReal R[3][3])
@@ -37,37 +39,16 @@ static void Rotation(const PetscReal q[4], PetscReal R[3][3])
   R[2][2] = 1 - 2 * (x * x + y * y);
 }
 
-/* Signed distance to one body (negative inside) and its world gradient (grad may be NULL). */
+/* Signed distance to one body (negative inside) and its world gradient (grad may be NULL): the shape's distance
+   in the body's frame, the gradient rotated back. */
 static PetscReal BodyDistance(const PetscReal x[3], PetscReal grad[3], void *ctx)
 {
   const PffBody *b = (const PffBody *)ctx;
-  PetscReal      l[3], gl[3] = {0, 0, 0}, d;
+  PetscReal      l[3], gl[3], d;
 
   for (PetscInt a = 0; a < 3; a++) /* local coordinates R^T (x - X) */
     l[a] = b->R[0][a] * (x[0] - b->x[0]) + b->R[1][a] * (x[1] - b->x[1]) + b->R[2][a] * (x[2] - b->x[2]);
-  if (b->type == PFF_BODY_SPHERE) {
-    const PetscReal r = PetscSqrtReal(l[0] * l[0] + l[1] * l[1] + l[2] * l[2]);
-    d                 = r - b->half[0];
-    for (PetscInt a = 0; a < 3; a++) gl[a] = r > 0 ? l[a] / r : (a == 1);
-  } else {
-    PetscReal qd[3], out = 0, in = -PETSC_MAX_REAL;
-    PetscInt  amax = 0;
-    for (PetscInt a = 0; a < 3; a++) {
-      qd[a] = PetscAbsReal(l[a]) - b->half[a];
-      out += PetscSqr(PetscMax(qd[a], 0.0));
-      if (qd[a] > in) {
-        in   = qd[a];
-        amax = a;
-      }
-    }
-    if (in > 0) {
-      d = PetscSqrtReal(out);
-      for (PetscInt a = 0; a < 3; a++) gl[a] = qd[a] > 0 ? PetscSign(l[a]) * qd[a] / d : 0;
-    } else {
-      d        = in;
-      gl[amax] = l[amax] >= 0 ? 1 : -1;
-    }
-  }
+  d = b->type == PFF_BODY_SPHERE ? PffSphereDistance(l, b->half[0], gl) : PffBoxDistance(l, b->half, gl);
   if (grad)
     for (PetscInt a = 0; a < 3; a++) grad[a] = b->R[a][0] * gl[0] + b->R[a][1] * gl[1] + b->R[a][2] * gl[2];
   return d;
@@ -230,6 +211,8 @@ PetscErrorCode PffBodiesDestroy(PffBodies *bodies)
   PetscFunctionBeginUser;
   if (!bodies || !*bodies) PetscFunctionReturn(PETSC_SUCCESS);
   PffBulletDestroy((*bodies)->world);
+  if ((*bodies)->csv)
+    PetscCheck(fclose((*bodies)->csv) == 0, PETSC_COMM_SELF, PETSC_ERR_FILE_WRITE, "bodies: cannot close bodies.csv");
   PetscCall(PetscFree(*bodies));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -258,10 +241,9 @@ PetscErrorCode PffBodiesGetState(PffBodies bs, PetscInt i, PetscReal x[3], Petsc
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode PffBodiesAdvance(PffBodies bs, PetscReal dt, PetscInt *n, PffTallBody **tall)
+PetscErrorCode PffBodiesGetTall(PffBodies bs, PetscInt *n, PffTallBody **tall)
 {
   PetscFunctionBeginUser;
-  PffBulletStep(bs->world, dt);
   for (PetscInt i = 0; i < bs->n; i++) {
     PffBody     *b = &bs->body[i];
     PffTallBody *t = &bs->tall[i];
@@ -291,6 +273,14 @@ PetscErrorCode PffBodiesAdvance(PffBodies bs, PetscReal dt, PetscInt *n, PffTall
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+PetscErrorCode PffBodiesAdvance(PffBodies bs, PetscReal dt, PetscInt *n, PffTallBody **tall)
+{
+  PetscFunctionBeginUser;
+  PffBulletStep(bs->world, dt);
+  PetscCall(PffBodiesGetTall(bs, n, tall));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffBodiesUpdateVelocities(PffBodies bs)
 {
   PetscFunctionBeginUser;
@@ -304,26 +294,26 @@ PetscErrorCode PffBodiesUpdateVelocities(PffBodies bs)
 
 PetscErrorCode PffBodiesWriteCSV(PffBodies bs, const char dir[], PetscInt step, PetscReal t)
 {
-  char  path[PETSC_MAX_PATH_LEN];
-  FILE *fp;
-
   PetscFunctionBeginUser;
   if (bs->rank) PetscFunctionReturn(PETSC_SUCCESS);
-  PetscCall(PetscSNPrintf(path, sizeof(path), "%s/bodies.csv", dir));
-  fp = fopen(path, step == 0 ? "w" : "a");
-  PetscCheck(fp, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "bodies: cannot write %s", path);
-  if (step == 0) fprintf(fp, "step,t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz\n");
+  if (!bs->csv) {
+    char path[PETSC_MAX_PATH_LEN];
+    PetscCall(PetscSNPrintf(path, sizeof(path), "%s/bodies.csv", dir));
+    bs->csv = fopen(path, "w");
+    PetscCheck(bs->csv, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN, "bodies: cannot write %s", path);
+    fprintf(bs->csv, "step,t,body,x,y,z,qw,qx,qy,qz,vx,vy,vz,wx,wy,wz,fx,fy,fz,tx,ty,tz\n");
+  }
   for (PetscInt i = 0; i < bs->n; i++) {
     PetscReal x[3], q[4], v[3], w[3];
     PetscCall(PffBodiesGetState(bs, i, x, q, v, w));
-    fprintf(fp, "%" PetscInt_FMT ",%.9e,%" PetscInt_FMT, step, (double)t, i);
-    for (PetscInt a = 0; a < 3; a++) fprintf(fp, ",%.9e", (double)x[a]);
-    for (PetscInt a = 0; a < 4; a++) fprintf(fp, ",%.9e", (double)q[a]);
-    for (PetscInt a = 0; a < 3; a++) fprintf(fp, ",%.9e", (double)v[a]);
-    for (PetscInt a = 0; a < 3; a++) fprintf(fp, ",%.9e", (double)w[a]);
-    for (PetscInt a = 0; a < 6; a++) fprintf(fp, ",%.9e", (double)bs->tall[i].force[a]);
-    fprintf(fp, "\n");
+    fprintf(bs->csv, "%" PetscInt_FMT ",%.9e,%" PetscInt_FMT, step, (double)t, i);
+    for (PetscInt a = 0; a < 3; a++) fprintf(bs->csv, ",%.9e", (double)x[a]);
+    for (PetscInt a = 0; a < 4; a++) fprintf(bs->csv, ",%.9e", (double)q[a]);
+    for (PetscInt a = 0; a < 3; a++) fprintf(bs->csv, ",%.9e", (double)v[a]);
+    for (PetscInt a = 0; a < 3; a++) fprintf(bs->csv, ",%.9e", (double)w[a]);
+    for (PetscInt a = 0; a < 6; a++) fprintf(bs->csv, ",%.9e", (double)bs->tall[i].force[a]);
+    fprintf(bs->csv, "\n");
   }
-  PetscCheck(fclose(fp) == 0, PETSC_COMM_SELF, PETSC_ERR_FILE_WRITE, "bodies: cannot write %s", path);
+  PetscCheck(fflush(bs->csv) == 0, PETSC_COMM_SELF, PETSC_ERR_FILE_WRITE, "bodies: cannot write bodies.csv");
   PetscFunctionReturn(PETSC_SUCCESS);
 }

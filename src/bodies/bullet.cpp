@@ -70,7 +70,7 @@ extern "C" int PffBulletAddBody(PffBulletWorld *w, int type, const double size[3
 
 extern "C" void PffBulletStep(PffBulletWorld *w, double dt)
 {
-  if (dt > 0) w->world.stepSimulation(dt, 0); // one step of exactly dt (no fixed sub-steps: the flow sets it)
+  w->world.stepSimulation(dt, 0); // one step of exactly dt (no fixed sub-steps: the flow sets it)
 }
 
 extern "C" void PffBulletGetState(const PffBulletWorld *w, int i, double x[3], double q[4], double v[3],

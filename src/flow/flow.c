@@ -166,14 +166,8 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
     if (!f->tall) PetscCall(PffTallCreate(f->grid, &f->tall));
     PetscCall(PffTallSetFromOptions(f->tall));
     if (!f->bodies) {
-      PetscInt  cells[3];
-      PetscReal origin[3], h, lo[3], hi[3];
-      PetscCall(PffGridGetSizes(f->grid, NULL, NULL, origin, &h, NULL));
-      PetscCall(PffGridGetCells(f->grid, cells));
-      for (PetscInt a = 0; a < 3; a++) {
-        lo[a] = origin[a];
-        hi[a] = origin[a] + (PetscReal)cells[a] * h;
-      }
+      PetscReal lo[3], hi[3];
+      PetscCall(PffGridGetDomain(f->grid, lo, hi));
       PetscCall(PffBodiesCreateFromOptions(f->comm, lo, hi, f->gravity, &f->bodies));
     }
   } else {

@@ -178,7 +178,7 @@ static PetscErrorCode PffFlowLiquidRefineBodies(PffFlow f, const PetscInt nb[3],
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetSizes(f->grid, &n0, NULL, origin, &h, NULL));
-  PetscCall(PffBodiesAdvance(f->bodies, 0, &n, &tb)); /* a zero step: the poses and bounding boxes */
+  PetscCall(PffBodiesGetTall(f->bodies, &n, &tb));
   for (PetscInt i = 0; i < n; i++) {
     const PetscReal blen = (PetscReal)n0 * h;
     const PetscInt  i0   = PetscMax(0, (PetscInt)PetscFloorReal((tb[i].lo[0] - origin[0]) / blen) - 1);

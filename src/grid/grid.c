@@ -315,6 +315,16 @@ PetscErrorCode PffGridGetCells(PffGrid g, PetscInt cells[3])
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+PetscErrorCode PffGridGetDomain(PffGrid g, PetscReal lo[3], PetscReal hi[3])
+{
+  PetscReal h0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetSizes(g, NULL, NULL, lo, &h0, NULL));
+  for (int d = 0; d < 3; d++) hi[d] = lo[d] + h0 * (PetscReal)g->cells[d];
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffGridGetComm(PffGrid g, MPI_Comm *comm)
 {
   PetscFunctionBeginUser;

@@ -26,14 +26,9 @@ PetscErrorCode PffFlowSceneDefaultReal(const char key[], PetscReal value)
 
 PetscErrorCode PffFlowSceneDomain(PffFlowScene *fs, PetscReal lo[3], PetscReal hi[3])
 {
-  PetscInt  cells[3];
-  PetscReal h0;
-
   PetscFunctionBeginUser;
   /* from the set parameters, so that it also serves before PffGridSetUp (ops.gridsetup) */
-  PetscCall(PffGridGetCells(fs->grid, cells));
-  PetscCall(PffGridGetSizes(fs->grid, NULL, NULL, lo, &h0, NULL));
-  for (int a = 0; a < 3; a++) hi[a] = lo[a] + h0 * (PetscReal)cells[a];
+  PetscCall(PffGridGetDomain(fs->grid, lo, hi));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -24,6 +24,7 @@
    touch the wall, not the gas). |d_L| is a lower bound of the distance to the surface and d_L is
    1-Lipschitz, so a box with centre c and half diagonal r is at least |d_L(c)| - r from it. */
 #include "geometry.h"
+#include <pff/shapes.h>
 
 const char *const PffShapeTypes[] = {"box", "sphere", "halfspace", "PffShapeType", "PFF_SHAPE_", NULL};
 /* solids are bounded: the same values without the half-space */
@@ -310,32 +311,13 @@ PetscInt PffGeometryLiquidAt(PffGeometry geo, const PetscReal x[3], PetscReal v[
 /* Exact signed distance of a box or a sphere, with its unit gradient. */
 static PetscReal PffShapeDistance(const PffShape *s, const PetscReal x[3], PetscReal g[3])
 {
-  if (s->type == PFF_SHAPE_SPHERE) {
-    const PetscReal e[3] = {x[0] - s->a[0], x[1] - s->a[1], x[2] - s->a[2]};
-    const PetscReal len  = PetscSqrtReal(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
-    for (int d = 0; d < 3; d++) g[d] = len > 0 ? e[d] / len : (d == 2 ? 1.0 : 0.0); /* any unit vector at the centre */
-    return len - s->r;
-  }
-  PetscReal q[3], sgn[3], out = 0, qmax = PETSC_MIN_REAL;
-  int       amax = 0;
+  PetscReal e[3], half[3];
+
   for (int d = 0; d < 3; d++) {
-    const PetscReal c = 0.5 * (s->a[d] + s->b[d]), e = x[d] - c;
-    sgn[d] = e < 0 ? -1.0 : 1.0;
-    q[d]   = PetscAbsReal(e) - 0.5 * (s->b[d] - s->a[d]);
-    if (q[d] > 0) out += q[d] * q[d];
-    if (q[d] > qmax) {
-      qmax = q[d];
-      amax = d;
-    }
+    e[d]    = x[d] - (s->type == PFF_SHAPE_SPHERE ? s->a[d] : 0.5 * (s->a[d] + s->b[d]));
+    half[d] = 0.5 * (s->b[d] - s->a[d]);
   }
-  if (out > 0) { /* outside: towards the nearest surface point */
-    out = PetscSqrtReal(out);
-    for (int d = 0; d < 3; d++) g[d] = q[d] > 0 ? sgn[d] * q[d] / out : 0.0;
-    return out;
-  }
-  /* inside or on the surface: the outward normal of the nearest face */
-  for (int d = 0; d < 3; d++) g[d] = d == amax ? sgn[d] : 0.0;
-  return qmax;
+  return s->type == PFF_SHAPE_SPHERE ? PffSphereDistance(e, s->r, g) : PffBoxDistance(e, half, g);
 }
 
 PetscReal PffGeometrySolidDistance(const PetscReal x[3], PetscReal grad[3], void *ctx)

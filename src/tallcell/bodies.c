@@ -60,12 +60,6 @@ static PetscErrorCode MassFactor(const PffTallBody *body, PetscReal L[6][6])
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Fraction of the square face with corner distances phi[4] (cyclic) that the body covers. */
-static PetscReal Covered(const PetscReal phi[4])
-{
-  return 1 - PffTallOpenFraction(phi);
-}
-
 /* J of body b on the samples: 6 Vecs, from every liquid cell of the owned columns within one cell of the body's
    bounding box. */
 static PetscErrorCode BodyJacobian(PffTall tc, const PffTallBody *body, Vec J[6])
@@ -95,18 +89,8 @@ static PetscErrorCode BodyJacobian(PffTall tc, const PffTallBody *body, Vec J[6]
             for (PetscInt a = 0; a < 3; a++) x[a] = tc->origin[a] + (PetscReal)(g[a] + ((v >> a) & 1)) * s;
             corner[v] = body->fn(x, grad, body->ctx);
           }
-          for (PetscInt a = 0; a < 3; a++) {
-            const PetscInt e1 = (a + 1) % 3, e2 = (a + 2) % 3;
-            PetscReal      cov[2];
-            for (PetscInt side = 0; side < 2; side++) {
-              PetscReal phi[4];
-              for (PetscInt v = 0; v < 4; v++) { /* the face's corners in cyclic order */
-                const PetscInt u1 = (v == 1 || v == 2), u2 = (v >= 2);
-                phi[v] = corner[(side << a) | (u1 << e1) | (u2 << e2)];
-              }
-              cov[side] = Covered(phi);
-            }
-            dA[a] = s * s * (cov[1] - cov[0]);
+          for (PetscInt a = 0; a < 3; a++) { /* the covered fractions 1 - open of the upper and the lower face */
+            dA[a] = s * s * ((1 - PffTallCellFaceOpen(corner, a, 1)) - (1 - PffTallCellFaceOpen(corner, a, 0)));
             r[a]  = tc->origin[a] + ((PetscReal)g[a] + 0.5) * s - body->X[a];
           }
           if (dA[0] == 0 && dA[1] == 0 && dA[2] == 0) continue;
@@ -116,12 +100,10 @@ static PetscErrorCode BodyJacobian(PffTall tc, const PffTallBody *body, Vec J[6]
           jc[3] = r[1] * dA[2] - r[2] * dA[1];
           jc[4] = r[2] * dA[0] - r[0] * dA[2];
           jc[5] = r[0] * dA[1] - r[1] * dA[0];
-          /* p_c from the samples: the column function at the centre (the upper half's segment) */
-          {
-            const PetscReal yc    = tc->origin[1] + ((PetscReal)j + 0.5) * s;
-            const PetscReal t     = rr[3] != rr[2] ? (yc - rr[2]) / (rr[3] - rr[2]) : 0;
-            const PetscInt  id[2] = {ri[2], ri[3]};
-            const PetscReal w[2]  = {1 - t, t};
+          { /* p_c from the samples: the column function at the centre */
+            PetscInt  id[2];
+            PetscReal w[2];
+            PffTallCentreWeights(ri, rr, tc->origin[1] + ((PetscReal)j + 0.5) * s, id, w);
             for (PetscInt q = 0; q < 2; q++) {
               if (id[q] < 0 || w[q] == 0) continue;
               for (PetscInt m = 0; m < 6; m++) PetscCall(VecSetValue(J[m], id[q], w[q] * jc[m], ADD_VALUES));
@@ -147,10 +129,11 @@ PetscErrorCode PffTallBuildBodies_Private(PffTall tc)
   PetscCall(VecDuplicateVecs(tc->p, k, &tc->J));
   PetscCall(VecGetLocalSize(tc->p, &mloc));
   PetscCall(MatCreateDense(tc->comm, mloc, PETSC_DECIDE, PETSC_DETERMINE, k, NULL, &tc->U));
+  PetscCall(PetscMalloc1(tc->nbodies, &tc->massL));
   PetscCall(MatDenseGetArrayWrite(tc->U, &u));
   for (PetscInt i = 0; i < k * mloc; i++) u[i] = 0;
   for (PetscInt b = 0; b < tc->nbodies; b++) {
-    PetscReal L[6][6];
+    PetscReal(*L)[6] = tc->massL[b];
     PetscCall(MassFactor(&tc->bodies[b], L));
     PetscCall(BodyJacobian(tc, &tc->bodies[b], &tc->J[6 * b]));
     for (PetscInt n = 0; n < 6; n++) {
@@ -195,9 +178,9 @@ PetscErrorCode PffTallBodiesUpdate_Private(PffTall tc, PetscReal dt)
   for (PetscInt b = 0; b < tc->nbodiesBuilt; b++) {
     PffTallBody *body = &tc->bodies[b];
     PetscScalar  f[6];
-    PetscReal    L[6][6], lf[6];
+    PetscReal    lf[6];
+    PetscReal(*L)[6] = tc->massL[b];
     PetscCall(VecMDot(tc->p, 6, &tc->J[6 * b], f));
-    PetscCall(MassFactor(body, L));
     for (PetscInt c = 0; c < 6; c++) { /* M^-1 f = L (L^T f) */
       lf[c] = 0;
       for (PetscInt n = 0; n < 6; n++) lf[c] += L[n][c] * PetscRealPart(f[n]);
@@ -217,6 +200,7 @@ PetscErrorCode PffTallFreeBodies_Private(PffTall tc)
   PetscFunctionBeginUser;
   if (tc->J) PetscCall(VecDestroyVecs(6 * tc->nbodiesBuilt, &tc->J));
   tc->nbodiesBuilt = 0;
+  PetscCall(PetscFree(tc->massL));
   PetscCall(MatDestroy(&tc->U));
   PetscCall(MatDestroy(&tc->N));
   PetscCall(VecDestroy(&tc->lrcC));

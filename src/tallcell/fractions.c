@@ -37,6 +37,16 @@ PetscReal PffTallOpenFraction(const PetscReal phi[4])
   return 0.25 * sum;
 }
 
+PetscReal PffTallCellFaceOpen(const PetscReal corner[8], PetscInt a, PetscInt side)
+{
+  const PetscInt e1 = (a + 1) % 3, e2 = (a + 2) % 3;
+  PetscReal      phi[4];
+
+  for (PetscInt v = 0; v < 4; v++) /* the face's corners in cyclic order */
+    phi[v] = corner[(side << a) | ((PetscInt)(v == 1 || v == 2) << e1) | ((PetscInt)(v >= 2) << e2)];
+  return PffTallOpenFraction(phi);
+}
+
 PetscErrorCode PffTallFillSolid(PffGrid grid, PffSolidFn fn, void *ctx, PetscInt chA, PetscInt chSolid)
 {
   PetscInt   nlocal, n0;
@@ -67,21 +77,16 @@ PetscErrorCode PffTallFillSolid(PffGrid grid, PffSolidFn fn, void *ctx, PetscInt
       for (PetscInt j = 0; j < n; j++)
         for (PetscInt i = 0; i < n; i++) {
           const PetscInt c = i + n * (j + n * k), ijk[3] = {i, j, k};
-          for (PetscInt d = 0; d < 3; d++) {
-            const PetscInt e1 = (d + 1) % 3, e2 = (d + 2) % 3;
-            PetscInt       q[3] = {i, j, k};
-            PetscReal      phi[4];
-            for (PetscInt v = 0; v < 4; v++) { /* corners in cyclic order */
-              q[e1]  = ijk[e1] + (v == 1 || v == 2);
-              q[e2]  = ijk[e2] + (v >= 2);
-              phi[v] = node[q[0] + m * (q[1] + m * q[2])];
-            }
-            const PetscBool wall = (PetscBool)(!periodic[d] && info.ijk[d] == 0 && ijk[d] == 0);
-            a[d][c]              = wall ? 0.0f : (float)PffTallOpenFraction(phi);
+          PetscReal      corner[8];
+          PetscBool      inside = PETSC_TRUE; /* all eight corners: then all six faces are closed */
+          for (PetscInt v = 0; v < 8; v++) {
+            corner[v] = node[(i + (v & 1)) + m * ((j + ((v >> 1) & 1)) + m * (k + (v >> 2)))];
+            inside    = (PetscBool)(inside && corner[v] <= 0);
           }
-          PetscBool inside = PETSC_TRUE; /* all eight corners: then all six faces are closed */
-          for (PetscInt v = 0; v < 8; v++)
-            inside = (PetscBool)(inside && node[(i + (v & 1)) + m * ((j + ((v >> 1) & 1)) + m * (k + (v >> 2)))] <= 0);
+          for (PetscInt d = 0; d < 3; d++) {
+            const PetscBool wall = (PetscBool)(!periodic[d] && info.ijk[d] == 0 && ijk[d] == 0);
+            a[d][c]              = wall ? 0.0f : (float)PffTallCellFaceOpen(corner, d, 0);
+          }
           for (PetscInt d = 0; d < 3; d++) x[d] = info.lo[d] + ((PetscReal)ijk[d] + 0.5) * info.h;
           sd[c] = (float)(fn(x, g, ctx) / info.h);
           if (inside) sd[c] = PetscMin(sd[c], -1.0f);

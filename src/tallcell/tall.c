@@ -241,9 +241,11 @@ static PetscErrorCode WriteCells(PffTall tc, PetscInt ch, const PetscScalar *p)
             if (!p)
               v = tc->height[rec];
             else if (PffTallLiquidKind(ri[4])) {
-              const PetscInt  ia = ri[2], ib = ri[3];
-              const PetscReal t = rr[3] != rr[2] ? (yc - rr[2]) / (rr[3] - rr[2]) : 0;
-              v = (ia >= 0 ? (1 - t) * p[ia - tc->sstart] : 0) + (ib >= 0 && t != 0 ? t * p[ib - tc->sstart] : 0);
+              PetscInt  id[2];
+              PetscReal w[2];
+              PffTallCentreWeights(ri, rr, yc, id, w);
+              for (PetscInt q = 0; q < 2; q++)
+                if (id[q] >= 0 && w[q] != 0) v += w[q] * p[id[q] - tc->sstart];
             }
             data[ci + n * (cj + n * ck)] = (float)v;
           }

@@ -83,8 +83,9 @@ struct _n_PffTall {
   /* rigid bodies (bodies.c): borrowed array; per built body 6 Vecs J (samples), U = J^T L, N = A + U rho U^T */
   PetscInt     nbodies, nbodiesBuilt;
   PffTallBody *bodies;
-  Vec         *J, lrcC;
-  Mat          U, N;
+  PetscReal (*massL)[6][6]; /* [nbodiesBuilt] L with L L^T = M^-1 */
+  Vec *J, lrcC;
+  Mat  U, N;
 
   Mat            G, A;
   Vec            p, b, urow, grow, w; /* samples: p, b; rows: u*, G p, work */
@@ -111,6 +112,22 @@ PETSC_INTERN PetscErrorCode PffTallFreeBodies_Private(PffTall);
 PETSC_INTERN PetscErrorCode PffTallAddRow_Private(PffTall, const PffTallRow *, PetscReal F, PetscReal V,
                                                   PetscBool surface, PetscInt nf, const PetscInt lb[],
                                                   const PetscInt comp[], const PetscInt cell[]);
+
+/* The pressure at a liquid record's cell centre yc as weights of at most two samples (the upper half's segment of
+   the column function; id -1 or weight 0: none), for writing p to cells and for the bodies' J. */
+static inline void PffTallCentreWeights(const PetscInt ri[], const PetscReal rr[], PetscReal yc, PetscInt id[2],
+                                        PetscReal w[2])
+{
+  const PetscReal t = rr[3] != rr[2] ? (yc - rr[2]) / (rr[3] - rr[2]) : 0;
+  id[0]             = ri[2];
+  id[1]             = ri[3];
+  w[0]              = 1 - t;
+  w[1]              = t;
+}
+
+/* Open fraction of face `side` (0 lower, 1 upper) normal to axis a of a cell, from the signed distance at its
+   eight corners (corner v at offset (v & 1, v >> 1 & 1, v >> 2) cells). */
+PETSC_INTERN PetscReal PffTallCellFaceOpen(const PetscReal corner[8], PetscInt a, PetscInt side);
 
 /* Whether a record kind is a liquid cell (cubic or part of a tall cell). */
 static inline PetscBool PffTallLiquidKind(PetscInt kind)

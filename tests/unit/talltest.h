@@ -4,6 +4,7 @@
 #pragma once
 
 #include "pfftest.h"
+#include <pff/shapes.h>
 
 #define N0 8
 #define G 9.81
@@ -27,34 +28,25 @@ static const PetscReal FLOAT_LO[3] = {0.4, 0.421875, 0.4}, FLOAT_HI[3] = {0.6, 0
 
 static PetscReal Obstacles(const PetscReal x[3], PetscReal grad[3], void *ctx)
 {
-  const PetscReal box[4][2][3] = {{{0.1, -1, 0.55}, {0.35, 0.25, 0.8}},
+  const PetscReal box[5][2][3] = {{{0.1, -1, 0.55}, {0.35, 0.25, 0.8}},
                                   {{0.6, -1, 0.2}, {0.75, 2, 0.33}},
                                   {{0.3, 0.45, 0.15}, {0.55, 0.75, 0.4}},
-                                  {{-1, -1, 0.44}, {2, 2, 0.56}}};
-  const Scene    *sc           = (const Scene *)ctx;
-  PetscReal       dmin         = PETSC_MAX_REAL;
-  if (sc->solid == 3) return 0.4 - PetscSqrtReal(PetscSqr(x[0] - 0.5) + PetscSqr(x[2] - 0.5));
-  if (sc->solid == 4) {
-    PetscReal out = 0, in = -PETSC_MAX_REAL;
-    for (PetscInt a = 0; a < 3; a++) {
-      const PetscReal q = PetscAbsReal(x[a] - 0.5 * (FLOAT_LO[a] + FLOAT_HI[a])) - 0.5 * (FLOAT_HI[a] - FLOAT_LO[a]);
-      out += PetscSqr(PetscMax(q, 0.0));
-      in = PetscMax(in, q);
-    }
-    if (grad) grad[0] = grad[1] = grad[2] = 0;
-    return in > 0 ? PetscSqrtReal(out) : in;
-  }
-  for (PetscInt b = sc->solid == 2 ? 3 : 0; b < (sc->solid == 2 ? 4 : 3); b++) {
-    PetscReal q[3], out = 0, in = -PETSC_MAX_REAL;
-    for (PetscInt a = 0; a < 3; a++) {
-      const PetscReal c = 0.5 * (box[b][0][a] + box[b][1][a]), hw = 0.5 * (box[b][1][a] - box[b][0][a]);
-      q[a] = PetscAbsReal(x[a] - c) - hw;
-      out += PetscSqr(PetscMax(q[a], 0.0));
-      in = PetscMax(in, q[a]);
-    }
-    dmin = PetscMin(dmin, in > 0 ? PetscSqrtReal(out) : in);
-  }
+                                  {{-1, -1, 0.44}, {2, 2, 0.56}},
+                                  {{FLOAT_LO[0], FLOAT_LO[1], FLOAT_LO[2]}, {FLOAT_HI[0], FLOAT_HI[1], FLOAT_HI[2]}}};
+  const PetscInt  first[5] = {1, 0, 3, 1, 4}, last[5] = {0, 2, 3, 0, 4}; /* the boxes of solids 1, 2 and 4 */
+  const Scene    *sc   = (const Scene *)ctx;
+  PetscReal       dmin = PETSC_MAX_REAL;
+
   if (grad) grad[0] = grad[1] = grad[2] = 0; /* not used by the fractions */
+  if (sc->solid == 3) return 0.4 - PetscSqrtReal(PetscSqr(x[0] - 0.5) + PetscSqr(x[2] - 0.5));
+  for (PetscInt b = first[sc->solid]; b <= last[sc->solid]; b++) {
+    PetscReal e[3], half[3];
+    for (PetscInt a = 0; a < 3; a++) {
+      e[a]    = x[a] - 0.5 * (box[b][0][a] + box[b][1][a]);
+      half[a] = 0.5 * (box[b][1][a] - box[b][0][a]);
+    }
+    dmin = PetscMin(dmin, PffBoxDistance(e, half, NULL));
+  }
   return dmin;
 }
 
