@@ -33,14 +33,17 @@ PETSC_EXTERN PetscReal PffBodiesDistance(const PetscReal x[3], PetscReal grad[3]
 /* The velocity v + omega x (x - X) of the body whose inside holds x (the nearest, when bodies overlap), in vel;
    returns whether x lies inside a body (vel untouched otherwise). Not collective. */
 PETSC_EXTERN PetscBool PffBodiesVelocityAt(PffBodies bodies, const PetscReal x[3], PetscReal vel[3]);
-/* The tall-cell view of every body at its current state (pose, bounding box, mass, world inertia, velocity as w*,
-   force zeroed) for PffTallSetBodies. Not collective (every rank holds the same). */
+/* The tall-cell view of every body at its current state (pose, bounding box, mass, world inertia, velocity; the
+   force and torque of the last projection) for PffTallSetBodies; tall may be NULL. Not collective (every rank holds the
+   same). */
 PETSC_EXTERN PetscErrorCode PffBodiesGetTall(PffBodies bodies, PetscInt *n, PffTallBody **tall);
-/* Algorithm 1, line 7: advances gravity, contacts and poses by dt in Bullet, then PffBodiesGetTall (w* is the
-   velocity after the advance). Not collective (every rank does the same). */
-PETSC_EXTERN PetscErrorCode PffBodiesAdvance(PffBodies bodies, PetscReal dt, PetscInt *n, PffTallBody **tall);
-/* Line 11: takes the velocities the projection left in the tall-cell view back into Bullet. */
-PETSC_EXTERN PetscErrorCode PffBodiesUpdateVelocities(PffBodies bodies);
+/* Algorithm 1, line 7: the tall-cell view at the current poses with the velocity w* = w + g dt, for the projection
+   of this step (Eq. 14 turns it into w). Not collective. */
+PETSC_EXTERN PetscErrorCode PffBodiesPredict(PffBodies bodies, PetscReal dt, PetscInt *n, PffTallBody **tall);
+/* Line 11 and the bodies' part of the advection: Bullet moves the bodies by dt with the velocities the projection
+   left in the tall-cell view (contacts between bodies and with the walls included), as the liquid's particles move
+   with the projected liquid velocity; the view then holds the new poses. Not collective. */
+PETSC_EXTERN PetscErrorCode PffBodiesAdvance(PffBodies bodies, PetscReal dt);
 /* Body i's centre of mass, quaternion (w, x, y, z), velocity and angular velocity. */
 PETSC_EXTERN PetscErrorCode PffBodiesGetState(PffBodies bodies, PetscInt i, PetscReal x[3], PetscReal q[4],
                                               PetscReal v[3], PetscReal omega[3]);

@@ -22,7 +22,8 @@ struct _n_PffBodies {
   PffBody         body[PFF_BODIES_MAX];
   PffTallBody     tall[PFF_BODIES_MAX];
   PffBulletWorld *world;
-  FILE           *csv; /* rank 0: bodies.csv, open from the first row to PffBodiesDestroy */
+  PetscReal       g[3]; /* gravity */
+  FILE           *csv;  /* rank 0: bodies.csv, open from the first row to PffBodiesDestroy */
 };
 
 static void Rotation(const PetscReal q[4], PetscReal R[3][3])
@@ -183,6 +184,7 @@ PetscErrorCode PffBodiesCreateFromOptions(MPI_Comm comm, const PetscReal lo[3], 
     const double gd[3] = {g[0], g[1], g[2]}, lod[3] = {lo[0], lo[1], lo[2]}, hid[3] = {hi[0], hi[1], hi[2]};
     bs->world = PffBulletCreate(gd, lod, hid);
     PetscCheck(bs->world, comm, PETSC_ERR_MEM, "bodies: Bullet could not create its world");
+    for (PetscInt a = 0; a < 3; a++) bs->g[a] = g[a];
   }
   for (PetscInt i = 0; i < bs->n; i++) {
     PffBody     *b       = &bs->body[i];
@@ -254,13 +256,11 @@ PetscErrorCode PffBodiesGetTall(PffBodies bs, PetscInt *n, PffTallBody **tall)
       PetscReal reach = 0; /* half-width of the world bounding box along a */
       for (PetscInt c = 0; c < 3; c++) reach += PetscAbsReal(b->R[a][c]) * b->half[c];
       if (b->type == PFF_BODY_SPHERE) reach = b->half[0];
-      t->X[a]         = b->x[a];
-      t->lo[a]        = b->x[a] - reach;
-      t->hi[a]        = b->x[a] + reach;
-      t->w[a]         = v[a];
-      t->w[3 + a]     = w[a];
-      t->force[a]     = 0;
-      t->force[3 + a] = 0;
+      t->X[a]     = b->x[a];
+      t->lo[a]    = b->x[a] - reach;
+      t->hi[a]    = b->x[a] + reach;
+      t->w[a]     = v[a];
+      t->w[3 + a] = w[a];
     }
     for (PetscInt r = 0; r < 3; r++) /* I_world = R diag(I) R^T */
       for (PetscInt c = 0; c < 3; c++) {
@@ -268,27 +268,35 @@ PetscErrorCode PffBodiesGetTall(PffBodies bs, PetscInt *n, PffTallBody **tall)
         for (PetscInt k = 0; k < 3; k++) t->inertia[r][c] += b->R[r][k] * b->inertia[k] * b->R[c][k];
       }
   }
-  *n    = bs->n;
-  *tall = bs->tall;
+  *n = bs->n;
+  if (tall) *tall = bs->tall;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode PffBodiesAdvance(PffBodies bs, PetscReal dt, PetscInt *n, PffTallBody **tall)
+PetscErrorCode PffBodiesPredict(PffBodies bs, PetscReal dt, PetscInt *n, PffTallBody **tall)
 {
   PetscFunctionBeginUser;
-  PffBulletStep(bs->world, dt);
   PetscCall(PffBodiesGetTall(bs, n, tall));
+  for (PetscInt i = 0; i < bs->n; i++)
+    for (PetscInt a = 0; a < 3; a++) bs->tall[i].w[a] += dt * bs->g[a];
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode PffBodiesUpdateVelocities(PffBodies bs)
+/* Bullet's step adds g dt to the velocity before it moves the body (semi-implicit Euler), so it starts from w - g dt
+   and moves the body with w (unless a contact changes it). */
+PetscErrorCode PffBodiesAdvance(PffBodies bs, PetscReal dt)
 {
+  PetscInt n;
+
   PetscFunctionBeginUser;
   for (PetscInt i = 0; i < bs->n; i++) {
-    const double v[3] = {bs->tall[i].w[0], bs->tall[i].w[1], bs->tall[i].w[2]};
-    const double w[3] = {bs->tall[i].w[3], bs->tall[i].w[4], bs->tall[i].w[5]};
+    const PffTallBody *t    = &bs->tall[i];
+    const double       v[3] = {t->w[0] - dt * bs->g[0], t->w[1] - dt * bs->g[1], t->w[2] - dt * bs->g[2]};
+    const double       w[3] = {t->w[3], t->w[4], t->w[5]};
     PffBulletSetVelocity(bs->world, (int)i, v, w);
   }
+  PffBulletStep(bs->world, dt);
+  PetscCall(PffBodiesGetTall(bs, &n, NULL));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

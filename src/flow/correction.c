@@ -82,33 +82,25 @@ static void PffDilate(const PetscInt nb[3], const PetscBool periodic[3], const P
   }
 }
 
-/* The reference of Eq. 6-7 and of the volume correction is the P2G of a lattice of 8 particles per cell.
-   A face's value depends on the lattice within one cell of it, so on its block's and its 26 neighbours'
-   levels, walls and solids only. After a topology change (refLevel: the raster levels it was last made for)
-   only the blocks whose level changed and their neighbours (R1) are made again, from a lattice seeded in R1
-   and its neighbours; the others kept theirs through PffGridAdapt (a copy: their level did not change).
-   Without refLevel everything is made. */
-PetscErrorCode PffFlowReferenceVolume_Private(PffFlow f)
+/* The reference of Eq. 6-7 and of the volume correction on the raster blocks r1 (a mask, the same on every rank):
+   the P2G of a lattice of 8 particles per cell, seeded in r1 and its neighbours (a face's value depends on the
+   lattice within one cell of it), copied into mass_ref and volume_ref on the blocks of r1 only. Collective. */
+static PetscErrorCode ReferenceBlocks(PffFlow f, const PetscBool r1[])
 {
   PffParticles    ref;
   const PetscReal one[PFF_PARTICLE_NTYPES] = {1, 1};
-  const PetscInt *level;
   PetscInt        nlocal, nbatch, nb[3], nblocks, lb0 = 0;
   PetscInt64      cells = 0, done = 0, nchanged = 0;
-  PetscBool       periodic[3], *seed, *keep, *changed, *r1, *s2;
+  PetscBool       periodic[3], *seed, *keep, *s2;
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridGetRaster(f->grid, nb, &level, NULL));
+  PetscCall(PffGridGetRaster(f->grid, nb, NULL, NULL));
   PetscCall(PffGridGetSizes(f->grid, NULL, NULL, NULL, NULL, periodic));
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
   nblocks = nb[0] * nb[1] * nb[2];
-  PetscCall(PetscMalloc5(nblocks, &changed, nblocks, &r1, nblocks, &s2, PetscMax(nlocal, 1), &seed, PetscMax(nlocal, 1),
-                         &keep));
-  for (PetscInt b = 0; b < nblocks; b++) {
-    changed[b] = (PetscBool)(!f->refLevel || f->refLevel[b] != level[b]);
-    nchanged += changed[b];
-  }
-  PffDilate(nb, periodic, changed, r1);
+  for (PetscInt b = 0; b < nblocks; b++) nchanged += r1[b];
+  if (!nchanged) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PetscMalloc3(nblocks, &s2, PetscMax(nlocal, 1), &seed, PetscMax(nlocal, 1), &keep));
   PffDilate(nb, periodic, r1, s2);
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo info;
@@ -117,9 +109,7 @@ PetscErrorCode PffFlowReferenceVolume_Private(PffFlow f)
     seed[lb] = s2[info.gid];
     if (seed[lb]) cells += (PetscInt64)info.n * info.n * info.n;
   }
-  if (!f->refLevel) PetscCall(PetscMalloc1(nblocks, &f->refLevel));
-  PetscCall(PetscArraycpy(f->refLevel, level, nblocks));
-  if (nchanged) {
+  {
     PetscInt64 nbt = (8 * cells + PFF_REFERENCE_BATCH - 1) / PFF_REFERENCE_BATCH;
     PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nbt, 1, MPIU_INT64, MPI_MAX, f->comm)); /* P2G is collective */
     nbatch = (PetscInt)PetscMax(nbt, 1);
@@ -152,13 +142,77 @@ PetscErrorCode PffFlowReferenceVolume_Private(PffFlow f)
     malloc_trim(0);
 #endif
   }
-  PetscCall(PetscFree5(changed, r1, s2, seed, keep));
-  PetscCall(PetscInfo(NULL, "reference lattice made again on %" PetscInt64_FMT " changed blocks and their neighbours\n",
-                      nchanged));
+  PetscCall(PetscFree3(s2, seed, keep));
+  PetscCall(PetscInfo(NULL, "reference lattice made again on %" PetscInt64_FMT " blocks\n", nchanged));
   if (f->chVolRef >= 0) {
     PetscCall(PffGridHaloBegin(f->grid, f->chVolRef));
     PetscCall(PffGridHaloEnd(f->grid, f->chVolRef));
   }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The reference depends on its block's and its 26 neighbours' levels, walls and solids only. After a topology
+   change (refLevel: the raster levels it was last made for) only the blocks whose level changed and their
+   neighbours are made again; the others kept theirs through PffGridAdapt (a copy: their level did not change).
+   Without refLevel everything is made. */
+PetscErrorCode PffFlowReferenceVolume_Private(PffFlow f)
+{
+  const PetscInt *level;
+  PetscInt        nb[3], nblocks;
+  PetscBool       periodic[3], *changed, *r1;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetRaster(f->grid, nb, &level, NULL));
+  PetscCall(PffGridGetSizes(f->grid, NULL, NULL, NULL, NULL, periodic));
+  nblocks = nb[0] * nb[1] * nb[2];
+  PetscCall(PetscMalloc2(nblocks, &changed, nblocks, &r1));
+  for (PetscInt b = 0; b < nblocks; b++) changed[b] = (PetscBool)(!f->refLevel || f->refLevel[b] != level[b]);
+  PffDilate(nb, periodic, changed, r1);
+  if (!f->refLevel) PetscCall(PetscMalloc1(nblocks, &f->refLevel));
+  PetscCall(PetscArraycpy(f->refLevel, level, nblocks));
+  PetscCall(ReferenceBlocks(f, r1));
+  PetscCall(PetscFree2(changed, r1));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* With moving bodies the reference follows them: the blocks within two cells of a body's bounding box now, and
+   those of the last call (which the body may have left), are made again at the bodies' current poses. Without
+   it the lattice target near a body is the one of its initial pose, and the particles it pushes out of itself
+   pile up unseen (the floating box lost 8 % of its pool that way on cubic cells). Collective. */
+PetscErrorCode PffFlowReferenceBodies_Private(PffFlow f)
+{
+  PetscInt     nb[3], nblocks, n0, nbody;
+  PetscReal    origin[3], h;
+  PffTallBody *tb;
+  PetscBool   *r1;
+
+  PetscFunctionBeginUser;
+  if (!f->bodies) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PffGridGetRaster(f->grid, nb, NULL, NULL));
+  PetscCall(PffGridGetSizes(f->grid, &n0, NULL, origin, &h, NULL));
+  nblocks = nb[0] * nb[1] * nb[2];
+  if (!f->refBody) PetscCall(PetscCalloc1(nblocks, &f->refBody));
+  PetscCall(PetscMalloc1(nblocks, &r1));
+  PetscCall(PffBodiesGetTall(f->bodies, &nbody, &tb));
+  for (PetscInt b = 0; b < nblocks; b++) r1[b] = PETSC_FALSE;
+  for (PetscInt i = 0; i < nbody; i++) {
+    PetscInt lo[3], hi[3];
+    for (PetscInt a = 0; a < 3; a++) {
+      const PetscReal blen = (PetscReal)n0 * h, margin = 2 * h;
+      lo[a] = PetscMax(0, (PetscInt)PetscFloorReal((tb[i].lo[a] - margin - origin[a]) / blen));
+      hi[a] = PetscMin(nb[a] - 1, (PetscInt)PetscFloorReal((tb[i].hi[a] + margin - origin[a]) / blen));
+    }
+    for (PetscInt bk = lo[2]; bk <= hi[2]; bk++)
+      for (PetscInt bj = lo[1]; bj <= hi[1]; bj++)
+        for (PetscInt bi = lo[0]; bi <= hi[0]; bi++) r1[bi + nb[0] * (bj + nb[1] * bk)] = PETSC_TRUE;
+  }
+  for (PetscInt b = 0; b < nblocks; b++) {
+    const PetscBool now = r1[b];
+    r1[b]               = (PetscBool)(now || f->refBody[b]);
+    f->refBody[b]       = now;
+  }
+  PetscCall(ReferenceBlocks(f, r1));
+  PetscCall(PetscFree(r1));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -192,14 +246,8 @@ static PetscErrorCode PffCorrectionSource(PffFlow f)
       for (PetscInt j = 0; j < n; j++)
         for (PetscInt i = 0; i < n; i++) {
           const PetscInt c = i + n * (j + n * k);
-          PetscReal      w = 0, wref = 0;
-          for (PetscInt d = 0; d < 3; d++)
-            for (PetscInt up = 0; up < 2; up++) {
-              const PetscInt ii = i + (up && d == 0), jj = j + (up && d == 1), kk = k + (up && d == 2);
-              if (*PffViewsAt(vo[d], ii, jj, kk, n) <= 0) continue;
-              w += *PffViewsAt(vw[d], ii, jj, kk, n);
-              wref += *PffViewsAt(vr[d], ii, jj, kk, n);
-            }
+          PetscReal      w, wref;
+          PffFlowCellVolumes_Private(vw, vr, vo, i, j, k, n, &w, &wref, NULL);
           if (wref <= 0) {
             cdiv[c] = -1;
             continue;

@@ -162,7 +162,6 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
     PetscCheck(f->extrapLayers > 0, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
                "-flow_extrapolate_layers 0 is invalid with -flow_model liquid: G2P and advection near the surface read "
                "the liquid velocity extrapolated into the air");
-    f->volCorr = 0; /* the two-phase correction measures both phases: not for a liquid alone (docs/tallcell.md) */
     if (!f->tall) PetscCall(PffTallCreate(f->grid, &f->tall));
     PetscCall(PffTallSetFromOptions(f->tall));
     if (!f->bodies) {
@@ -267,13 +266,15 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
     PetscCall(PffGridAddChannel(f->grid, "volume", PFF_CHANNEL_FACE, 1, &f->chVol));
     PetscCall(PffGridAddChannel(f->grid, "volume_ref", PFF_CHANNEL_FACE, 1, &f->chVolRef));
     PetscCall(PffGridAddChannel(f->grid, "cdiv", PFF_CHANNEL_CELL, 1, &f->chCdiv));
-    PetscCall(PffGridAddChannel(f->grid, "correction_potential", PFF_CHANNEL_CELL, 1, &f->chQ));
+    /* the liquid model's correction is local (liquidcorr.c): no potential; chUa is the liquid's advection */
+    if (f->model == PFF_FLOW_TWO_PHASE)
+      PetscCall(PffGridAddChannel(f->grid, "correction_potential", PFF_CHANNEL_CELL, 1, &f->chQ));
     PetscCall(PffGridAddChannel(f->grid, "velocity_gas", PFF_CHANNEL_FACE, width, &f->chUa));
     /* the liquid's advection channel carries the liquid displacement even without extrapolation */
     if (f->chUl < 0) PetscCall(PffGridAddChannel(f->grid, "velocity_liquid", PFF_CHANNEL_FACE, width, &f->chUl));
     const PetscInt work[] = {f->chVol, f->chVolRef, f->chCdiv, f->chQ, f->chUa, f->chUl};
     for (size_t k = 0; k < PETSC_STATIC_ARRAY_LENGTH(work); k++)
-      PetscCall(PffGridSetChannelOutput(f->grid, work[k], PETSC_FALSE));
+      if (work[k] >= 0) PetscCall(PffGridSetChannelOutput(f->grid, work[k], PETSC_FALSE));
   }
   /* working channels stay out of frames (checkpoints keep everything) */
   const PetscInt hidden[] = {f->chMass, f->chMassRef, f->chUt, f->chPhiF, f->chBeta, f->chOpen};
@@ -332,6 +333,7 @@ PetscErrorCode PffFlowDestroy(PffFlow *flow)
   PetscCall(PffBodiesDestroy(&(*flow)->bodies));
   PetscCall(PffFlowAdaptDestroy_Private(*flow));
   PetscCall(PetscFree((*flow)->refLevel));
+  PetscCall(PetscFree((*flow)->refBody));
   PetscCall(PetscFree(*flow));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

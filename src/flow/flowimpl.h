@@ -60,6 +60,7 @@ struct _n_PffFlow {
 
   PffFlowAdaptCtx  adapt;
   PetscInt        *refLevel; /* [nblocks] raster levels the reference lattice was made for (correction.c) */
+  PetscBool       *refBody;  /* [nblocks] blocks the bodies' reference was last made on (correction.c) */
   PetscObjectState topology; /* the grid's topology state of the open faces and the reference lattice */
   PetscReal        t, dtPrev;
   PetscInt         step;
@@ -96,6 +97,28 @@ static inline void PffFlowFaceTags_Private(const PffView *vphi, PetscInt i, Pets
   *lo = (PetscBool)(*PffViewsAt(vphi, i - (d == 0), j - (d == 1), k - (d == 2), n) >= 0.5);
 }
 
+/* The sums W and W_ref of a cell's open faces (views of the volume, its lattice target and the open fractions,
+   component by component) and their number nopen (may be NULL): its particle volume fraction is s = W / W_ref
+   where W_ref > 0. */
+static inline void PffFlowCellVolumes_Private(const PffView *vw[3], const PffView *vr[3], const PffView *vo[3],
+                                              PetscInt i, PetscInt j, PetscInt k, PetscInt n, PetscReal *wp,
+                                              PetscReal *wrefp, PetscInt *nopen)
+{
+  PetscReal w = 0, wref = 0;
+  PetscInt  no = 0;
+  for (PetscInt d = 0; d < 3; d++)
+    for (PetscInt up = 0; up < 2; up++) {
+      const PetscInt ii = i + (up && d == 0), jj = j + (up && d == 1), kk = k + (up && d == 2);
+      if (*PffViewsAt(vo[d], ii, jj, kk, n) <= 0) continue;
+      w += *PffViewsAt(vw[d], ii, jj, kk, n);
+      wref += *PffViewsAt(vr[d], ii, jj, kk, n);
+      no++;
+    }
+  *wp    = w;
+  *wrefp = wref;
+  if (nopen) *nopen = no;
+}
+
 /* adapt.c */
 PETSC_INTERN PetscErrorCode PffFlowAdaptSetUp_Private(PffFlow);
 PETSC_INTERN PetscErrorCode PffFlowAdaptDestroy_Private(PffFlow);
@@ -110,8 +133,11 @@ PETSC_INTERN PetscErrorCode PffFlowCheckTopology_Private(PffFlow);
 PETSC_INTERN PetscErrorCode PffFlowPhaseField_Private(PffFlow);
 /* correction.c */
 PETSC_INTERN PetscErrorCode PffFlowReferenceVolume_Private(PffFlow);
+PETSC_INTERN PetscErrorCode PffFlowReferenceBodies_Private(PffFlow);
 PETSC_INTERN PetscErrorCode PffFlowVolumeCorrection_Private(PffFlow, PffFlowStepStats *);
 PETSC_INTERN PetscErrorCode PffFlowCorrectionVelocity_Private(PffFlow, PetscReal dt, PetscBool extrapolated);
+/* liquidcorr.c */
+PETSC_INTERN PetscErrorCode PffFlowLiquidCorrection_Private(PffFlow, PetscReal dt, PffFlowStepStats *);
 /* fields.c */
 PETSC_INTERN PetscErrorCode PffFlowFaceVelocity_Private(PffFlow, PetscReal dt);
 PETSC_INTERN PetscErrorCode PffFlowOpenFaces_Private(PffFlow);

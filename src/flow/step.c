@@ -160,9 +160,11 @@ static PetscErrorCode PffFlowAdvect(PffFlow f, PetscReal dt, PffFlowStepStats *s
 
   PetscFunctionBeginUser;
   if (f->model == PFF_FLOW_LIQUID && !f->prescribed) {
-    /* the liquid model's G2P extrapolated this step's u into chUl already, and nothing changed u since */
-    ch[PFF_PARTICLE_LIQUID] = f->chUl;
-    extrapolated            = PETSC_TRUE;
+    /* the liquid model's G2P extrapolated this step's u into chUl already, and nothing changed u since; its
+       volume correction added the displacement in chUa (liquidcorr.c) */
+    ch[PFF_PARTICLE_LIQUID] = f->chUa >= 0 ? f->chUa : f->chUl;
+    PetscCall(PffParticlesAdvectPerType(f->part, ch, dt, f->solid, f->solidCtx, &st->advect));
+    PetscFunctionReturn(PETSC_SUCCESS);
   } else if (f->chUlMask >= 0) {
     PetscInt64 faces = 0;
     PetscCall(PffExtrapolateLiquidVelocity(f->grid, f->chU, f->chPhiF, f->chOpen, f->extrapLayers, f->chUlMask, f->chUl,
@@ -262,13 +264,18 @@ PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
 
     if (f->chVol >= 0) {
       PetscCall(PffStageBegin(PFF_STAGE_CORRECTION, &t0));
-      PetscCall(PffFlowVolumeCorrection_Private(f, st));
+      if (f->model == PFF_FLOW_LIQUID)
+        PetscCall(PffFlowLiquidCorrection_Private(f, dt, st));
+      else
+        PetscCall(PffFlowVolumeCorrection_Private(f, st));
       PetscCall(PffStageEnd(st, PFF_STAGE_CORRECTION, t0));
     }
   }
 
   PetscCall(PffStageBegin(PFF_STAGE_ADVECT, &t0));
   PetscCall(PffFlowAdvect(f, dt, st));
+  /* the reference lattice near moving bodies for their new poses, before the next P2G or frame reads it */
+  PetscCall(PffFlowReferenceBodies_Private(f));
   PetscCall(PffStageEnd(st, PFF_STAGE_ADVECT, t0));
 
   f->t += dt;
