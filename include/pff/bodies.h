@@ -17,6 +17,8 @@
 #include <pff/tallcell.h>
 
 #define PFF_BODIES_MAX 16
+#define PFF_BODY_CHECKPOINT_VALUES                                                                                     \
+  18 /* per body in a checkpoint: origin, rotation matrix, velocity, angular velocity */
 
 typedef struct _n_PffBodies *PffBodies;
 
@@ -47,6 +49,10 @@ PETSC_EXTERN PetscErrorCode PffBodiesAdvance(PffBodies bodies, PetscReal dt);
 /* Body i's centre of mass, quaternion (w, x, y, z), velocity and angular velocity. */
 PETSC_EXTERN PetscErrorCode PffBodiesGetState(PffBodies bodies, PetscInt i, PetscReal x[3], PetscReal q[4],
                                               PetscReal v[3], PetscReal omega[3]);
+/* The bodies' state for a checkpoint: *n values (0 without bodies; bodies may be NULL), into s unless it is NULL.
+   Setting them back restores every body exactly as Bullet held it. Not collective. */
+PETSC_EXTERN PetscErrorCode PffBodiesGetCheckpointState(PffBodies bodies, PetscInt *n, PetscReal s[]);
+PETSC_EXTERN PetscErrorCode PffBodiesSetCheckpointState(PffBodies bodies, const PetscReal s[]);
 /* Appends one line per body to <dir>/bodies.csv on rank 0 (created with its header at the first call, kept open
    until PffBodiesDestroy, flushed every call): step, t, body, x, y, z, q, v, omega, the pressure's last force and
    torque. Not collective. */

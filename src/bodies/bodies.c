@@ -300,6 +300,34 @@ PetscErrorCode PffBodiesAdvance(PffBodies bs, PetscReal dt)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+PetscErrorCode PffBodiesGetCheckpointState(PffBodies bs, PetscInt *n, PetscReal s[])
+{
+  _Static_assert(PFF_BODY_CHECKPOINT_VALUES == PFF_BULLET_RAW, "the checkpoint holds Bullet's raw state");
+  PetscFunctionBeginUser;
+  *n = bs ? bs->n * PFF_BULLET_RAW : 0;
+  if (!s) PetscFunctionReturn(PETSC_SUCCESS);
+  for (PetscInt i = 0; i < bs->n; i++) {
+    double raw[PFF_BULLET_RAW];
+    PffBulletGetRaw(bs->world, (int)i, raw);
+    for (PetscInt k = 0; k < PFF_BULLET_RAW; k++) s[i * PFF_BULLET_RAW + k] = raw[k];
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffBodiesSetCheckpointState(PffBodies bs, const PetscReal s[])
+{
+  PetscInt n;
+
+  PetscFunctionBeginUser;
+  for (PetscInt i = 0; i < bs->n; i++) {
+    double raw[PFF_BULLET_RAW];
+    for (PetscInt k = 0; k < PFF_BULLET_RAW; k++) raw[k] = s[i * PFF_BULLET_RAW + k];
+    PffBulletSetRaw(bs->world, (int)i, raw);
+  }
+  PetscCall(PffBodiesGetTall(bs, &n, NULL));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffBodiesWriteCSV(PffBodies bs, const char dir[], PetscInt step, PetscReal t)
 {
   PetscFunctionBeginUser;

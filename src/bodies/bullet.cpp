@@ -97,6 +97,30 @@ extern "C" void PffBulletSetVelocity(PffBulletWorld *w, int i, const double v[3]
   b->setAngularVelocity(btVector3(omega[0], omega[1], omega[2]));
 }
 
+extern "C" void PffBulletGetRaw(const PffBulletWorld *w, int i, double s[PFF_BULLET_RAW])
+{
+  const btRigidBody *b = w->bodies[w->nwalls + i];
+  const btTransform &t = b->getCenterOfMassTransform();
+  for (int a = 0; a < 3; a++) {
+    s[a]      = t.getOrigin()[a];
+    s[12 + a] = b->getLinearVelocity()[a];
+    s[15 + a] = b->getAngularVelocity()[a];
+    for (int c = 0; c < 3; c++) s[3 + 3 * a + c] = t.getBasis()[a][c];
+  }
+}
+
+extern "C" void PffBulletSetRaw(PffBulletWorld *w, int i, const double s[PFF_BULLET_RAW])
+{
+  btRigidBody *b = w->bodies[w->nwalls + i];
+  btMatrix3x3  basis(s[3], s[4], s[5], s[6], s[7], s[8], s[9], s[10], s[11]);
+  btTransform  t(basis, btVector3(s[0], s[1], s[2]));
+  b->setCenterOfMassTransform(t);
+  b->getMotionState()->setWorldTransform(t);
+  b->setLinearVelocity(btVector3(s[12], s[13], s[14]));
+  b->setAngularVelocity(btVector3(s[15], s[16], s[17]));
+  b->updateInertiaTensor();
+}
+
 extern "C" void PffBulletDestroy(PffBulletWorld *w)
 {
   if (!w) return;

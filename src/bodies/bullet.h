@@ -19,6 +19,11 @@ int PffBulletAddBody(PffBulletWorld *w, int type, const double size[3], double m
 void PffBulletStep(PffBulletWorld *w, double dt);
 void PffBulletGetState(const PffBulletWorld *w, int i, double x[3], double q[4], double v[3], double omega[3]);
 void PffBulletSetVelocity(PffBulletWorld *w, int i, const double v[3], const double omega[3]);
+/* Body i's state exactly as Bullet holds it (origin, basis row by row, velocity, angular velocity), for checkpoints:
+   setting what get gave restores the body bit for bit. */
+#define PFF_BULLET_RAW 18
+void PffBulletGetRaw(const PffBulletWorld *w, int i, double s[PFF_BULLET_RAW]);
+void PffBulletSetRaw(PffBulletWorld *w, int i, const double s[PFF_BULLET_RAW]);
 void PffBulletDestroy(PffBulletWorld *w);
 
 #ifdef __cplusplus

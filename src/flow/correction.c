@@ -176,7 +176,8 @@ PetscErrorCode PffFlowReferenceVolume_Private(PffFlow f)
 }
 
 /* With moving bodies the reference follows them: the blocks within two cells of a body's bounding box now, and
-   those of the last call (which the body may have left), are made again at the bodies' current poses. Without
+   those of the last call (which the body may have left; at the first call, as after a restart, the blocks within
+   one block of those of now), are made again at the bodies' current poses. Without
    it the lattice target near a body is the one of its initial pose, and the particles it pushes out of itself
    pile up unseen (the floating box lost 8 % of its pool that way on cubic cells). Collective. */
 PetscErrorCode PffFlowReferenceBodies_Private(PffFlow f)
@@ -190,8 +191,9 @@ PetscErrorCode PffFlowReferenceBodies_Private(PffFlow f)
   if (!f->bodies) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PffGridGetRaster(f->grid, nb, NULL, NULL));
   PetscCall(PffGridGetSizes(f->grid, &n0, NULL, origin, &h, NULL));
-  nblocks = nb[0] * nb[1] * nb[2];
-  if (!f->refBody) PetscCall(PetscCalloc1(nblocks, &f->refBody));
+  nblocks               = nb[0] * nb[1] * nb[2];
+  const PetscBool first = (PetscBool)!f->refBody;
+  if (first) PetscCall(PetscCalloc1(nblocks, &f->refBody));
   PetscCall(PetscMalloc1(nblocks, &r1));
   PetscCall(PffBodiesGetTall(f->bodies, &nbody, &tb));
   for (PetscInt b = 0; b < nblocks; b++) r1[b] = PETSC_FALSE;
@@ -205,6 +207,11 @@ PetscErrorCode PffFlowReferenceBodies_Private(PffFlow f)
     for (PetscInt bk = lo[2]; bk <= hi[2]; bk++)
       for (PetscInt bj = lo[1]; bj <= hi[1]; bj++)
         for (PetscInt bi = lo[0]; bi <= hi[0]; bi++) r1[bi + nb[0] * (bj + nb[1] * bk)] = PETSC_TRUE;
+  }
+  if (first) { /* the last step's blocks are unknown after a restart: those within a block of the bodies' now */
+    PetscBool periodic[3];
+    PetscCall(PffGridGetSizes(f->grid, NULL, NULL, NULL, NULL, periodic));
+    PffDilate(nb, periodic, r1, f->refBody);
   }
   for (PetscInt b = 0; b < nblocks; b++) {
     const PetscBool now = r1[b];

@@ -274,16 +274,22 @@ static PetscErrorCode PffFlowSceneConservation(PffFlowScene *fs)
 #define PFF_FLOW_SCENE_NEXTRA 9
 #define PFF_FLOW_SCENE_NEXTRA_LEGACY 4
 
-/* <output_dir>/checkpoint.h5, written to a temporary name and renamed by the io module. */
+/* <output_dir>/checkpoint.h5, written to a temporary name and renamed by the io module. The rigid bodies' state
+   (PffBodiesGetCheckpointState) follows the scene's extra values. */
 static PetscErrorCode PffFlowSceneCheckpoint(PffFlowScene *fs)
 {
-  PetscReal    extra[PFF_FLOW_SCENE_NEXTRA], rho[PFF_PARTICLE_NTYPES];
+  PetscReal   *extra, rho[PFF_PARTICLE_NTYPES];
   char         path[PETSC_MAX_PATH_LEN];
   PetscReal    t;
-  PetscInt     step;
+  PetscInt     step, nbody;
   PffParticles p;
+  PffBodies    bodies;
 
   PetscFunctionBeginUser;
+  PetscCall(PffFlowGetBodies(fs->flow, &bodies));
+  PetscCall(PffBodiesGetCheckpointState(bodies, &nbody, NULL));
+  PetscCall(PetscMalloc1(PFF_FLOW_SCENE_NEXTRA + nbody, &extra));
+  if (nbody) PetscCall(PffBodiesGetCheckpointState(bodies, &nbody, extra + PFF_FLOW_SCENE_NEXTRA));
   PetscCall(PffFlowGetDensities(fs->flow, rho));
   for (PetscInt k = 0; k < PFF_PARTICLE_NTYPES; k++) {
     extra[k]     = fs->volumeStart[k];
@@ -295,7 +301,8 @@ static PetscErrorCode PffFlowSceneCheckpoint(PffFlowScene *fs)
   PetscCall(PffFlowGetTime(fs->flow, &t, &step));
   PetscCall(PffFlowGetParticles(fs->flow, &p));
   PetscCall(PetscSNPrintf(path, sizeof(path), "%s/checkpoint.h5", fs->scene->outdir));
-  PetscCall(PffIOWriteCheckpoint(fs->grid, p, path, t, step, PFF_FLOW_SCENE_NEXTRA, extra, fs->scene->name));
+  PetscCall(PffIOWriteCheckpoint(fs->grid, p, path, t, step, PFF_FLOW_SCENE_NEXTRA + nbody, extra, fs->scene->name));
+  PetscCall(PetscFree(extra));
   PetscCall(PetscPrintf(fs->scene->comm, "checkpoint %s at step %" PetscInt_FMT "\n", path, step));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -314,12 +321,25 @@ static PetscErrorCode PffFlowSceneStart(PffFlowScene *fs)
     PetscFunctionReturn(PETSC_SUCCESS);
   }
   PffParticles p;
-  PetscReal    t, extra[PFF_FLOW_SCENE_NEXTRA];
-  PetscInt     step, nextra;
+  PffBodies    bodies;
+  PetscReal    t, *extra;
+  PetscInt     step, nextra, nbody;
   PetscCall(PffFlowGetParticles(fs->flow, &p));
+  PetscCall(PffFlowGetBodies(fs->flow, &bodies));
+  PetscCall(PffBodiesGetCheckpointState(bodies, &nbody, NULL));
   PetscCall(PffIOGetCheckpointExtraCount(fs->grid, fs->restart, &nextra));
+  /* the scene's values, then the bodies' (checkpoints before bodies were stored have none) */
+  PetscCheck(
+      nextra <= PFF_FLOW_SCENE_NEXTRA || nextra == PFF_FLOW_SCENE_NEXTRA + nbody, fs->scene->comm, PETSC_ERR_ARG_INCOMP,
+      "-sim_restart %s holds the state of %" PetscInt_FMT " rigid bodies, the scene has %" PetscInt_FMT
+      " (-body_<i>_*)",
+      fs->restart, (nextra - PFF_FLOW_SCENE_NEXTRA) / PFF_BODY_CHECKPOINT_VALUES, nbody / PFF_BODY_CHECKPOINT_VALUES);
+  PetscCheck(!nbody || nextra == PFF_FLOW_SCENE_NEXTRA + nbody, fs->scene->comm, PETSC_ERR_ARG_INCOMP,
+             "-sim_restart %s holds no rigid bodies, the scene has %" PetscInt_FMT " (-body_<i>_*)", fs->restart,
+             nbody / PFF_BODY_CHECKPOINT_VALUES);
   /* any other count is the reader's error: the checkpoint is not one of a fluid scene */
-  if (nextra != 0 && nextra != PFF_FLOW_SCENE_NEXTRA_LEGACY) nextra = PFF_FLOW_SCENE_NEXTRA;
+  if (nextra != 0 && nextra != PFF_FLOW_SCENE_NEXTRA_LEGACY) nextra = PFF_FLOW_SCENE_NEXTRA + nbody;
+  PetscCall(PetscMalloc1(PFF_FLOW_SCENE_NEXTRA + nbody, &extra));
   {
     /* an adaptive run continues on the grid the checkpoint was written on (its level map); a static one
        must match it, which the reader checks */
@@ -348,6 +368,7 @@ static PetscErrorCode PffFlowSceneStart(PffFlowScene *fs)
     fs->bubblesDeletedRun = (PetscInt64)extra[6];
     fs->countsCarried     = PETSC_TRUE;
   }
+  if (nbody) PetscCall(PffBodiesSetCheckpointState(bodies, extra + PFF_FLOW_SCENE_NEXTRA));
   PetscCall(PffFlowSetTime(fs->flow, t, step));
   PetscCall(PffFlowUpdateFields(fs->flow, PETSC_FALSE));
   fs->restarted = PETSC_TRUE;
@@ -365,6 +386,7 @@ static PetscErrorCode PffFlowSceneStart(PffFlowScene *fs)
                           "restart: %s holds no reference volumes; volume drifts are measured from the restart\n",
                           fs->restart));
   }
+  PetscCall(PetscFree(extra));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -436,8 +458,6 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
   PetscCall(PffFlowGetTime(fs->flow, &t, &step));
   PetscCall(PetscMemzero(&st, sizeof(st)));
   PetscCall(PffFlowGetBodies(fs->flow, &bodies));
-  PetscCheck(!bodies || !fs->restarted, s->comm, PETSC_ERR_SUP,
-             "-sim_restart: checkpoints do not hold the rigid bodies yet (-body_<i>_*); start the run again");
   if (!fs->restarted) {
     PetscCall(PffFlowSceneDiagRow(fs, step, t, &st, 0));
     if (bodies) PetscCall(PffBodiesWriteCSV(bodies, s->outdir, step, t));
