@@ -16,9 +16,14 @@ static inline PetscReal PffPhi(PetscReal rt, PetscReal rtmin, PetscReal scale)
 
 /* Cell phi = mean of the face phi over the cell's open faces (chPhiF's halo current); a cell with every
    face closed (inside a solid) keeps the plain mean. With bulkOnly only cells whose open faces are all 1
-   (or all 0) are set, the others keep their value. */
+   (or all 0) are set, the others keep their value. The liquid model takes the mean over the axes of each
+   axis' mean instead: its level set reads phi at the free surface, where the vertical faces differ from the
+   horizontal ones, and the plain mean weighs them otherwise in a cell beside a wall (one side face fewer):
+   a still pool's surface cells read 0.930 at the walls against 0.939 inside, and the pool moved at 1.2e-2 m/s. */
 static PetscErrorCode PffFlowCellPhase(PffFlow f, PetscInt nlocal, PetscBool bulkOnly)
 {
+  const PetscBool perAxis = (PetscBool)(f->model == PFF_FLOW_LIQUID);
+
   PetscFunctionBeginUser;
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo   info;
@@ -34,7 +39,7 @@ static PetscErrorCode PffFlowCellPhase(PffFlow f, PetscInt nlocal, PetscBool bul
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt j = 0; j < n; j++)
         for (PetscInt i = 0; i < n; i++) {
-          PetscReal sum = 0, w = 0, all = 0, lo1 = 1, hi0 = 0;
+          PetscReal sum = 0, w = 0, all = 0, lo1 = 1, hi0 = 0, axes = 0, naxes = 0;
           for (PetscInt d = 0; d < 3; d++) {
             const PetscInt  e[3] = {d == 0, d == 1, d == 2};
             const PetscReal lo   = *PffViewsAt(vphi[d], i, j, k, n),
@@ -43,6 +48,10 @@ static PetscErrorCode PffFlowCellPhase(PffFlow f, PetscInt nlocal, PetscBool bul
             const PetscReal ohi  = *PffViewsAt(vopen[d], i + e[0], j + e[1], k + e[2], n);
             sum += olo * lo + ohi * hi;
             w += olo + ohi;
+            if (olo + ohi > 0) {
+              axes += (olo * lo + ohi * hi) / (olo + ohi);
+              naxes++;
+            }
             all += lo + hi;
             if (olo > 0) {
               lo1 = PetscMin(lo1, lo);
@@ -54,7 +63,7 @@ static PetscErrorCode PffFlowCellPhase(PffFlow f, PetscInt nlocal, PetscBool bul
             }
           }
           if (bulkOnly && !(w > 0 && (lo1 == 1 || hi0 == 0))) continue;
-          cell[i + n * (j + n * k)] = (float)(w > 0 ? sum / w : all / 6);
+          cell[i + n * (j + n * k)] = (float)(w > 0 ? (perAxis ? axes / naxes : sum / w) : all / 6);
         }
   }
   PetscCall(PffGridHaloBegin(f->grid, f->chPhi));
