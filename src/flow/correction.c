@@ -85,7 +85,7 @@ static void PffDilate(const PetscInt nb[3], const PetscBool periodic[3], const P
 /* The reference of Eq. 6-7 and of the volume correction on the raster blocks r1 (a mask, the same on every rank):
    the P2G of a lattice of 8 particles per cell, seeded in r1 and its neighbours (a face's value depends on the
    lattice within one cell of it), copied into mass_ref and volume_ref on the blocks of r1 only. Collective. */
-static PetscErrorCode ReferenceBlocks(PffFlow f, const PetscBool r1[])
+static PetscErrorCode ReferenceLattice(PffFlow f, const PetscBool r1[])
 {
   PffParticles    ref;
   const PetscReal one[PFF_PARTICLE_NTYPES] = {1, 1};
@@ -99,7 +99,6 @@ static PetscErrorCode ReferenceBlocks(PffFlow f, const PetscBool r1[])
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
   nblocks = nb[0] * nb[1] * nb[2];
   for (PetscInt b = 0; b < nblocks; b++) nchanged += r1[b];
-  if (!nchanged) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PetscMalloc3(nblocks, &s2, PetscMax(nlocal, 1), &seed, PetscMax(nlocal, 1), &keep));
   PffDilate(nb, periodic, r1, s2);
   for (PetscInt lb = 0; lb < nlocal; lb++) {
@@ -144,6 +143,20 @@ static PetscErrorCode ReferenceBlocks(PffFlow f, const PetscBool r1[])
   }
   PetscCall(PetscFree3(s2, seed, keep));
   PetscCall(PetscInfo(NULL, "reference lattice made again on %" PetscInt64_FMT " blocks\n", nchanged));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The lattice on the blocks of r1 when there are any, then volume_ref's halo in any case: a re-partition moves
+   blocks without changing their levels. Collective. */
+static PetscErrorCode ReferenceBlocks(PffFlow f, const PetscBool r1[])
+{
+  PetscInt  nb[3];
+  PetscBool any = PETSC_FALSE;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetRaster(f->grid, nb, NULL, NULL));
+  for (PetscInt b = 0; b < nb[0] * nb[1] * nb[2] && !any; b++) any = r1[b];
+  if (any) PetscCall(ReferenceLattice(f, r1));
   if (f->chVolRef >= 0) {
     PetscCall(PffGridHaloBegin(f->grid, f->chVolRef));
     PetscCall(PffGridHaloEnd(f->grid, f->chVolRef));

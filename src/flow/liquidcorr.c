@@ -57,9 +57,9 @@ static PetscErrorCode LiquidExcess(PffFlow f, PetscReal sums[3])
             if (r != 13 && ((info.holes >> r) & 1)) continue; /* a wall */
             if (!(*PffViewsAt(vls, ii, jj, kk, n) < 0)) interior = PETSC_FALSE;
           }
-          PetscReal w, wref;
-          PetscInt  nopen;
-          PffFlowCellVolumes_Private(vw, vr, vo, i, j, k, n, &w, &wref, &nopen);
+          PetscReal w = 0, wref = 0;
+          PetscInt  nopen = 0;
+          if (interior) PffFlowCellVolumes_Private(vw, vr, vo, i, j, k, n, &w, &wref, &nopen);
           /* a face inside the fluid has W_ref = 8 (the lattice's 8 particles per cell, of unit volume at their
              block's level, trilinear weights); a cell that a solid cuts deeply has a target of a few lattice
              particles, and s is their noise */
