@@ -126,6 +126,11 @@ PETSC_EXTERN PetscErrorCode PffFlowGetDiagnostics(PffFlow flow, PetscReal *umax,
 PETSC_EXTERN PetscErrorCode PffExtrapolateLiquidVelocity(PffGrid grid, PetscInt chU, PetscInt chPhiF, PetscInt chOpen,
                                                          PetscInt layers, PetscInt chMask, PetscInt chUl,
                                                          PetscInt64 *faces);
+/* The same for nf fields at once (chU[q] into chUl[q], 1 <= nf <= 2) on the shared mask: the result is the one of
+   nf separate calls, bit for bit, with one set of layers, mask exchanges and neighbour scans. Collective. */
+PETSC_EXTERN PetscErrorCode PffExtrapolateLiquidVelocities(PffGrid grid, PetscInt nf, const PetscInt chU[],
+                                                           PetscInt chPhiF, PetscInt chOpen, PetscInt layers,
+                                                           PetscInt chMask, const PetscInt chUl[], PetscInt64 *faces);
 
 /* Volumes of the two phases from the current cell phase field (as left by the last step, PffFlowSeed or
    PffFlowUpdateFields; not recomputed here): liquid = sum phi_c V_c and gas = sum (1 - phi_c) V_c over the

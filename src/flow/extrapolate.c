@@ -20,6 +20,11 @@
    (same level, same rank) then still sees it as invalid, as a copied ghost would. */
 #define PFF_EXTRAP_PENDING -1.0f
 
+/* Channels of one call: phi_f, open, mask, then (u, ul) per extrapolated field; every field shares the mask, so
+   that the layers, their halo exchanges of the mask and the neighbour scans are done once for all of them. */
+#define PFF_EXTRAP_MAXF 2
+#define PFF_EXTRAP_NCH(nf) (3 + 2 * (nf))
+
 typedef enum {
   PFF_EXTRAP_INIT,   /* layer 0: m = 1 on open liquid faces, ul = m u */
   PFF_EXTRAP_COMMIT, /* pending faces become valid */
@@ -27,25 +32,27 @@ typedef enum {
 } PffExtrapPass;
 
 /* A face-by-face pass over every owned face of every component. */
-static PetscErrorCode PffExtrapolatePass(PffGrid grid, const PetscInt ch[5], PetscInt nlocal, PffExtrapPass pass)
+static PetscErrorCode PffExtrapolatePass(PffGrid grid, const PetscInt ch[], PetscInt nf, PetscInt nlocal,
+                                         PffExtrapPass pass)
 {
   PetscFunctionBeginUser;
   for (PetscInt lb = 0; lb < nlocal; lb++)
     for (PetscInt d = 0; d < 3; d++) {
-      float   *a[5];
+      float   *a[PFF_EXTRAP_NCH(PFF_EXTRAP_MAXF)];
       PetscInt n3 = 0;
-      PetscCall(PffFlowGridBlockData_Private(grid, lb, d, 5, ch, a, &n3));
-      const float *u = a[0], *phi = a[1], *open = a[2];
-      float       *m = a[3], *ul = a[4];
+      PetscCall(PffFlowGridBlockData_Private(grid, lb, d, PFF_EXTRAP_NCH(nf), ch, a, &n3));
+      const float *phi = a[0], *open = a[1];
+      float       *m = a[2];
       for (PetscInt c = 0; c < n3; c++) {
         if (pass == PFF_EXTRAP_INIT) {
           const PetscBool valid = open[c] > 0 && phi[c] >= 0.5f;
           m[c]                  = valid ? 1.0f : 0.0f;
-          ul[c]                 = valid ? u[c] : 0.0f;
+          for (PetscInt q = 0; q < nf; q++) a[4 + 2 * q][c] = valid ? a[3 + 2 * q][c] : 0.0f;
           continue;
         }
         if (m[c] == PFF_EXTRAP_PENDING) m[c] = 1.0f;
-        if (pass == PFF_EXTRAP_LAST && m[c] == 0) ul[c] = open[c] > 0 ? u[c] : 0.0f;
+        if (pass == PFF_EXTRAP_LAST && m[c] == 0)
+          for (PetscInt q = 0; q < nf; q++) a[4 + 2 * q][c] = open[c] > 0 ? a[3 + 2 * q][c] : 0.0f;
       }
     }
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -68,89 +75,109 @@ static PetscBool PffExtrapolateBlockReached(const PffView *vm, const float *m, P
   return (PetscBool)(valid > 0);
 }
 
-/* One layer on component d of local block lb; ghosts of m and ul are current. Returns the faces it
+/* One layer on component d of local block lb; ghosts of m and of every ul are current. Returns the faces it
    made valid (marked pending). */
-static PetscErrorCode PffExtrapolateLayerBlock(PffGrid grid, const PetscInt ch[5], PetscInt lb, PetscInt d,
+static PetscErrorCode PffExtrapolateLayerBlock(PffGrid grid, const PetscInt ch[], PetscInt nf, PetscInt lb, PetscInt d,
                                                PetscInt *count)
 {
   PffBlockInfo   info;
-  const PffView *vm, *vu;
-  float         *a[5];
+  const PffView *vm, *vu[PFF_EXTRAP_MAXF];
+  float         *a[PFF_EXTRAP_NCH(PFF_EXTRAP_MAXF)];
   PetscInt       added = 0;
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetBlockInfo(grid, lb, &info));
-  PetscCall(PffFlowGridBlockData_Private(grid, lb, d, 5, ch, a, NULL));
-  PetscCall(PffGridGetBlockViews(grid, ch[3], lb, d, &vm));
-  PetscCall(PffGridGetBlockViews(grid, ch[4], lb, d, &vu));
-  const float   *open = a[2];
-  float         *m = a[3], *ul = a[4];
-  const PetscInt n = info.n;
+  PetscCall(PffFlowGridBlockData_Private(grid, lb, d, PFF_EXTRAP_NCH(nf), ch, a, NULL));
+  PetscCall(PffGridGetBlockViews(grid, ch[2], lb, d, &vm));
+  for (PetscInt q = 0; q < nf; q++) PetscCall(PffGridGetBlockViews(grid, ch[4 + 2 * q], lb, d, &vu[q]));
+  const float   *open = a[1];
+  float         *m    = a[2];
+  const PetscInt n    = info.n;
   if (!PffExtrapolateBlockReached(vm, m, n)) PetscFunctionReturn(PETSC_SUCCESS);
   for (PetscInt k = 0; k < n; k++)
     for (PetscInt j = 0; j < n; j++)
       for (PetscInt i = 0; i < n; i++) {
         const PetscInt c = i + n * (j + n * k);
         if (m[c] != 0 || !(open[c] > 0)) continue;
-        PetscReal sum = 0;
-        PetscInt  cnt = 0;
+        PetscReal sum[PFF_EXTRAP_MAXF] = {0};
+        PetscInt  cnt                  = 0;
         for (PetscInt q = 0; q < 6; q++) {
           const PetscInt  s = q % 2 ? 1 : -1, ax = q / 2;
           const PetscInt  ii = i + (ax == 0 ? s : 0), jj = j + (ax == 1 ? s : 0), kk = k + (ax == 2 ? s : 0);
           const PetscReal mq = *PffViewsAt(vm, ii, jj, kk, n);
           if (!(mq >= 0.5)) continue;
-          sum += (PetscReal)*PffViewsAt(vu, ii, jj, kk, n) / mq;
+          for (PetscInt f = 0; f < nf; f++) sum[f] += (PetscReal)*PffViewsAt(vu[f], ii, jj, kk, n) / mq;
           cnt++;
         }
         if (!cnt) continue;
-        ul[c] = (float)(sum / (PetscReal)cnt);
-        m[c]  = PFF_EXTRAP_PENDING;
+        for (PetscInt f = 0; f < nf; f++) a[4 + 2 * f][c] = (float)(sum[f] / (PetscReal)cnt);
+        m[c] = PFF_EXTRAP_PENDING;
         added++;
       }
   *count += added;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode PffExtrapolateLiquidVelocity(PffGrid grid, PetscInt chU, PetscInt chPhiF, PetscInt chOpen,
-                                            PetscInt layers, PetscInt chMask, PetscInt chUl, PetscInt64 *faces)
+PetscErrorCode PffExtrapolateLiquidVelocities(PffGrid grid, PetscInt nf, const PetscInt chU[], PetscInt chPhiF,
+                                              PetscInt chOpen, PetscInt layers, PetscInt chMask, const PetscInt chUl[],
+                                              PetscInt64 *faces)
 {
-  const PetscInt ch[5] = {chU, chPhiF, chOpen, chMask, chUl};
-  PetscInt       nlocal, added = 0;
-  MPI_Comm       comm;
+  PetscInt ch[PFF_EXTRAP_NCH(PFF_EXTRAP_MAXF)], nlocal, added = 0;
+  MPI_Comm comm;
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetComm(grid, &comm));
   PetscCheck(layers >= 0, comm, PETSC_ERR_ARG_OUTOFRANGE, "extrapolation layers %" PetscInt_FMT " must be >= 0",
              layers);
-  for (PetscInt k = 0; k < 5; k++) {
+  PetscCheck(nf >= 1 && nf <= PFF_EXTRAP_MAXF, comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "extrapolation of %" PetscInt_FMT " fields: 1 to %d at once", nf, PFF_EXTRAP_MAXF);
+  ch[0] = chPhiF;
+  ch[1] = chOpen;
+  ch[2] = chMask;
+  for (PetscInt q = 0; q < nf; q++) {
+    ch[3 + 2 * q] = chU[q];
+    ch[4 + 2 * q] = chUl[q];
+  }
+  for (PetscInt k = 0; k < PFF_EXTRAP_NCH(nf); k++) {
     const char    *name;
     PffChannelKind kind;
     PetscCall(PffGridGetChannelInfo(grid, ch[k], &name, &kind, NULL, NULL));
     PetscCheck(kind == PFF_CHANNEL_FACE, comm, PETSC_ERR_ARG_WRONG, "extrapolation channel %s must be a face channel",
                name);
   }
-  PetscCheck(chMask != chUl && chUl != chU, comm, PETSC_ERR_ARG_WRONG,
-             "extrapolation needs distinct mask, source and result channels");
+  for (PetscInt q = 0; q < nf; q++) {
+    PetscBool distinct = (PetscBool)(chMask != chUl[q] && chUl[q] != chU[q]);
+    for (PetscInt r = 0; r < q; r++) distinct = (PetscBool)(distinct && chUl[r] != chUl[q]);
+    PetscCheck(distinct, comm, PETSC_ERR_ARG_WRONG, "extrapolation needs distinct mask, source and result channels");
+  }
   PetscCall(PetscLogEventBegin(PFF_FlowExtrap, 0, 0, 0, 0));
   PetscCall(PffGridGetLocalBlocks(grid, &nlocal));
-  PetscCall(PffExtrapolatePass(grid, ch, nlocal, PFF_EXTRAP_INIT));
+  PetscCall(PffExtrapolatePass(grid, ch, nf, nlocal, PFF_EXTRAP_INIT));
   for (PetscInt l = 1; l <= layers; l++) {
     PetscCall(PffGridHaloBegin(grid, chMask));
-    PetscCall(PffGridHaloBegin(grid, chUl));
+    for (PetscInt q = 0; q < nf; q++) PetscCall(PffGridHaloBegin(grid, chUl[q]));
     PetscCall(PffGridHaloEnd(grid, chMask));
-    PetscCall(PffGridHaloEnd(grid, chUl));
+    for (PetscInt q = 0; q < nf; q++) PetscCall(PffGridHaloEnd(grid, chUl[q]));
     for (PetscInt lb = 0; lb < nlocal; lb++)
-      for (PetscInt d = 0; d < 3; d++) PetscCall(PffExtrapolateLayerBlock(grid, ch, lb, d, &added));
-    PetscCall(PffExtrapolatePass(grid, ch, nlocal, l == layers ? PFF_EXTRAP_LAST : PFF_EXTRAP_COMMIT));
+      for (PetscInt d = 0; d < 3; d++) PetscCall(PffExtrapolateLayerBlock(grid, ch, nf, lb, d, &added));
+    PetscCall(PffExtrapolatePass(grid, ch, nf, nlocal, l == layers ? PFF_EXTRAP_LAST : PFF_EXTRAP_COMMIT));
   }
-  if (layers == 0) PetscCall(PffExtrapolatePass(grid, ch, nlocal, PFF_EXTRAP_LAST));
-  PetscCall(PffGridHaloBegin(grid, chUl));
-  PetscCall(PffGridHaloEnd(grid, chUl));
+  if (layers == 0) PetscCall(PffExtrapolatePass(grid, ch, nf, nlocal, PFF_EXTRAP_LAST));
+  for (PetscInt q = 0; q < nf; q++) PetscCall(PffGridHaloBegin(grid, chUl[q]));
+  for (PetscInt q = 0; q < nf; q++) PetscCall(PffGridHaloEnd(grid, chUl[q]));
   PetscCall(PetscLogEventEnd(PFF_FlowExtrap, 0, 0, 0, 0));
   if (faces) {
     PetscInt64 g = added;
     PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &g, 1, MPIU_INT64, MPI_SUM, comm));
     *faces = g;
   }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffExtrapolateLiquidVelocity(PffGrid grid, PetscInt chU, PetscInt chPhiF, PetscInt chOpen,
+                                            PetscInt layers, PetscInt chMask, PetscInt chUl, PetscInt64 *faces)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffExtrapolateLiquidVelocities(grid, 1, &chU, chPhiF, chOpen, layers, chMask, &chUl, faces));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

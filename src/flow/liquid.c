@@ -160,11 +160,12 @@ PetscErrorCode PffFlowLiquidProject_Private(PffFlow f, PetscReal dt, PffPressure
 
 PetscErrorCode PffFlowLiquidG2P_Private(PffFlow f, const PetscReal alpha[])
 {
+  /* the velocity and its change on one set of layers (they share the liquid faces) */
+  const PetscInt src[2] = {f->chU, f->chUt}, dst[2] = {f->chUl, f->chDuL};
+
   PetscFunctionBeginUser;
   PetscCall(
-      PffExtrapolateLiquidVelocity(f->grid, f->chU, f->chPhiF, f->chOpen, f->extrapLayers, f->chUlMask, f->chUl, NULL));
-  PetscCall(PffExtrapolateLiquidVelocity(f->grid, f->chUt, f->chPhiF, f->chOpen, f->extrapLayers, f->chUlMask, f->chDuL,
-                                         NULL));
+      PffExtrapolateLiquidVelocities(f->grid, 2, src, f->chPhiF, f->chOpen, f->extrapLayers, f->chUlMask, dst, NULL));
   if (f->bodies) {
     PetscCall(BodyFaceVelocities(f, f->chUl));
     PetscCall(PffGridHaloBegin(f->grid, f->chUl));

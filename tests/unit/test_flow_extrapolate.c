@@ -15,10 +15,12 @@
        liquid velocity linear in x every value is finite and inside the range of the liquid faces'
        values, widened by half a coarse cell of slope (where the grid extrapolates ghosts linearly). With one
        layer the lowest coarse x-faces above the fine slab, whose ghost below has mask exactly 1/2, take UL.
+   (d) Two fields at once (PffExtrapolateLiquidVelocities) equal two separate calls bit for bit.
 
    Sample run:  mpiexec -n 4 ./test_flow_extrapolate
    Prints the same lines on any number of ranks. */
 #include "pfftest.h"
+#include <string.h>
 
 static const char help[] = "Liquid-velocity extrapolation into the air (Sec. 3.7).\n";
 
@@ -441,6 +443,79 @@ static PetscErrorCode TestLevels(MPI_Comm comm)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Owned faces of face channel src into dst, or (cmp) the number of owned faces where they differ in any bit. */
+static PetscErrorCode CopyOrCompare(const PffTestCtx *t, PetscInt src, PetscInt dst, PetscBool cmp, PetscInt64 *ndiff)
+{
+  PetscFunctionBeginUser;
+  for (PetscInt lb = 0; lb < t->nlocal; lb++)
+    for (PetscInt d = 0; d < 3; d++) {
+      PffBlockInfo info;
+      float       *a, *b;
+      PetscCall(PffGridGetBlockInfo(t->grid, lb, &info));
+      PetscCall(PffGridGetBlockData(t->grid, src, lb, d, &a));
+      PetscCall(PffGridGetBlockData(t->grid, dst, lb, d, &b));
+      const PetscInt n3 = info.n * info.n * info.n;
+      if (!cmp)
+        PetscCall(PetscArraycpy(b, a, n3));
+      else
+        for (PetscInt c = 0; c < n3; c++) *ndiff += memcmp(&a[c], &b[c], sizeof(float)) != 0;
+    }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* (d) Two fields at once (PffExtrapolateLiquidVelocities, as the liquid model extrapolates u and its change): on
+   the two-level grid, a liquid velocity linear in x and one linear in every coordinate give, bit for bit, what two
+   separate calls give, and the same count of extrapolated faces. */
+static PetscErrorCode TestTwoFields(MPI_Comm comm)
+{
+  const PetscInt layers = 3;
+  PffTestCtx     t;
+  Channels       ch;
+  PetscInt       u2, ul2, ref[2];
+  PetscInt64     bad = 0, total = 0, faces[2], fused;
+
+  PetscFunctionBeginUser;
+  PetscCall(CreateTwoLevelGrid(comm, &t));
+  PetscCall(AddChannels(t.grid, &ch));
+  PetscCall(PffGridAddChannel(t.grid, "u2", PFF_CHANNEL_FACE, 2, &u2));
+  PetscCall(PffGridAddChannel(t.grid, "u2_liquid", PFF_CHANNEL_FACE, 2, &ul2));
+  PetscCall(PffGridAddChannel(t.grid, "ref1", PFF_CHANNEL_FACE, 1, &ref[0]));
+  PetscCall(PffGridAddChannel(t.grid, "ref2", PFF_CHANNEL_FACE, 1, &ref[1]));
+  Scene s1 = {&t, REGION_SLAB, VEL_LINEAR_X, 0.47}, s2 = {&t, REGION_SLAB, VEL_LINEAR, 0.47};
+  /* the separate calls (the same liquid faces: only the velocity differs) */
+  PetscCall(Extrapolate(&t, &s2, &ch, layers, &faces[1]));
+  PetscCall(CopyOrCompare(&t, ch.ul, ref[1], PETSC_FALSE, NULL));
+  PetscCall(Extrapolate(&t, &s1, &ch, layers, &faces[0]));
+  PetscCall(CopyOrCompare(&t, ch.ul, ref[0], PETSC_FALSE, NULL));
+  /* the fused call: ch.u holds field 1, u2 field 2 */
+  PetscCall(PffGridFillChannel(t.grid, u2, FillU, &s2));
+  PetscCall(PffGridHaloBegin(t.grid, u2));
+  PetscCall(PffGridHaloEnd(t.grid, u2));
+  PetscCall(PffGridFillChannel(t.grid, ch.ul, FillU, &s2)); /* stale values that the call must overwrite */
+  {
+    const PetscInt src[2] = {ch.u, u2}, dst[2] = {ch.ul, ul2};
+    PetscCall(PffExtrapolateLiquidVelocities(t.grid, 2, src, ch.phi, ch.open, layers, ch.mask, dst, &fused));
+  }
+  PetscCall(CopyOrCompare(&t, ch.ul, ref[0], PETSC_TRUE, &bad));
+  PetscCall(CopyOrCompare(&t, ul2, ref[1], PETSC_TRUE, &bad));
+  for (PetscInt lb = 0; lb < t.nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(t.grid, lb, &info));
+    total += 6 * info.n * info.n * info.n;
+  }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &bad, 1, MPIU_INT64, MPI_SUM, comm));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &total, 1, MPIU_INT64, MPI_SUM, comm));
+  PetscCall(PetscPrintf(comm,
+                        "two fields at once: %" PetscInt64_FMT " of %" PetscInt64_FMT
+                        " faces differ from two separate calls; %" PetscInt64_FMT
+                        " faces extrapolated (%" PetscInt64_FMT " and %" PetscInt64_FMT " separately)\n",
+                        bad, total, fused, faces[0], faces[1]));
+  PetscCheck(bad == 0, comm, PETSC_ERR_PLIB, "%" PetscInt64_FMT " faces differ from two separate calls", bad);
+  PetscCheck(fused == faces[0] && fused == faces[1], comm, PETSC_ERR_PLIB, "extrapolated face counts differ");
+  PetscCall(PffGridDestroy(&t.grid));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 int main(int argc, char **argv)
 {
   PetscCall(PetscInitialize(&argc, &argv, NULL, help));
@@ -448,6 +523,7 @@ int main(int argc, char **argv)
   PetscCall(TestSlab(PETSC_COMM_WORLD));
   PetscCall(TestRule(PETSC_COMM_WORLD));
   PetscCall(TestLevels(PETSC_COMM_WORLD));
+  PetscCall(TestTwoFields(PETSC_COMM_WORLD));
   PetscCall(PetscFinalize());
   return 0;
 }
