@@ -119,6 +119,27 @@ static inline void PffFlowCellVolumes_Private(const PffView *vw[3], const PffVie
   if (nopen) *nopen = no;
 }
 
+/* The face neighbours of cell (i, j, k) of an n^3 block that are walls (across the block's holes) or whose value in the
+   cell view v is >= thr (above) or < thr (!above): the liquid model's tests of an enclosed void and of an interior
+   cell. */
+static inline PetscInt PffFlowFaceNeighbours_Private(const PffBlockInfo *info, const PffView *v, PetscInt i, PetscInt j,
+                                                     PetscInt k, PetscInt n, float thr, PetscBool above)
+{
+  const PetscInt d[6][3] = {{-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
+  PetscInt       cnt     = 0;
+  for (PetscInt q = 0; q < 6; q++) {
+    const PetscInt ii = i + d[q][0], jj = j + d[q][1], kk = k + d[q][2];
+    const PetscInt r = PffRegionIndex(ii, jj, kk, n);
+    if (r != 13 && ((info->holes >> r) & 1))
+      cnt++;
+    else {
+      const float val = *PffViewsAt(v, ii, jj, kk, n);
+      cnt += above ? val >= thr : val < thr;
+    }
+  }
+  return cnt;
+}
+
 /* adapt.c */
 PETSC_INTERN PetscErrorCode PffFlowAdaptSetUp_Private(PffFlow);
 PETSC_INTERN PetscErrorCode PffFlowAdaptDestroy_Private(PffFlow);
@@ -137,7 +158,7 @@ PETSC_INTERN PetscErrorCode PffFlowReferenceBodies_Private(PffFlow);
 PETSC_INTERN PetscErrorCode PffFlowVolumeCorrection_Private(PffFlow, PffFlowStepStats *);
 PETSC_INTERN PetscErrorCode PffFlowCorrectionVelocity_Private(PffFlow, PetscReal dt, PetscBool extrapolated);
 /* liquidcorr.c */
-PETSC_INTERN PetscErrorCode PffFlowLiquidCorrection_Private(PffFlow, PetscReal dt, PffFlowStepStats *);
+PETSC_INTERN PetscErrorCode PffFlowLiquidCorrection_Private(PffFlow, PetscReal dt);
 /* fields.c */
 PETSC_INTERN PetscErrorCode PffFlowFaceVelocity_Private(PffFlow, PetscReal dt);
 PETSC_INTERN PetscErrorCode PffFlowOpenFaces_Private(PffFlow);

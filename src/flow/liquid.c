@@ -58,17 +58,8 @@ static PetscErrorCode PffFlowLevelSet(PffFlow f)
             continue;
           }
           if (phi[c] >= 0.5f) continue;
-          PetscInt liquid = 0;
-          for (PetscInt q = 0; q < 6; q++) {
-            const PetscInt ii = i + d[q][0], jj = j + d[q][1], kk = k + d[q][2];
-            const PetscInt r = PffRegionIndex(ii, jj, kk, n);
-            /* a wall counts as liquid: a void against a wall is enclosed too */
-            if (r != 13 && ((info.holes >> r) & 1))
-              liquid++;
-            else if (*PffViewsAt(v, ii, jj, kk, n) >= 0.5f)
-              liquid++;
-          }
-          if (liquid >= 5) ls[c] = -0.125f * s2;
+          /* a wall counts as liquid: a void against a wall is enclosed too */
+          if (PffFlowFaceNeighbours_Private(&info, v, i, j, k, n, 0.5f, PETSC_TRUE) >= 5) ls[c] = -0.125f * s2;
         }
   }
   PetscFunctionReturn(PETSC_SUCCESS);

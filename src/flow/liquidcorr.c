@@ -26,8 +26,7 @@
 /* e = s - 1 of the interior cells into chCdiv, PFF_LIQCORR_FREE elsewhere; counts and sums of e for the log */
 static PetscErrorCode LiquidExcess(PffFlow f, PetscReal sums[3])
 {
-  const PetscInt d6[6][3] = {{-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
-  PetscInt       nlocal;
+  PetscInt nlocal;
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
@@ -49,14 +48,10 @@ static PetscErrorCode LiquidExcess(PffFlow f, PetscReal sums[3])
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt j = 0; j < n; j++)
         for (PetscInt i = 0; i < n; i++) {
-          const PetscInt c        = i + n * (j + n * k);
-          PetscBool      interior = (PetscBool)(*PffViewsAt(vls, i, j, k, n) < 0 && !(sd && sd[c] < 0));
-          for (PetscInt q = 0; q < 6 && interior; q++) {
-            const PetscInt ii = i + d6[q][0], jj = j + d6[q][1], kk = k + d6[q][2];
-            const PetscInt r = PffRegionIndex(ii, jj, kk, n);
-            if (r != 13 && ((info.holes >> r) & 1)) continue; /* a wall */
-            if (!(*PffViewsAt(vls, ii, jj, kk, n) < 0)) interior = PETSC_FALSE;
-          }
+          const PetscInt  c = i + n * (j + n * k);
+          const PetscBool interior =
+              (PetscBool)(*PffViewsAt(vls, i, j, k, n) < 0 && !(sd && sd[c] < 0) &&
+                          PffFlowFaceNeighbours_Private(&info, vls, i, j, k, n, 0, PETSC_FALSE) == 6);
           PetscReal w = 0, wref = 0;
           PetscInt  nopen = 0;
           if (interior) PffFlowCellVolumes_Private(vw, vr, vo, i, j, k, n, &w, &wref, &nopen);
@@ -117,12 +112,11 @@ static PetscErrorCode LiquidDisplacement(PffFlow f, PetscReal dt)
 
 /* After the liquid model's G2P (chUl holds the extrapolated liquid velocity): chUa, the liquid's advection
    velocity with the displacement. Collective. */
-PetscErrorCode PffFlowLiquidCorrection_Private(PffFlow f, PetscReal dt, PffFlowStepStats *st)
+PetscErrorCode PffFlowLiquidCorrection_Private(PffFlow f, PetscReal dt)
 {
   PetscReal sums[3] = {0, 0, 0};
 
   PetscFunctionBeginUser;
-  (void)st;
   PetscCall(PffGridHaloBegin(f->grid, f->chVol));
   PetscCall(PffGridHaloEnd(f->grid, f->chVol));
   PetscCall(PffGridHaloBegin(f->grid, f->chLS));

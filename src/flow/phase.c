@@ -48,7 +48,7 @@ static PetscErrorCode PffFlowCellPhase(PffFlow f, PetscInt nlocal, PetscBool bul
             const PetscReal ohi  = *PffViewsAt(vopen[d], i + e[0], j + e[1], k + e[2], n);
             sum += olo * lo + ohi * hi;
             w += olo + ohi;
-            if (olo + ohi > 0) {
+            if (perAxis && olo + ohi > 0) {
               axes += (olo * lo + ohi * hi) / (olo + ohi);
               naxes++;
             }

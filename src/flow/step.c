@@ -265,7 +265,7 @@ PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
     if (f->chVol >= 0) {
       PetscCall(PffStageBegin(PFF_STAGE_CORRECTION, &t0));
       if (f->model == PFF_FLOW_LIQUID)
-        PetscCall(PffFlowLiquidCorrection_Private(f, dt, st));
+        PetscCall(PffFlowLiquidCorrection_Private(f, dt));
       else
         PetscCall(PffFlowVolumeCorrection_Private(f, st));
       PetscCall(PffStageEnd(st, PFF_STAGE_CORRECTION, t0));
