@@ -121,16 +121,21 @@ PETSC_EXTERN PetscErrorCode PffFlowGetDiagnostics(PffFlow flow, PetscReal *umax,
    the previous layer only) takes their mean; the remaining faces copy chU, closed faces (chOpen 0) get 0.
    Across a level boundary an interpolated neighbour counts as valid when its interpolated mask is >= 1/2
    and contributes the mean of its valid sources. chMask (any width) is scratch; chUl's halo is current
-   on return. faces (may be NULL) receives the global number of faces extrapolated. The flow calls it
-   in the Advect stage; exposed for tests. Collective. */
+   on return. chWork (-1 for none) is a scratch face channel of width 1 the layers run on, whose result is
+   then copied into chUl: a layer reads one ghost face, and a wide chUl (the advection's width) would
+   exchange its whole halo at every layer; the result is the same bit for bit. faces (may be NULL)
+   receives the global number of faces extrapolated. The flow calls it in the Advect stage; exposed for
+   tests. Collective. */
 PETSC_EXTERN PetscErrorCode PffExtrapolateLiquidVelocity(PffGrid grid, PetscInt chU, PetscInt chPhiF, PetscInt chOpen,
                                                          PetscInt layers, PetscInt chMask, PetscInt chUl,
-                                                         PetscInt64 *faces);
-/* The same for nf fields at once (chU[q] into chUl[q], 1 <= nf <= 2) on the shared mask: the result is the one of
-   nf separate calls, bit for bit, with one set of layers, mask exchanges and neighbour scans. Collective. */
+                                                         PetscInt chWork, PetscInt64 *faces);
+/* The same for nf fields at once (chU[q] into chUl[q], 1 <= nf <= 2, chWork NULL or one entry per field) on the
+   shared mask: the result is the one of nf separate calls, bit for bit, with one set of layers, mask exchanges
+   and neighbour scans. Collective. */
 PETSC_EXTERN PetscErrorCode PffExtrapolateLiquidVelocities(PffGrid grid, PetscInt nf, const PetscInt chU[],
                                                            PetscInt chPhiF, PetscInt chOpen, PetscInt layers,
-                                                           PetscInt chMask, const PetscInt chUl[], PetscInt64 *faces);
+                                                           PetscInt chMask, const PetscInt chUl[],
+                                                           const PetscInt chWork[], PetscInt64 *faces);
 
 /* Volumes of the two phases from the current cell phase field (as left by the last step, PffFlowSeed or
    PffFlowUpdateFields; not recomputed here): liquid = sum phi_c V_c and gas = sum (1 - phi_c) V_c over the

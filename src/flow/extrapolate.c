@@ -118,11 +118,30 @@ static PetscErrorCode PffExtrapolateLayerBlock(PffGrid grid, const PetscInt ch[]
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* The layers' result from the work channels into the results (owned faces; the caller's exchange does the rest). */
+static PetscErrorCode PffExtrapolateCopyWork(PffGrid grid, PetscInt nf, const PetscInt ch[], const PetscInt chUl[],
+                                             PetscInt nlocal)
+{
+  PetscFunctionBeginUser;
+  for (PetscInt q = 0; q < nf; q++) {
+    if (ch[4 + 2 * q] == chUl[q]) continue;
+    for (PetscInt lb = 0; lb < nlocal; lb++)
+      for (PetscInt d = 0; d < 3; d++) {
+        const PetscInt pair[2] = {ch[4 + 2 * q], chUl[q]};
+        float         *a[2];
+        PetscInt       n3 = 0;
+        PetscCall(PffFlowGridBlockData_Private(grid, lb, d, 2, pair, a, &n3));
+        PetscCall(PetscArraycpy(a[1], a[0], n3));
+      }
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffExtrapolateLiquidVelocities(PffGrid grid, PetscInt nf, const PetscInt chU[], PetscInt chPhiF,
                                               PetscInt chOpen, PetscInt layers, PetscInt chMask, const PetscInt chUl[],
-                                              PetscInt64 *faces)
+                                              const PetscInt chWork[], PetscInt64 *faces)
 {
-  PetscInt ch[PFF_EXTRAP_NCH(PFF_EXTRAP_MAXF)], nlocal, added = 0;
+  PetscInt ch[PFF_EXTRAP_NCH(PFF_EXTRAP_MAXF)], nlocal, added = 0, nwork = 0;
   MPI_Comm comm;
 
   PetscFunctionBeginUser;
@@ -135,8 +154,10 @@ PetscErrorCode PffExtrapolateLiquidVelocities(PffGrid grid, PetscInt nf, const P
   ch[1] = chOpen;
   ch[2] = chMask;
   for (PetscInt q = 0; q < nf; q++) {
-    ch[3 + 2 * q] = chU[q];
-    ch[4 + 2 * q] = chUl[q];
+    const PetscBool work = (PetscBool)(chWork && chWork[q] >= 0);
+    ch[3 + 2 * q]        = chU[q];
+    ch[4 + 2 * q]        = work ? chWork[q] : chUl[q];
+    nwork += work;
   }
   for (PetscInt k = 0; k < PFF_EXTRAP_NCH(nf); k++) {
     const char    *name;
@@ -146,23 +167,27 @@ PetscErrorCode PffExtrapolateLiquidVelocities(PffGrid grid, PetscInt nf, const P
                name);
   }
   for (PetscInt q = 0; q < nf; q++) {
-    PetscBool distinct = (PetscBool)(chMask != chUl[q] && chUl[q] != chU[q]);
-    for (PetscInt r = 0; r < q; r++) distinct = (PetscBool)(distinct && chUl[r] != chUl[q]);
-    PetscCheck(distinct, comm, PETSC_ERR_ARG_WRONG, "extrapolation needs distinct mask, source and result channels");
+    PetscBool distinct =
+        (PetscBool)(chMask != chUl[q] && chUl[q] != chU[q] && ch[4 + 2 * q] != chMask && ch[4 + 2 * q] != chU[q]);
+    for (PetscInt r = 0; r < nf; r++)
+      if (r != q) distinct = (PetscBool)(distinct && chUl[r] != chUl[q] && ch[4 + 2 * r] != ch[4 + 2 * q]);
+    PetscCheck(distinct, comm, PETSC_ERR_ARG_WRONG,
+               "extrapolation needs distinct mask, source, result and work channels");
   }
   PetscCall(PetscLogEventBegin(PFF_FlowExtrap, 0, 0, 0, 0));
   PetscCall(PffGridGetLocalBlocks(grid, &nlocal));
   PetscCall(PffExtrapolatePass(grid, ch, nf, nlocal, PFF_EXTRAP_INIT));
   for (PetscInt l = 1; l <= layers; l++) {
     PetscCall(PffGridHaloBegin(grid, chMask));
-    for (PetscInt q = 0; q < nf; q++) PetscCall(PffGridHaloBegin(grid, chUl[q]));
+    for (PetscInt q = 0; q < nf; q++) PetscCall(PffGridHaloBegin(grid, ch[4 + 2 * q]));
     PetscCall(PffGridHaloEnd(grid, chMask));
-    for (PetscInt q = 0; q < nf; q++) PetscCall(PffGridHaloEnd(grid, chUl[q]));
+    for (PetscInt q = 0; q < nf; q++) PetscCall(PffGridHaloEnd(grid, ch[4 + 2 * q]));
     for (PetscInt lb = 0; lb < nlocal; lb++)
       for (PetscInt d = 0; d < 3; d++) PetscCall(PffExtrapolateLayerBlock(grid, ch, nf, lb, d, &added));
     PetscCall(PffExtrapolatePass(grid, ch, nf, nlocal, l == layers ? PFF_EXTRAP_LAST : PFF_EXTRAP_COMMIT));
   }
   if (layers == 0) PetscCall(PffExtrapolatePass(grid, ch, nf, nlocal, PFF_EXTRAP_LAST));
+  if (nwork) PetscCall(PffExtrapolateCopyWork(grid, nf, ch, chUl, nlocal));
   for (PetscInt q = 0; q < nf; q++) PetscCall(PffGridHaloBegin(grid, chUl[q]));
   for (PetscInt q = 0; q < nf; q++) PetscCall(PffGridHaloEnd(grid, chUl[q]));
   PetscCall(PetscLogEventEnd(PFF_FlowExtrap, 0, 0, 0, 0));
@@ -175,9 +200,10 @@ PetscErrorCode PffExtrapolateLiquidVelocities(PffGrid grid, PetscInt nf, const P
 }
 
 PetscErrorCode PffExtrapolateLiquidVelocity(PffGrid grid, PetscInt chU, PetscInt chPhiF, PetscInt chOpen,
-                                            PetscInt layers, PetscInt chMask, PetscInt chUl, PetscInt64 *faces)
+                                            PetscInt layers, PetscInt chMask, PetscInt chUl, PetscInt chWork,
+                                            PetscInt64 *faces)
 {
   PetscFunctionBeginUser;
-  PetscCall(PffExtrapolateLiquidVelocities(grid, 1, &chU, chPhiF, chOpen, layers, chMask, &chUl, faces));
+  PetscCall(PffExtrapolateLiquidVelocities(grid, 1, &chU, chPhiF, chOpen, layers, chMask, &chUl, &chWork, faces));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

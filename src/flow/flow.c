@@ -37,7 +37,7 @@ PetscErrorCode PffFlowCreate(PffGrid grid, PffFlow *flow)
   f->adapt.imbalance          = PFF_FLOW_ADAPT_IMBALANCE_DEFAULT;
   f->chMass = f->chMassRef = f->chUt = f->chU = f->chPhiF = f->chBeta = f->chOpen = f->chPhi = f->chP = f->chCdiv =
       f->chVort                                                                                       = -1;
-  f->chUl = f->chUlMask = f->chVol = f->chVolRef = f->chQ = f->chUa = -1;
+  f->chUl = f->chUlMask = f->chUlWork = f->chVol = f->chVolRef = f->chQ = f->chUa = -1;
   f->chLS = f->chDuL = f->chSolidD = f->chLSs = f->chTallH = -1;
   f->model                                                 = PFF_FLOW_TWO_PHASE;
   PetscCall(PffParticlesCreate(grid, &f->part));
@@ -231,6 +231,13 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
     PetscCall(PffGridAddChannel(f->grid, "extrap_mask", PFF_CHANNEL_FACE, 1, &f->chUlMask));
     PetscCall(PffGridSetChannelOutput(f->grid, f->chUl, PETSC_FALSE));
     PetscCall(PffGridSetChannelOutput(f->grid, f->chUlMask, PETSC_FALSE));
+    /* the layers then exchange one ghost face, not the advection's width (extrapolate.c): across level boundaries
+       every ghost is interpolated, and the wider halo cost the dam break on its quadtree a quarter of its
+       extrapolation time; on one level the halo is mostly read in place, and the copy costs what it saves */
+    if (width > 1 && nlevels > 1) {
+      PetscCall(PffGridAddChannel(f->grid, "extrap_work", PFF_CHANNEL_FACE, 1, &f->chUlWork));
+      PetscCall(PffGridSetChannelOutput(f->grid, f->chUlWork, PETSC_FALSE));
+    }
   }
   if (f->model == PFF_FLOW_LIQUID) {
     PetscCall(PffGridAddChannel(f->grid, "levelset", PFF_CHANNEL_CELL, 1, &f->chLS));
@@ -282,8 +289,8 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
     PetscCall(PffGridSetChannelOutput(f->grid, hidden[k], PETSC_FALSE));
   /* what an adapt need not move: every step recomputes it from the particles, or PffFlowReset does */
   /* (mass_ref and volume_ref move: a reset makes them again only where the levels changed) */
-  const PetscInt scratch[] = {f->chMass, f->chUt,   f->chPhiF, f->chBeta,  f->chOpen,
-                              f->chVol,  f->chCdiv, f->chQ,    f->chUlMask};
+  const PetscInt scratch[] = {f->chMass, f->chUt,   f->chPhiF, f->chBeta,   f->chOpen,
+                              f->chVol,  f->chCdiv, f->chQ,    f->chUlMask, f->chUlWork};
   for (size_t k = 0; k < PETSC_STATIC_ARRAY_LENGTH(scratch); k++)
     if (scratch[k] >= 0) PetscCall(PffGridSetChannelTransfer(f->grid, scratch[k], PFF_TRANSFER_NONE));
   PetscCall(PffParticlesGetKernelSum(f->part, &f->rho0));

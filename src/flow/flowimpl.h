@@ -54,6 +54,7 @@ struct _n_PffFlow {
   /* channels */
   PetscInt chMass, chMassRef, chUt, chU, chPhiF, chBeta, chOpen, chPhi, chP, chCdiv, chVort;
   PetscInt chUl, chUlMask; /* liquid velocity extrapolated into the air and its validity (only with layers > 0) */
+  PetscInt chUlWork;       /* width-1 scratch of the extrapolation's layers when chUl is wider, else -1 */
   PetscInt chVol, chVolRef, chQ, chUa; /* volume weights, their lattice target, correction potential, gas advection */
   PetscInt extrapLayers;               /* -flow_extrapolate_layers (Sec. 3.7) */
   PetscInt uWidth;

@@ -152,11 +152,11 @@ PetscErrorCode PffFlowLiquidProject_Private(PffFlow f, PetscReal dt, PffPressure
 PetscErrorCode PffFlowLiquidG2P_Private(PffFlow f, const PetscReal alpha[])
 {
   /* the velocity and its change on one set of layers (they share the liquid faces) */
-  const PetscInt src[2] = {f->chU, f->chUt}, dst[2] = {f->chUl, f->chDuL};
+  const PetscInt src[2] = {f->chU, f->chUt}, dst[2] = {f->chUl, f->chDuL}, work[2] = {f->chUlWork, -1};
 
   PetscFunctionBeginUser;
-  PetscCall(
-      PffExtrapolateLiquidVelocities(f->grid, 2, src, f->chPhiF, f->chOpen, f->extrapLayers, f->chUlMask, dst, NULL));
+  PetscCall(PffExtrapolateLiquidVelocities(f->grid, 2, src, f->chPhiF, f->chOpen, f->extrapLayers, f->chUlMask, dst,
+                                           work, NULL));
   if (f->bodies) {
     PetscCall(BodyFaceVelocities(f, f->chUl));
     PetscCall(PffGridHaloBegin(f->grid, f->chUl));

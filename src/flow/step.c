@@ -168,7 +168,7 @@ static PetscErrorCode PffFlowAdvect(PffFlow f, PetscReal dt, PffFlowStepStats *s
   } else if (f->chUlMask >= 0) {
     PetscInt64 faces = 0;
     PetscCall(PffExtrapolateLiquidVelocity(f->grid, f->chU, f->chPhiF, f->chOpen, f->extrapLayers, f->chUlMask, f->chUl,
-                                           &faces));
+                                           f->chUlWork, &faces));
     PetscCall(PetscInfo(NULL, "liquid velocity extrapolated to %" PetscInt64_FMT " air faces\n", faces));
     ch[PFF_PARTICLE_LIQUID] = f->chUl;
     extrapolated            = PETSC_TRUE;
@@ -243,14 +243,19 @@ PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
       PetscCall(PffPressureCheckSolve(f->press, &st->pressure, "Pressure", f->step + 1, f->t,
                                       "raise -pressure_ksp_max_it or loosen -pressure_ksp_rtol"));
     }
-    PetscCall(PffGridHaloBegin(f->grid, f->chU));
-    PetscCall(PffGridHaloEnd(f->grid, f->chU));
+    /* the liquid model reads u and its change on owned faces only: its extrapolation exchanges the results */
+    if (f->model != PFF_FLOW_LIQUID) {
+      PetscCall(PffGridHaloBegin(f->grid, f->chU));
+      PetscCall(PffGridHaloEnd(f->grid, f->chU));
+    }
     PetscCall(PffStageEnd(st, PFF_STAGE_PRESSURE, t0));
 
     PetscCall(PffStageBegin(PFF_STAGE_G2P, &t0));
     PetscCall(PffFlowVelocityChange_Private(f));
-    PetscCall(PffGridHaloBegin(f->grid, f->chUt));
-    PetscCall(PffGridHaloEnd(f->grid, f->chUt));
+    if (f->model != PFF_FLOW_LIQUID) {
+      PetscCall(PffGridHaloBegin(f->grid, f->chUt));
+      PetscCall(PffGridHaloEnd(f->grid, f->chUt));
+    }
     PetscCall(PffFlowFlipRatios_Private(f, dt, alpha));
     if (f->model == PFF_FLOW_LIQUID)
       PetscCall(PffFlowLiquidG2P_Private(f, alpha));

@@ -15,6 +15,9 @@
    owners, so the global sum is unchanged. Plans are built once per raster and shared by channels. */
 #include "gridimpl.h"
 
+/* A ghost box spans at most a block (64 cells) along an axis, or the halo width across it. */
+#define PFF_HALO_MAX_EXTENT 64
+
 /* Per-axis interpolation stencil in the coarser neighbour: first index and weight of the second. */
 static inline void PffCoarseStencil(PetscInt i, PetscReal o, PetscInt shift, PetscInt nn, PetscInt *i0, PetscReal *t)
 {
@@ -91,6 +94,7 @@ static PetscErrorCode PffHaloPlanBuild(PffGrid g, PffHaloPlan *p)
           x.glo[a] = d[a] < 0 ? -w : (d[a] > 0 ? n : 0);
           x.gn[a]  = d[a] ? w : n;
           gsz *= x.gn[a];
+          PetscAssert(x.gn[a] <= PFF_HALO_MAX_EXTENT, PETSC_COMM_SELF, PETSC_ERR_PLIB, "ghost box wider than a block");
         }
         x.goff = nghost;
         *go    = nghost;
@@ -239,39 +243,62 @@ static void PffHaloFillCrossLevel(PffGrid g, const PffHaloPlan *p, const PffHalo
   const PetscInt n = PffGridBlockN_Private(g, g->lgid[x->lb]), nn = PffGridBlockN_Private(g, x->nbgid);
   PetscInt       d[3];
   PffRegionDirection(x->region, d);
-  const float *src = halo + p->nghost + x->soff;
-  float       *gh  = halo + x->goff;
-  PetscReal    o[3];
-  for (int a = 0; a < 3; a++) o[a] = PffChannelOffset_Private(p->kind, x->comp, a);
-#define SRC(i, j, k) src[((i)-x->slo[0]) + x->sn[0] * (((j)-x->slo[1]) + x->sn[1] * ((k)-x->slo[2]))]
+  const float   *src = halo + p->nghost + x->soff;
+  float         *gh  = halo + x->goff;
+  const PetscInt sy = x->sn[0], sz = x->sn[0] * x->sn[1], step[3] = {1, sy, sz};
+  /* the stencils are separable: one per ghost row of each axis (a ghost box is at most a block wide), not one per
+     ghost cell and axis; off[a][i] is the source offset of the row's first cell along axis a */
+  PetscInt  off[3][PFF_HALO_MAX_EXTENT], cnt[3][PFF_HALO_MAX_EXTENT];
+  PetscReal w0[3][PFF_HALO_MAX_EXTENT], w1[3][PFF_HALO_MAX_EXTENT];
+  for (int a = 0; a < 3; a++) {
+    const PetscReal o = PffChannelOffset_Private(p->kind, x->comp, a);
+    for (PetscInt i = 0; i < x->gn[a]; i++) {
+      PetscInt i0;
+      if (x->rel > 0) {
+        PffCoarseStencil(x->glo[a] + i, o, d[a] * n, nn, &i0, &w1[a][i]);
+        w0[a][i] = 1 - w1[a][i];
+      } else
+        cnt[a][i] = PffFineCover(x->glo[a] + i, o, d[a] * n, &i0);
+      off[a][i] = (i0 - x->slo[a]) * step[a];
+    }
+  }
+  if (x->rel > 0) {
+    /* trilinear in the coarser neighbour, the corners summed in the order x, y, z fastest first */
+    const PetscInt dx = nn > 1, dy = nn > 1 ? sy : 0, dz = nn > 1 ? sz : 0;
+    for (PetscInt k = 0; k < x->gn[2]; k++)
+      for (PetscInt j = 0; j < x->gn[1]; j++) {
+        float *row = gh + x->gn[0] * (j + x->gn[1] * k);
+        for (PetscInt i = 0; i < x->gn[0]; i++) {
+          const float    *c  = src + off[0][i] + off[1][j] + off[2][k];
+          const PetscReal x0 = w0[0][i], x1 = w1[0][i], y0 = w0[1][j], y1 = w1[1][j], z0 = w0[2][k], z1 = w1[2][k];
+          PetscReal       v = 0.0; /* not the first term: a zero sum stays +0, as before */
+          v += x0 * y0 * z0 * (PetscReal)c[0];
+          v += x1 * y0 * z0 * (PetscReal)c[dx];
+          v += x0 * y1 * z0 * (PetscReal)c[dy];
+          v += x1 * y1 * z0 * (PetscReal)c[dx + dy];
+          v += x0 * y0 * z1 * (PetscReal)c[dz];
+          v += x1 * y0 * z1 * (PetscReal)c[dx + dz];
+          v += x0 * y1 * z1 * (PetscReal)c[dy + dz];
+          v += x1 * y1 * z1 * (PetscReal)c[dx + dy + dz];
+          row[i] = (float)v;
+        }
+      }
+    return;
+  }
+  /* the mean of the finer neighbour's cells (or coplanar faces) under the ghost */
   for (PetscInt k = 0; k < x->gn[2]; k++)
     for (PetscInt j = 0; j < x->gn[1]; j++)
       for (PetscInt i = 0; i < x->gn[0]; i++) {
-        const PetscInt c[3] = {x->glo[0] + i, x->glo[1] + j, x->glo[2] + k};
-        PetscReal      v    = 0.0;
-        if (x->rel > 0) {
-          PetscInt  i0[3];
-          PetscReal t[3];
-          for (int a = 0; a < 3; a++) PffCoarseStencil(c[a], o[a], d[a] * n, nn, &i0[a], &t[a]);
-          const PetscInt di = nn > 1, dj = nn > 1, dk = nn > 1;
-          for (int q = 0; q < 8; q++) {
-            const PetscReal wx = (q & 1) ? t[0] : 1 - t[0], wy = (q & 2) ? t[1] : 1 - t[1],
-                            wz = (q & 4) ? t[2] : 1 - t[2];
-            v += wx * wy * wz *
-                 (PetscReal)SRC(i0[0] + ((q & 1) ? di : 0), i0[1] + ((q & 2) ? dj : 0), i0[2] + ((q & 4) ? dk : 0));
-          }
-        } else {
-          PetscInt f0[3], cnt[3];
-          for (int a = 0; a < 3; a++) cnt[a] = PffFineCover(c[a], o[a], d[a] * n, &f0[a]);
-          for (PetscInt kk = 0; kk < cnt[2]; kk++)
-            for (PetscInt jj = 0; jj < cnt[1]; jj++)
-              for (PetscInt ii = 0; ii < cnt[0]; ii++) v += (PetscReal)SRC(f0[0] + ii, f0[1] + jj, f0[2] + kk);
-          v /= (PetscReal)(cnt[0] * cnt[1] * cnt[2]);
-        }
-        gh[i + x->gn[0] * (j + x->gn[1] * k)] = (float)v;
+        const float *c = src + off[0][i] + off[1][j] + off[2][k];
+        PetscReal    v = 0.0;
+        for (PetscInt kk = 0; kk < cnt[2][k]; kk++)
+          for (PetscInt jj = 0; jj < cnt[1][j]; jj++)
+            for (PetscInt ii = 0; ii < cnt[0][i]; ii++) v += (PetscReal)c[ii + jj * sy + kk * sz];
+        gh[i + x->gn[0] * (j + x->gn[1] * k)] = (float)(v / (PetscReal)(cnt[0][i] * cnt[1][j] * cnt[2][k]));
       }
 }
 
+#define SRC(i, j, k) src[((i)-x->slo[0]) + x->sn[0] * (((j)-x->slo[1]) + x->sn[1] * ((k)-x->slo[2]))]
 /* The conservative reverse of PffHaloFillCrossLevel: ghost values spread onto the source box. */
 static void PffHaloSpreadCrossLevel(PffGrid g, const PffHaloPlan *p, const PffHaloXfer *x, float *halo)
 {

@@ -15,7 +15,8 @@
        liquid velocity linear in x every value is finite and inside the range of the liquid faces'
        values, widened by half a coarse cell of slope (where the grid extrapolates ghosts linearly). With one
        layer the lowest coarse x-faces above the fine slab, whose ghost below has mask exactly 1/2, take UL.
-   (d) Two fields at once (PffExtrapolateLiquidVelocities) equal two separate calls bit for bit.
+   (d) Two fields at once (PffExtrapolateLiquidVelocities) equal two separate calls bit for bit, also with the
+       layers on a width-1 work channel for the wide field (as the flow runs them).
 
    Sample run:  mpiexec -n 4 ./test_flow_extrapolate
    Prints the same lines on any number of ranks. */
@@ -111,7 +112,7 @@ static PetscErrorCode Extrapolate(const PffTestCtx *t, Scene *s, const Channels 
   /* the flow exchanges these before; so do we (the kernel reads no ghost of u, phi or open) */
   PetscCall(PffGridHaloBegin(t->grid, ch->u));
   PetscCall(PffGridHaloEnd(t->grid, ch->u));
-  PetscCall(PffExtrapolateLiquidVelocity(t->grid, ch->u, ch->phi, ch->open, layers, ch->mask, ch->ul, faces));
+  PetscCall(PffExtrapolateLiquidVelocity(t->grid, ch->u, ch->phi, ch->open, layers, ch->mask, ch->ul, -1, faces));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -465,14 +466,16 @@ static PetscErrorCode CopyOrCompare(const PffTestCtx *t, PetscInt src, PetscInt 
 
 /* (d) Two fields at once (PffExtrapolateLiquidVelocities, as the liquid model extrapolates u and its change): on
    the two-level grid, a liquid velocity linear in x and one linear in every coordinate give, bit for bit, what two
-   separate calls give, and the same count of extrapolated faces. */
+   separate calls give, and the same count of extrapolated faces; with the layers of the first (width-2) field on a
+   width-1 work channel too, as the flow runs them (a layer reads one ghost face, and the first ghost layer of a
+   width-1 exchange is that of a width-2 one). */
 static PetscErrorCode TestTwoFields(MPI_Comm comm)
 {
   const PetscInt layers = 3;
   PffTestCtx     t;
   Channels       ch;
-  PetscInt       u2, ul2, ref[2];
-  PetscInt64     bad = 0, total = 0, faces[2], fused;
+  PetscInt       u2, ul2, ref[2], work;
+  PetscInt64     total = 0, faces[2];
 
   PetscFunctionBeginUser;
   PetscCall(CreateTwoLevelGrid(comm, &t));
@@ -481,37 +484,41 @@ static PetscErrorCode TestTwoFields(MPI_Comm comm)
   PetscCall(PffGridAddChannel(t.grid, "u2_liquid", PFF_CHANNEL_FACE, 2, &ul2));
   PetscCall(PffGridAddChannel(t.grid, "ref1", PFF_CHANNEL_FACE, 1, &ref[0]));
   PetscCall(PffGridAddChannel(t.grid, "ref2", PFF_CHANNEL_FACE, 1, &ref[1]));
+  PetscCall(PffGridAddChannel(t.grid, "work", PFF_CHANNEL_FACE, 1, &work));
   Scene s1 = {&t, REGION_SLAB, VEL_LINEAR_X, 0.47}, s2 = {&t, REGION_SLAB, VEL_LINEAR, 0.47};
   /* the separate calls (the same liquid faces: only the velocity differs) */
   PetscCall(Extrapolate(&t, &s2, &ch, layers, &faces[1]));
   PetscCall(CopyOrCompare(&t, ch.ul, ref[1], PETSC_FALSE, NULL));
   PetscCall(Extrapolate(&t, &s1, &ch, layers, &faces[0]));
   PetscCall(CopyOrCompare(&t, ch.ul, ref[0], PETSC_FALSE, NULL));
-  /* the fused call: ch.u holds field 1, u2 field 2 */
-  PetscCall(PffGridFillChannel(t.grid, u2, FillU, &s2));
-  PetscCall(PffGridHaloBegin(t.grid, u2));
-  PetscCall(PffGridHaloEnd(t.grid, u2));
-  PetscCall(PffGridFillChannel(t.grid, ch.ul, FillU, &s2)); /* stale values that the call must overwrite */
-  {
-    const PetscInt src[2] = {ch.u, u2}, dst[2] = {ch.ul, ul2};
-    PetscCall(PffExtrapolateLiquidVelocities(t.grid, 2, src, ch.phi, ch.open, layers, ch.mask, dst, &fused));
-  }
-  PetscCall(CopyOrCompare(&t, ch.ul, ref[0], PETSC_TRUE, &bad));
-  PetscCall(CopyOrCompare(&t, ul2, ref[1], PETSC_TRUE, &bad));
   for (PetscInt lb = 0; lb < t.nlocal; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(t.grid, lb, &info));
     total += 6 * info.n * info.n * info.n;
   }
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &bad, 1, MPIU_INT64, MPI_SUM, comm));
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &total, 1, MPIU_INT64, MPI_SUM, comm));
-  PetscCall(PetscPrintf(comm,
-                        "two fields at once: %" PetscInt64_FMT " of %" PetscInt64_FMT
-                        " faces differ from two separate calls; %" PetscInt64_FMT
-                        " faces extrapolated (%" PetscInt64_FMT " and %" PetscInt64_FMT " separately)\n",
-                        bad, total, fused, faces[0], faces[1]));
-  PetscCheck(bad == 0, comm, PETSC_ERR_PLIB, "%" PetscInt64_FMT " faces differ from two separate calls", bad);
-  PetscCheck(fused == faces[0] && fused == faces[1], comm, PETSC_ERR_PLIB, "extrapolated face counts differ");
+  for (PetscInt useWork = 0; useWork < 2; useWork++) {
+    const PetscInt src[2] = {ch.u, u2}, dst[2] = {ch.ul, ul2}, wk[2] = {work, -1};
+    PetscInt64     bad = 0, fused;
+    /* the fused call: ch.u holds field 1, u2 field 2 */
+    PetscCall(PffGridFillChannel(t.grid, u2, FillU, &s2));
+    PetscCall(PffGridHaloBegin(t.grid, u2));
+    PetscCall(PffGridHaloEnd(t.grid, u2));
+    PetscCall(PffGridFillChannel(t.grid, ch.ul, FillU, &s2)); /* stale values that the call must overwrite */
+    PetscCall(PffGridFillChannel(t.grid, work, FillU, &s1));
+    PetscCall(PffExtrapolateLiquidVelocities(t.grid, 2, src, ch.phi, ch.open, layers, ch.mask, dst, useWork ? wk : NULL,
+                                             &fused));
+    PetscCall(CopyOrCompare(&t, ch.ul, ref[0], PETSC_TRUE, &bad));
+    PetscCall(CopyOrCompare(&t, ul2, ref[1], PETSC_TRUE, &bad));
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &bad, 1, MPIU_INT64, MPI_SUM, comm));
+    PetscCall(PetscPrintf(comm,
+                          "two fields at once%s: %" PetscInt64_FMT " of %" PetscInt64_FMT
+                          " faces differ from two separate calls; %" PetscInt64_FMT
+                          " faces extrapolated (%" PetscInt64_FMT " and %" PetscInt64_FMT " separately)\n",
+                          useWork ? ", layers on a width-1 work channel" : "", bad, total, fused, faces[0], faces[1]));
+    PetscCheck(bad == 0, comm, PETSC_ERR_PLIB, "%" PetscInt64_FMT " faces differ from two separate calls", bad);
+    PetscCheck(fused == faces[0] && fused == faces[1], comm, PETSC_ERR_PLIB, "extrapolated face counts differ");
+  }
   PetscCall(PffGridDestroy(&t.grid));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
