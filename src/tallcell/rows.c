@@ -58,15 +58,17 @@ PetscErrorCode PffTallAddRow_Private(PffTall tc, const PffTallRow *row, PetscRea
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Record j of column (gx, gz) at level l, owned or ghost. */
-static PetscErrorCode GetRecord(PffTall tc, PetscInt l, PetscInt gx, PetscInt gz, PetscInt j, const PetscInt **ri,
-                                const PetscReal **rr)
+/* The records of column (gx, gz) at level l, owned or ghost: record j is ri + PFF_TALL_RI j, rr + PFF_TALL_RR j
+   (a column's records are consecutive in both stores). Resolved once per column, not per record: a ghost column
+   is a binary search. */
+static PetscErrorCode ColumnRecords(PffTall tc, PetscInt l, PetscInt gx, PetscInt gz, const PetscInt **ri,
+                                    const PetscReal **rr)
 {
   const PetscInt n = tc->n0 >> l, ny = tc->nb[1] * n, bc = gx / n + tc->nb[0] * (gz / n);
 
   PetscFunctionBeginUser;
   if (tc->bcOwner[bc] == tc->rank) {
-    const PetscInt r = tc->bcOffset[bc] + ((gz % n) * n + gx % n) * ny + j;
+    const PetscInt r = tc->bcOffset[bc] + ((gz % n) * n + gx % n) * ny;
     *ri              = tc->ri + PFF_TALL_RI * r;
     *rr              = tc->rr + PFF_TALL_RR * r;
   } else {
@@ -87,8 +89,8 @@ static PetscErrorCode GetRecord(PffTall tc, PetscInt l, PetscInt gx, PetscInt gz
                "tallcell: column (%" PetscInt_FMT ", %" PetscInt_FMT ") at level %" PetscInt_FMT
                " is neither owned nor a ghost",
                gx, gz, l);
-    *ri = tc->gi + PFF_TALL_RI * (tc->gstart[g] + j);
-    *rr = tc->gr + PFF_TALL_RR * (tc->gstart[g] + j);
+    *ri = tc->gi + PFF_TALL_RI * tc->gstart[g];
+    *rr = tc->gr + PFF_TALL_RR * tc->gstart[g];
   }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -117,8 +119,10 @@ static void AddPressure(const PetscInt ri[], const PetscReal rr[], PetscReal yc,
 
 /* The lower side of a face: its columns (level, x, z) and the distance of the centres. */
 typedef struct {
-  PetscInt  nc, l, gx[2], gz[2];
-  PetscReal d;
+  PetscInt         nc, l, gx[2], gz[2];
+  PetscReal        d;
+  const PetscInt  *ri[2]; /* the columns' records (ColumnRecords) */
+  const PetscReal *rr[2];
 } LowerSide;
 
 /* What the lower side has at height y. Its phi there is the mean over its columns of phi interpolated
@@ -144,8 +148,10 @@ static PetscErrorCode LowerAt(PffTall tc, const LowerSide *ls, PetscReal y, Pets
 
   PetscFunctionBeginUser;
   for (PetscInt c = 0; c < ls->nc; c++) {
-    PetscCall(GetRecord(tc, ls->l, ls->gx[c], ls->gz[c], ja, &ra[c], &xa[c]));
-    PetscCall(GetRecord(tc, ls->l, ls->gx[c], ls->gz[c], jb, &rb[c], &xb[c]));
+    ra[c]   = ls->ri[c] + PFF_TALL_RI * ja;
+    xa[c]   = ls->rr[c] + PFF_TALL_RR * ja;
+    rb[c]   = ls->ri[c] + PFF_TALL_RI * jb;
+    xb[c]   = ls->rr[c] + PFF_TALL_RR * jb;
     phic[c] = (1 - f) * xa[c][4] + f * xb[c][4];
     if ((upper ? rb[c] : ra[c])[4] == PFF_TALL_SOLID) continue;
     sum += phic[c];
@@ -160,12 +166,8 @@ static PetscErrorCode LowerAt(PffTall tc, const LowerSide *ls, PetscReal y, Pets
   for (PetscInt c = 0; kinds && c < ls->nc; c++) {
     const PetscInt jl = (PetscInt)PetscFloorReal((ylo - y0) / s + 1e-9),
                    jh = (PetscInt)PetscCeilReal((yhi - y0) / s - 1e-9) - 1;
-    const PetscInt  *ri;
-    const PetscReal *rr;
-    PetscCall(GetRecord(tc, ls->l, ls->gx[c], ls->gz[c], jl, &ri, &rr));
-    kinds[2 * c] = ri[4];
-    PetscCall(GetRecord(tc, ls->l, ls->gx[c], ls->gz[c], jh, &ri, &rr));
-    kinds[2 * c + 1] = ri[4];
+    kinds[2 * c]      = ls->ri[c][PFF_TALL_RI * jl + 4];
+    kinds[2 * c + 1]  = ls->ri[c][PFF_TALL_RI * jh + 4];
   }
   *phiMean = n ? sum / (PetscReal)n : PETSC_MAX_REAL;
   if (nside) *nside = n;
@@ -194,12 +196,14 @@ static PetscBool SameTall(const PetscInt a[5], const PetscInt b[5], PetscInt nc)
 static PetscErrorCode ColumnFaceRows(PffTall tc, PetscInt l, PetscInt gx, PetscInt gz, PetscInt a,
                                      const PetscInt lbOf[])
 {
-  const PetscInt  n = tc->n0 >> l, ny = tc->nb[1] * n, ci = gx % n, ck = gz % n;
-  const PetscReal s = tc->h0 * (PetscReal)(1 << l), y0 = tc->origin[1];
-  const PetscInt  g[3] = {gx, 0, gz}, e = 2 - a; /* e: the tangential horizontal axis */
-  LowerSide       ls;
-  PetscInt        lnb;
-  PetscInt       *sig, *fl, *fc, *fcell;
+  const PetscInt   n = tc->n0 >> l, ny = tc->nb[1] * n, ci = gx % n, ck = gz % n;
+  const PetscReal  s = tc->h0 * (PetscReal)(1 << l), y0 = tc->origin[1];
+  const PetscInt   g[3] = {gx, 0, gz}, e = 2 - a; /* e: the tangential horizontal axis */
+  LowerSide        ls;
+  PetscInt         lnb;
+  const PetscInt  *uri; /* U's records */
+  const PetscReal *urr;
+  PetscInt        *sig, *fl, *fc, *fcell;
 
   PetscFunctionBeginUser;
   /* the lower side's level */
@@ -223,15 +227,14 @@ static PetscErrorCode ColumnFaceRows(PffTall tc, PetscInt l, PetscInt gx, PetscI
       const PetscInt tcell = (PetscInt)((e0 >> lnb) + c);
       ls.gx[c]             = a == 0 ? (PetscInt)lowCell : tcell;
       ls.gz[c]             = a == 0 ? tcell : (PetscInt)lowCell;
+      PetscCall(ColumnRecords(tc, ls.l, ls.gx[c], ls.gz[c], &ls.ri[c], &ls.rr[c]));
     }
   }
+  PetscCall(ColumnRecords(tc, l, gx, gz, &uri, &urr));
   PetscCall(PetscMalloc4(5 * ny, &sig, ny, &fl, ny, &fc, ny, &fcell));
   for (PetscInt j = 0; j < ny; j++) {
-    const PetscInt  *ri;
-    const PetscReal *rr;
-    PetscReal        phiL;
-    PetscCall(GetRecord(tc, l, gx, gz, j, &ri, &rr));
-    sig[5 * j] = ri[4];
+    PetscReal phiL;
+    sig[5 * j] = uri[PFF_TALL_RI * j + 4];
     PetscCall(
         LowerAt(tc, &ls, y0 + (j + 0.5) * s, y0 + j * s, y0 + (j + 1) * s, 0, NULL, &phiL, NULL, &sig[5 * j + 1]));
     for (PetscInt q = 1 + 2 * ls.nc; q < 5; q++) sig[5 * j + q] = 0;
@@ -244,14 +247,13 @@ static PetscErrorCode ColumnFaceRows(PffTall tc, PetscInt l, PetscInt gx, PetscI
     while (j1 < ny && SameTall(&sig[5 * j1], &sig[5 * j0], ls.nc)) j1++;
     const PetscReal  ylo = y0 + j0 * s, yhi = y0 + j1 * s, ym = 0.5 * (ylo + yhi);
     const PetscInt   ju = (PetscInt)PetscFloorReal((ym - y0) / s);
-    const PetscInt  *ri;
-    const PetscReal *rr;
+    const PetscInt  *ri = uri + PFF_TALL_RI * PetscMin(ju, ny - 1);
+    const PetscReal *rr = urr + PFF_TALL_RR * PetscMin(ju, ny - 1);
     PetscReal        phiL;
     PetscInt         nside;
-    PffTallRow       row = {0};
-    PetscCall(GetRecord(tc, l, gx, gz, PetscMin(ju, ny - 1), &ri, &rr));
-    const PetscBool uliq = PffTallLiquidKind(ri[4]);
-    const PetscReal phiU = rr[4];
+    PffTallRow       row  = {0};
+    const PetscBool  uliq = PffTallLiquidKind(ri[4]);
+    const PetscReal  phiU = rr[4];
     PetscCall(LowerAt(tc, &ls, ym, ylo, yhi, 0, NULL, &phiL, &nside, NULL));
     const PetscBool lliq = (PetscBool)(phiL < 0);
     /* a solid on either side closes the face: its fraction is zero, and so is its row */
