@@ -32,6 +32,9 @@ PETSC_EXTERN PetscErrorCode PffBodiesGetCount(PffBodies bodies, PetscInt *n);
 /* Signed distance to the union of the bodies at their current poses (negative inside) and its gradient (grad
    may be NULL); a PffSolidFn with ctx the PffBodies. */
 PETSC_EXTERN PetscReal PffBodiesDistance(const PetscReal x[3], PetscReal grad[3], void *ctx);
+/* Whether x lies inside a body (PffBodiesDistance < 0), at the poses of the last PffBodiesGetTall; a point outside a
+   body's bounding box is not evaluated. Not collective. */
+PETSC_EXTERN PetscBool PffBodiesContain(PffBodies bodies, const PetscReal x[3]);
 /* The velocity v + omega x (x - X) of the body whose inside holds x (the nearest, when bodies overlap), in vel;
    returns whether x lies inside a body (vel untouched otherwise). Not collective. */
 PETSC_EXTERN PetscBool PffBodiesVelocityAt(PffBodies bodies, const PetscReal x[3], PetscReal vel[3]);

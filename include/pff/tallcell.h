@@ -81,8 +81,14 @@ PETSC_EXTERN PetscErrorCode PffTallGetSizing(PffTall tc, PetscBool *sizing, Pets
 PETSC_EXTERN PetscErrorCode PffTallSetSolid(PffTall tc, PetscInt chA, PetscInt chSolid);
 /* Fills chA and chSolid for PffTallSetSolid from the signed distance fn (negative inside the solids): a face's
    fraction from fn at its corners (exact for a planar boundary; lower domain walls 0), a cell's distance from
-   fn at its centre, set to at most -1 when all eight corners are inside. Exchanges both halos. Collective. */
-PETSC_EXTERN PetscErrorCode PffTallFillSolid(PffGrid grid, PffSolidFn fn, void *ctx, PetscInt chA, PetscInt chSolid);
+   fn at its centre in cells, set to at most -1 when all eight corners are inside and to at most
+   PFF_TALL_SOLID_DISTANCE_MAX. blocks (NULL: all) marks the raster blocks to fill, the others keep their values:
+   where the solids changed only within a region, filling the blocks within PFF_TALL_SOLID_DISTANCE_MAX + 1 cells
+   of it before and after the change gives what a whole fill gives (the clipped distance is the same elsewhere).
+   Exchanges both halos. Collective. */
+#define PFF_TALL_SOLID_DISTANCE_MAX 2.0
+PETSC_EXTERN PetscErrorCode PffTallFillSolid(PffGrid grid, PffSolidFn fn, void *ctx, PetscInt chA, PetscInt chSolid,
+                                             const PetscBool blocks[]);
 /* Open fraction of a square face from the signed distance at its corners phi[4], in cyclic order. */
 PETSC_EXTERN PetscReal PffTallOpenFraction(const PetscReal phi[4]);
 

@@ -72,6 +72,19 @@ PetscReal PffBodiesDistance(const PetscReal x[3], PetscReal grad[3], void *ctx)
   return dmin;
 }
 
+PetscBool PffBodiesContain(PffBodies bs, const PetscReal x[3])
+{
+  const PetscReal slack = 1e-9; /* the box's corners reach its bounding box to rounding */
+
+  for (PetscInt i = 0; i < bs->n; i++) {
+    const PffTallBody *t   = &bs->tall[i];
+    PetscBool          out = PETSC_FALSE;
+    for (PetscInt a = 0; a < 3; a++) out = (PetscBool)(out || x[a] < t->lo[a] - slack || x[a] > t->hi[a] + slack);
+    if (!out && BodyDistance(x, NULL, (void *)&bs->body[i]) < 0) return PETSC_TRUE;
+  }
+  return PETSC_FALSE;
+}
+
 PetscBool PffBodiesVelocityAt(PffBodies bs, const PetscReal x[3], PetscReal vel[3])
 {
   PetscReal dmin = 0;
@@ -203,6 +216,10 @@ PetscErrorCode PffBodiesCreateFromOptions(MPI_Comm comm, const PetscReal lo[3], 
     Rotation(b->q, b->R);
     t->fn  = BodyDistance;
     t->ctx = b;
+  }
+  {
+    PetscInt n;
+    PetscCall(PffBodiesGetTall(bs, &n, NULL)); /* the bounding boxes of PffBodiesContain */
   }
   *bodies = bs;
   PetscFunctionReturn(PETSC_SUCCESS);

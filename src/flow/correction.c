@@ -21,15 +21,65 @@
 #include <malloc.h>
 #endif
 
+/* The reference lattice's seeding: the blocks r1 whose reference is made, and the raster to find a point's block. */
+typedef struct {
+  PffFlow          f;
+  const PetscBool *r1;
+  const PetscInt  *level;
+  PetscInt         nb[3];
+  PetscBool        periodic[3];
+  PetscReal        origin[3], h0, blen;
+} PffReferenceCtx;
+
+/* Whether a block of r1 lies within 1.5 cells (of x's own block) of x: a lattice particle splats into its block
+   and the ghost layer one cell of its level wide around it, so one farther away adds nothing to r1's faces, and
+   the neighbour blocks of r1 seeded whole (a block wider than needed) made most of the lattice that the bodies'
+   reference seeds at every step. */
+static PetscBool PffReferenceReaches(const PffReferenceCtx *c, const PetscReal x[3])
+{
+  PetscInt lo[3], hi[3], b0[3];
+
+  for (PetscInt a = 0; a < 3; a++)
+    b0[a] = PetscMax(0, PetscMin(c->nb[a] - 1, (PetscInt)PetscFloorReal((x[a] - c->origin[a]) / c->blen)));
+  const PetscReal reach = 1.5 * c->h0 * (PetscReal)(1 << c->level[b0[0] + c->nb[0] * (b0[1] + c->nb[1] * b0[2])]);
+  for (PetscInt a = 0; a < 3; a++) {
+    lo[a] = (PetscInt)PetscFloorReal((x[a] - reach - c->origin[a]) / c->blen);
+    hi[a] = (PetscInt)PetscFloorReal((x[a] + reach - c->origin[a]) / c->blen);
+  }
+  for (PetscInt k = lo[2]; k <= hi[2]; k++)
+    for (PetscInt j = lo[1]; j <= hi[1]; j++)
+      for (PetscInt i = lo[0]; i <= hi[0]; i++) {
+        PetscInt q[3] = {i, j, k}, inside = 1;
+        for (PetscInt a = 0; a < 3; a++) {
+          if (c->periodic[a])
+            q[a] = ((q[a] % c->nb[a]) + c->nb[a]) % c->nb[a];
+          else if (q[a] < 0 || q[a] >= c->nb[a])
+            inside = 0;
+        }
+        if (inside && c->r1[q[0] + c->nb[0] * (q[1] + c->nb[1] * q[2])]) return PETSC_TRUE;
+      }
+  return PETSC_FALSE;
+}
+
 static PetscErrorCode PffReferenceSeed(const PetscReal x[3], PetscInt *type, PetscReal v[3], void *ctx)
 {
-  PffFlow   f = (PffFlow)ctx;
-  PetscReal grad[3];
+  const PffReferenceCtx *c = (const PffReferenceCtx *)ctx;
+  const PffFlow          f = c->f;
+  PetscReal              grad[3];
+  PetscBool              inside;
 
   PetscFunctionBeginUser;
   v[0] = v[1] = v[2] = 0;
-  /* the scenes seed nothing inside a solid (distance < 0) */
-  *type = f->solid && f->solid(x, grad, f->solidCtx) < 0 ? -1 : PFF_PARTICLE_LIQUID;
+  *type              = -1;
+  if (!PffReferenceReaches(c, x)) PetscFunctionReturn(PETSC_SUCCESS);
+  /* the scenes seed nothing inside a solid (distance < 0); with bodies only the sign of their distance counts, and
+     most lattice points lie outside every body's bounding box */
+  if (f->bodies)
+    inside = (PetscBool)((f->staticSolid && f->staticSolid(x, grad, f->staticSolidCtx) < 0) ||
+                         PffBodiesContain(f->bodies, x));
+  else
+    inside = (PetscBool)(f->solid && f->solid(x, grad, f->solidCtx) < 0);
+  if (!inside) *type = PFF_PARTICLE_LIQUID;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -85,20 +135,28 @@ static void PffDilate(const PetscInt nb[3], const PetscBool periodic[3], const P
 /* The reference of Eq. 6-7 and of the volume correction on the raster blocks r1 (a mask, the same on every rank):
    the P2G of a lattice of 8 particles per cell, seeded in r1 and its neighbours (a face's value depends on the
    lattice within one cell of it), copied into mass_ref and volume_ref on the blocks of r1 only. Collective. */
-static PetscErrorCode ReferenceLattice(PffFlow f, const PetscBool r1[])
+static PetscErrorCode ReferenceLattice(PffFlow f, const PetscBool r1[], PetscBool trim)
 {
+  PffReferenceCtx rc;
   PffParticles    ref;
   const PetscReal one[PFF_PARTICLE_NTYPES] = {1, 1};
-  PetscInt        nlocal, nbatch, nb[3], nblocks, lb0 = 0;
+  PetscInt        nlocal, nbatch, nb[3], nblocks, lb0 = 0, n0;
   PetscInt64      cells = 0, done = 0, nchanged = 0;
   PetscBool       periodic[3], *seed, *keep, *s2;
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridGetRaster(f->grid, nb, NULL, NULL));
-  PetscCall(PffGridGetSizes(f->grid, NULL, NULL, NULL, NULL, periodic));
+  PetscCall(PffGridGetRaster(f->grid, nb, &rc.level, NULL));
+  PetscCall(PffGridGetSizes(f->grid, &n0, NULL, rc.origin, &rc.h0, periodic));
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
   nblocks = nb[0] * nb[1] * nb[2];
   for (PetscInt b = 0; b < nblocks; b++) nchanged += r1[b];
+  rc.f    = f;
+  rc.r1   = r1;
+  rc.blen = (PetscReal)n0 * rc.h0;
+  for (PetscInt a = 0; a < 3; a++) {
+    rc.nb[a]       = nb[a];
+    rc.periodic[a] = periodic[a];
+  }
   PetscCall(PetscMalloc3(nblocks, &s2, PetscMax(nlocal, 1), &seed, PetscMax(nlocal, 1), &keep));
   PffDilate(nb, periodic, r1, s2);
   for (PetscInt lb = 0; lb < nlocal; lb++) {
@@ -126,7 +184,7 @@ static PetscErrorCode ReferenceLattice(PffFlow f, const PetscBool r1[])
         lb1++;
       }
       PetscCall(PffParticlesClear(ref));
-      PetscCall(PffParticlesSeedBlocks(ref, PffReferenceSeed, f, lb0, lb1, seed));
+      PetscCall(PffParticlesSeedBlocks(ref, PffReferenceSeed, &rc, lb0, lb1, seed));
       /* the kernel sum of Eq. 6 for the same lattice normalises Eq. 7 (phase.c); mass, momentum and volume
          land in working channels that every step overwrites */
       PetscCall(PffParticlesP2G(ref, one, f->chMass, f->chUt, f->chVol));
@@ -137,8 +195,11 @@ static PetscErrorCode ReferenceLattice(PffFlow f, const PetscBool r1[])
     PetscCall(PffParticlesDestroy(&ref));
 #if defined(__GLIBC__)
     /* glibc keeps freed heap pages resident until they are trimmed: the lattice's store and scratch (160 MB per rank
-       in rt3d W = 64) stayed resident, and the seed reused only part of them (20 MB per rank of the peak) */
-    malloc_trim(0);
+       in rt3d W = 64) stayed resident, and the seed reused only part of them (20 MB per rank of the peak); the bodies'
+       reference, made at every step, keeps them (trimmed, their pages were faulted in again at every step) */
+    if (trim) malloc_trim(0);
+#else
+    (void)trim;
 #endif
   }
   PetscCall(PetscFree3(s2, seed, keep));
@@ -148,7 +209,7 @@ static PetscErrorCode ReferenceLattice(PffFlow f, const PetscBool r1[])
 
 /* The lattice on the blocks of r1 when there are any, then volume_ref's halo in any case: a re-partition moves
    blocks without changing their levels. Collective. */
-static PetscErrorCode ReferenceBlocks(PffFlow f, const PetscBool r1[])
+static PetscErrorCode ReferenceBlocks(PffFlow f, const PetscBool r1[], PetscBool trim)
 {
   PetscInt  nb[3];
   PetscBool any = PETSC_FALSE;
@@ -156,7 +217,7 @@ static PetscErrorCode ReferenceBlocks(PffFlow f, const PetscBool r1[])
   PetscFunctionBeginUser;
   PetscCall(PffGridGetRaster(f->grid, nb, NULL, NULL));
   for (PetscInt b = 0; b < nb[0] * nb[1] * nb[2] && !any; b++) any = r1[b];
-  if (any) PetscCall(ReferenceLattice(f, r1));
+  if (any) PetscCall(ReferenceLattice(f, r1, trim));
   if (f->chVolRef >= 0) {
     PetscCall(PffGridHaloBegin(f->grid, f->chVolRef));
     PetscCall(PffGridHaloEnd(f->grid, f->chVolRef));
@@ -183,7 +244,7 @@ PetscErrorCode PffFlowReferenceVolume_Private(PffFlow f)
   PffDilate(nb, periodic, changed, r1);
   if (!f->refLevel) PetscCall(PetscMalloc1(nblocks, &f->refLevel));
   PetscCall(PetscArraycpy(f->refLevel, level, nblocks));
-  PetscCall(ReferenceBlocks(f, r1));
+  PetscCall(ReferenceBlocks(f, r1, PETSC_TRUE));
   PetscCall(PetscFree2(changed, r1));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -195,32 +256,19 @@ PetscErrorCode PffFlowReferenceVolume_Private(PffFlow f)
    pile up unseen (the floating box lost 8 % of its pool that way on cubic cells). Collective. */
 PetscErrorCode PffFlowReferenceBodies_Private(PffFlow f)
 {
-  PetscInt     nb[3], nblocks, n0, nbody;
-  PetscReal    origin[3], h;
-  PffTallBody *tb;
-  PetscBool   *r1;
+  PetscInt   nb[3], nblocks;
+  PetscReal  h;
+  PetscBool *r1;
 
   PetscFunctionBeginUser;
   if (!f->bodies) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PffGridGetRaster(f->grid, nb, NULL, NULL));
-  PetscCall(PffGridGetSizes(f->grid, &n0, NULL, origin, &h, NULL));
+  PetscCall(PffGridGetSizes(f->grid, NULL, NULL, NULL, &h, NULL));
   nblocks               = nb[0] * nb[1] * nb[2];
   const PetscBool first = (PetscBool)!f->refBody;
   if (first) PetscCall(PetscCalloc1(nblocks, &f->refBody));
-  PetscCall(PetscMalloc1(nblocks, &r1));
-  PetscCall(PffBodiesGetTall(f->bodies, &nbody, &tb));
-  for (PetscInt b = 0; b < nblocks; b++) r1[b] = PETSC_FALSE;
-  for (PetscInt i = 0; i < nbody; i++) {
-    PetscInt lo[3], hi[3];
-    for (PetscInt a = 0; a < 3; a++) {
-      const PetscReal blen = (PetscReal)n0 * h, margin = 2 * h;
-      lo[a] = PetscMax(0, (PetscInt)PetscFloorReal((tb[i].lo[a] - margin - origin[a]) / blen));
-      hi[a] = PetscMin(nb[a] - 1, (PetscInt)PetscFloorReal((tb[i].hi[a] + margin - origin[a]) / blen));
-    }
-    for (PetscInt bk = lo[2]; bk <= hi[2]; bk++)
-      for (PetscInt bj = lo[1]; bj <= hi[1]; bj++)
-        for (PetscInt bi = lo[0]; bi <= hi[0]; bi++) r1[bi + nb[0] * (bj + nb[1] * bk)] = PETSC_TRUE;
-  }
+  PetscCall(PetscCalloc1(nblocks, &r1));
+  PetscCall(PffFlowBodyBlocks_Private(f, 2 * h, r1));
   if (first) { /* the last step's blocks are unknown after a restart: those within a block of the bodies' now */
     PetscBool periodic[3];
     PetscCall(PffGridGetSizes(f->grid, NULL, NULL, NULL, NULL, periodic));
@@ -231,8 +279,32 @@ PetscErrorCode PffFlowReferenceBodies_Private(PffFlow f)
     r1[b]               = (PetscBool)(now || f->refBody[b]);
     f->refBody[b]       = now;
   }
-  PetscCall(ReferenceBlocks(f, r1));
+  PetscCall(ReferenceBlocks(f, r1, PETSC_FALSE));
   PetscCall(PetscFree(r1));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowBodyBlocks_Private(PffFlow f, PetscReal margin, PetscBool r[])
+{
+  PetscInt     nb[3], n0, nbody;
+  PetscReal    origin[3], h;
+  PffTallBody *tb;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetRaster(f->grid, nb, NULL, NULL));
+  PetscCall(PffGridGetSizes(f->grid, &n0, NULL, origin, &h, NULL));
+  PetscCall(PffBodiesGetTall(f->bodies, &nbody, &tb));
+  for (PetscInt i = 0; i < nbody; i++) {
+    PetscInt lo[3], hi[3];
+    for (PetscInt a = 0; a < 3; a++) {
+      const PetscReal blen = (PetscReal)n0 * h;
+      lo[a]                = PetscMax(0, (PetscInt)PetscFloorReal((tb[i].lo[a] - margin - origin[a]) / blen));
+      hi[a]                = PetscMin(nb[a] - 1, (PetscInt)PetscFloorReal((tb[i].hi[a] + margin - origin[a]) / blen));
+    }
+    for (PetscInt bk = lo[2]; bk <= hi[2]; bk++)
+      for (PetscInt bj = lo[1]; bj <= hi[1]; bj++)
+        for (PetscInt bi = lo[0]; bi <= hi[0]; bi++) r[bi + nb[0] * (bj + nb[1] * bk)] = PETSC_TRUE;
+  }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

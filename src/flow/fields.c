@@ -3,14 +3,44 @@
    ratios per particle type and level (Eq. 13, Sec. 5.3), escaped particles (Sec. 3.4) and vorticity for output. */
 #include "flowimpl.h"
 
-PetscErrorCode PffFlowOpenFaces_Private(PffFlow f)
+/* The liquid model's open fractions and cell distances. After the bodies moved (moved) only the blocks within
+   reach of their boxes, at the new poses and at the last fill's, are filled again: the fractions and the clipped
+   distances elsewhere are the static solids', the same as a whole fill's (PffTallFillSolid); filling every block
+   evaluated every body's distance at every node of the grid each step. */
+static PetscErrorCode LiquidOpenFaces(PffFlow f, PetscBool moved)
+{
+  PetscInt   nb[3], nblocks, nlevels;
+  PetscReal  h;
+  PetscBool *r = NULL;
+
+  PetscFunctionBeginUser;
+  if (f->bodies) {
+    PetscCall(PffGridGetRaster(f->grid, nb, NULL, NULL));
+    PetscCall(PffGridGetSizes(f->grid, NULL, &nlevels, NULL, &h, NULL));
+    nblocks = nb[0] * nb[1] * nb[2];
+    if (!f->openBody) PetscCall(PetscCalloc1(nblocks, &f->openBody));
+    PetscCall(PetscCalloc1(nblocks, &r));
+    /* a distance is clipped at PFF_TALL_SOLID_DISTANCE_MAX cells of its block's level, the coarsest at most */
+    PetscCall(PffFlowBodyBlocks_Private(f, (PFF_TALL_SOLID_DISTANCE_MAX + 1) * h * (PetscReal)(1 << (nlevels - 1)), r));
+    for (PetscInt b = 0; b < nblocks; b++) {
+      const PetscBool now = r[b];
+      r[b]                = (PetscBool)(now || f->openBody[b]);
+      f->openBody[b]      = now;
+    }
+  }
+  PetscCall(PffTallFillSolid(f->grid, f->solid, f->solidCtx, f->chOpen, f->chSolidD, moved ? r : NULL));
+  PetscCall(PetscFree(r));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowOpenFaces_Private(PffFlow f, PetscBool moved)
 {
   PetscInt  nlocal;
   PetscBool periodic[3];
 
   PetscFunctionBeginUser;
   if (f->chSolidD >= 0) { /* the liquid model's variational pressure takes the open area fractions */
-    PetscCall(PffTallFillSolid(f->grid, f->solid, f->solidCtx, f->chOpen, f->chSolidD));
+    PetscCall(LiquidOpenFaces(f, moved));
     PetscFunctionReturn(PETSC_SUCCESS);
   }
   PetscCall(PffGridGetSizes(f->grid, NULL, NULL, NULL, NULL, periodic));

@@ -304,7 +304,7 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
 PetscErrorCode PffFlowReset(PffFlow f)
 {
   PetscFunctionBeginUser;
-  PetscCall(PffFlowOpenFaces_Private(f));
+  PetscCall(PffFlowOpenFaces_Private(f, PETSC_FALSE));
   PetscCall(PffFlowReferenceVolume_Private(f));
   PetscCall(PffGridGetTopologyState(f->grid, &f->topology));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -341,6 +341,7 @@ PetscErrorCode PffFlowDestroy(PffFlow *flow)
   PetscCall(PffFlowAdaptDestroy_Private(*flow));
   PetscCall(PetscFree((*flow)->refLevel));
   PetscCall(PetscFree((*flow)->refBody));
+  PetscCall(PetscFree((*flow)->openBody));
   PetscCall(PetscFree(*flow));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

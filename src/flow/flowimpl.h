@@ -62,6 +62,7 @@ struct _n_PffFlow {
   PffFlowAdaptCtx  adapt;
   PetscInt        *refLevel; /* [nblocks] raster levels the reference lattice was made for (correction.c) */
   PetscBool       *refBody;  /* [nblocks] blocks the bodies' reference was last made on (correction.c) */
+  PetscBool       *openBody; /* [nblocks] blocks the bodies' open fractions were last filled on (fields.c) */
   PetscObjectState topology; /* the grid's topology state of the open faces and the reference lattice */
   PetscReal        t, dtPrev;
   PetscInt         step;
@@ -156,13 +157,15 @@ PETSC_INTERN PetscErrorCode PffFlowPhaseField_Private(PffFlow);
 /* correction.c */
 PETSC_INTERN PetscErrorCode PffFlowReferenceVolume_Private(PffFlow);
 PETSC_INTERN PetscErrorCode PffFlowReferenceBodies_Private(PffFlow);
+/* Sets r[b] for the raster blocks within margin of a body's bounding box (others untouched). */
+PETSC_INTERN PetscErrorCode PffFlowBodyBlocks_Private(PffFlow, PetscReal, PetscBool[]);
 PETSC_INTERN PetscErrorCode PffFlowVolumeCorrection_Private(PffFlow, PffFlowStepStats *);
 PETSC_INTERN PetscErrorCode PffFlowCorrectionVelocity_Private(PffFlow, PetscReal dt, PetscBool extrapolated);
 /* liquidcorr.c */
 PETSC_INTERN PetscErrorCode PffFlowLiquidCorrection_Private(PffFlow, PetscReal dt);
 /* fields.c */
 PETSC_INTERN PetscErrorCode PffFlowFaceVelocity_Private(PffFlow, PetscReal dt);
-PETSC_INTERN PetscErrorCode PffFlowOpenFaces_Private(PffFlow);
+PETSC_INTERN PetscErrorCode PffFlowOpenFaces_Private(PffFlow, PetscBool);
 
 /* Position of the lower comp-face (or the centre, comp < 0) of cell (i, j, k) of a block. */
 static inline void PffFacePosition(const PffBlockInfo *info, PetscInt i, PetscInt j, PetscInt k, PetscInt comp,

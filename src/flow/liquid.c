@@ -135,7 +135,7 @@ PetscErrorCode PffFlowLiquidProject_Private(PffFlow f, PetscReal dt, PffPressure
        of itself piled up under it: 8 % of the pool's volume in 1.5 s); the fractions follow for G2P, the
        advection and the next step */
     PetscCall(PffBodiesAdvance(f->bodies, dt));
-    PetscCall(PffFlowOpenFaces_Private(f));
+    PetscCall(PffFlowOpenFaces_Private(f, PETSC_TRUE));
   }
   ps->its       = ts.its;
   ps->rnorm     = ts.rnorm;

@@ -61,7 +61,10 @@ PetscErrorCode PffParticlesSeedBlocks(PffParticles p, PffSeedFn fn, void *ctx, P
             PetscInt       type = -1;
             /* the callback sees the world point of the stored float position */
             for (int a = 0; a < 3; a++) {
-              const PetscReal u  = PffRandom01_Private(p->seed, id, PFF_RNG_SEED_JITTER, (uint64_t)a);
+              /* no hash for an unjittered lattice (the reference lattice is seeded at every step with bodies):
+                 0 (u - 1/2) adds a zero either way */
+              const PetscReal u =
+                  p->jitter != 0 ? PffRandom01_Private(p->seed, id, PFF_RNG_SEED_JITTER, (uint64_t)a) : 0.5;
               const PetscReal s  = 0.25 + 0.5 * (PetscReal)((sub >> a) & 1) + p->jitter * (u - 0.5) * 0.5;
               const PetscReal lo = (PetscReal)(info.ijk[a] * p->n0) + (PetscReal)c[a] * scale;
               /* rounding to float must not carry the particle into the next cell (or block, or rank) */

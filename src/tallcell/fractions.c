@@ -47,7 +47,8 @@ PetscReal PffTallCellFaceOpen(const PetscReal corner[8], PetscInt a, PetscInt si
   return PffTallOpenFraction(phi);
 }
 
-PetscErrorCode PffTallFillSolid(PffGrid grid, PffSolidFn fn, void *ctx, PetscInt chA, PetscInt chSolid)
+PetscErrorCode PffTallFillSolid(PffGrid grid, PffSolidFn fn, void *ctx, PetscInt chA, PetscInt chSolid,
+                                const PetscBool blocks[])
 {
   PetscInt   nlocal, n0;
   PetscBool  periodic[3];
@@ -63,6 +64,7 @@ PetscErrorCode PffTallFillSolid(PffGrid grid, PffSolidFn fn, void *ctx, PetscInt
     float       *a[3], *sd;
     PetscReal    x[3], g[3];
     PetscCall(PffGridGetBlockInfo(grid, lb, &info));
+    if (blocks && !blocks[info.gid]) continue;
     const PetscInt n = info.n, m = n + 1;
     for (PetscInt k = 0; k <= n; k++)
       for (PetscInt j = 0; j <= n; j++)
@@ -88,7 +90,7 @@ PetscErrorCode PffTallFillSolid(PffGrid grid, PffSolidFn fn, void *ctx, PetscInt
             a[d][c]              = wall ? 0.0f : (float)PffTallCellFaceOpen(corner, d, 0);
           }
           for (PetscInt d = 0; d < 3; d++) x[d] = info.lo[d] + ((PetscReal)ijk[d] + 0.5) * info.h;
-          sd[c] = (float)(fn(x, g, ctx) / info.h);
+          sd[c] = (float)PetscMin(fn(x, g, ctx) / info.h, PFF_TALL_SOLID_DISTANCE_MAX);
           if (inside) sd[c] = PetscMin(sd[c], -1.0f);
         }
   }

@@ -164,7 +164,7 @@ static PetscErrorCode ProblemCreate(MPI_Comm comm, const PetscInt nb[3], PetscIn
   if (sc->solid) {
     PetscCall(PffGridAddChannel(pb->t.grid, "A", PFF_CHANNEL_FACE, 1, &pb->A));
     PetscCall(PffGridAddChannel(pb->t.grid, "sd", PFF_CHANNEL_CELL, 1, &pb->sd));
-    PetscCall(PffTallFillSolid(pb->t.grid, Obstacles, sc, pb->A, pb->sd));
+    PetscCall(PffTallFillSolid(pb->t.grid, Obstacles, sc, pb->A, pb->sd, NULL));
     PetscCall(PffTallSetSolid(pb->tc, pb->A, pb->sd));
   }
   PetscCall(PffTallGetKSP(pb->tc, &ksp));
