@@ -262,6 +262,7 @@ PetscErrorCode PffFlowReferenceBodies_Private(PffFlow f)
 
   PetscFunctionBeginUser;
   if (!f->bodies) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PetscLogEventBegin(PFF_FlowRefBodies, 0, 0, 0, 0));
   PetscCall(PffGridGetRaster(f->grid, nb, NULL, NULL));
   PetscCall(PffGridGetSizes(f->grid, NULL, NULL, NULL, &h, NULL));
   nblocks               = nb[0] * nb[1] * nb[2];
@@ -281,6 +282,7 @@ PetscErrorCode PffFlowReferenceBodies_Private(PffFlow f)
   }
   PetscCall(ReferenceBlocks(f, r1, PETSC_FALSE));
   PetscCall(PetscFree(r1));
+  PetscCall(PetscLogEventEnd(PFF_FlowRefBodies, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

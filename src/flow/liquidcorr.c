@@ -118,8 +118,8 @@ PetscErrorCode PffFlowLiquidCorrection_Private(PffFlow f, PetscReal dt)
 
   PetscFunctionBeginUser;
   PetscCall(PffGridHaloBegin(f->grid, f->chVol));
-  PetscCall(PffGridHaloEnd(f->grid, f->chVol));
   PetscCall(PffGridHaloBegin(f->grid, f->chLS));
+  PetscCall(PffGridHaloEnd(f->grid, f->chVol));
   PetscCall(PffGridHaloEnd(f->grid, f->chLS));
   PetscCall(LiquidExcess(f, sums));
   PetscCall(PffGridHaloBegin(f->grid, f->chCdiv));

@@ -171,6 +171,7 @@ PetscErrorCode PffTallBuild(PffTall tc, PetscInt chPhi)
   PetscFunctionBeginUser;
   PetscCall(PffTallFreeBuild_Private(tc));
   PetscCallMPI(MPI_Barrier(tc->comm));
+  PetscCall(PetscLogEventBegin(PFF_TallBuild, 0, 0, 0, 0));
   PetscCall(PetscTime(&t0));
   PetscCall(PffTallBuildColumns_Private(tc, chPhi));
   PetscCall(PffTallBuildRows_Private(tc));
@@ -182,6 +183,7 @@ PetscErrorCode PffTallBuild(PffTall tc, PetscInt chPhi)
   PetscCall(PetscTime(&t1));
   tc->assembleTime = t1 - t0;
   tc->built        = PETSC_TRUE;
+  PetscCall(PetscLogEventEnd(PFF_TallBuild, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
