@@ -6,7 +6,10 @@
 # frames. Usage: bash jobs/bench/tall_scene.sh [N [t_end [drop|dam]]] (default 64, 0.5 s, drop; N cells across
 # the unit box, the dam's tank is 3N/4 high). Appends the summaries to output/bench/tall_scene.txt and one CSV row
 # per method to docs/data/tall_scene_issue15.csv (drop) or docs/data/tall_dam_issue15.csv (dam): commit, UTC time,
-# load average, steps, seconds per step, the Pressure stage's seconds per step, particles, liquid volume drift.
+# load average, steps, seconds per step, the Pressure stage's seconds per step, particles, liquid volume drift; and
+# one row per method to docs/data/tall_table1_issue15.csv with the paper's Table 1 columns in seconds per step
+# (postproc/table1.py on the run's -log_view: sizing, quadtree, advection, tall cells, projection, extrapolation,
+# particles, other, total) and the one-time set-up.
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/../setup.sh"
 n=${1:-64}
@@ -21,6 +24,8 @@ case $scene in
 esac
 mkdir -p "$out"
 commit=$(git -C "$PFF_ROOT" describe --always --dirty)
+t1csv=$PFF_ROOT/docs/data/tall_table1_issue15.csv
+[ -f "$t1csv" ] || echo "commit,utc,load1,scene,n,method,t_end,steps,sizing,quadtree,advection,tall_cells,projection,extrapolate,particles,other,total,setup_s,setup_sizing_s,setup_quadtree_s" > "$t1csv"
 [ -f "$csv" ] || echo "commit,utc,load1,n,method,t_end,steps,wall_s,s_per_step,pressure_s_per_step,pressure_share,particles,liquid_volume_drift,max_abs_drift" > "$csv"
 for m in "uniform:-grid_levels 1 -tall_merge false" "tall:-grid_levels 1" "quadtree:"; do
   name=${m%%:*}
@@ -30,6 +35,7 @@ for m in "uniform:-grid_levels 1 -tall_merge false" "tall:-grid_levels 1" "quadt
   log=$out/${tag}_${n}_${name}.log
   OMP_NUM_THREADS=1 "${PFF_MPIEXEC[@]}" -n 2 "$PFF_BUILD_DIR/bin/pfflip" -options_file_yaml "$PFF_ROOT/config/$cfg" \
     -grid_cells "$cells" -grid_h "$h" -sim_t_end "$tend" -sim_frames false -output_dir "$out/${tag}_${n}_${name}" \
+    -log_view ":$out/${tag}_${n}_${name}.lv" \
     ${opts[@]+"${opts[@]}"} > "$log" 2>&1
   { echo "# $utc $commit load $(cut -d' ' -f1-3 /proc/loadavg) scene=$scene n=$n method=$name ${opts[*]+${opts[*]}}"; grep -E "^(summary|conservation|tall cells)" "$log"; } | tee -a "$out/tall_scene.txt"
   steps=$(grep -oP "summary: \K[0-9]+(?= steps)" "$log")
@@ -41,4 +47,7 @@ for m in "uniform:-grid_levels 1 -tall_merge false" "tall:-grid_levels 1" "quadt
   awk -v c="$commit" -v u="$utc" -v l="$load" -v n="$n" -v m="$name" -v t="$tend" -v s="$steps" -v w="$wall" \
       -v sh="$share" -v p="$parts" -v d="$drift" -v md="$maxd" \
       'BEGIN{printf "%s,%s,%s,%s,%s,%s,%s,%s,%.4f,%.4f,%s,%s,%s,%s\n", c,u,l,n,m,t,s,w,w/s,w/s*sh/100,sh,p,d,md}' >> "$csv"
+  t1=$(/usr/bin/python3 "$PFF_ROOT/postproc/table1.py" "$out/${tag}_${n}_${name}.lv" "$steps" --csv)
+  echo "$commit,$utc,$load,$scene,$n,$name,$tend,$steps,$t1" >> "$t1csv"
+  /usr/bin/python3 "$PFF_ROOT/postproc/table1.py" "$out/${tag}_${n}_${name}.lv" "$steps" | tee -a "$out/tall_scene.txt"
 done

@@ -7,7 +7,8 @@ PetscLogEvent PFF_GridSetUp, PFF_GridAdapt, PFF_GridRefine, PFF_GridPartition, P
     PFF_HaloEnd, PFF_HaloRevBegin, PFF_HaloRevEnd, PFF_GridInterp, PFF_GridLaplacian, PFF_IOWrite, PFF_IORead,
     PFF_PartSeed, PFF_PartAdapt, PFF_FlowAdaptDist, PFF_FlowAdaptMap, PFF_PartBin, PFF_PartMigrate, PFF_P2G, PFF_G2P,
     PFF_Advect, PFF_PressSetUp, PFF_PressAssemble, PFF_PressSolve, PFF_PhaseField, PFF_Forces, PFF_FlowExtrap,
-    PFF_CkptWrite, PFF_CkptRead, PFF_MGSetUp, PFF_MGApply, PFF_MGSmooth, PFF_MGCoarse, PFF_FlowRefBodies, PFF_TallBuild;
+    PFF_CkptWrite, PFF_CkptRead, PFF_MGSetUp, PFF_MGApply, PFF_MGSmooth, PFF_MGCoarse, PFF_FlowRefBodies, PFF_TallBuild,
+    PFF_TallSizing;
 
 static PetscBool PffPackageInitialized = PETSC_FALSE;
 
@@ -47,6 +48,7 @@ PetscErrorCode PffInitializePackage(void)
   PetscCall(PetscLogEventRegister("FlowExtrapolate", PFF_CLASSID, &PFF_FlowExtrap));
   PetscCall(PetscLogEventRegister("FlowRefBodies", PFF_CLASSID, &PFF_FlowRefBodies));
   PetscCall(PetscLogEventRegister("TallBuild", PFF_CLASSID, &PFF_TallBuild));
+  PetscCall(PetscLogEventRegister("TallSizing", PFF_CLASSID, &PFF_TallSizing));
   PetscCall(PetscLogEventRegister("CkptWrite", PFF_CLASSID, &PFF_CkptWrite));
   PetscCall(PetscLogEventRegister("CkptRead", PFF_CLASSID, &PFF_CkptRead));
   PetscCall(PetscLogEventRegister("MGSetUp", PFF_CLASSID, &PFF_MGSetUp));

@@ -35,6 +35,7 @@ PetscErrorCode PffTallSizingLevels(PffTall tc, PetscInt chPhi, PetscInt chU, Pet
   MPI_Comm        comm = tc->comm;
 
   PetscFunctionBeginUser;
+  PetscCall(PetscLogEventBegin(PFF_TallSizing, 0, 0, 0, 0));
   PetscCall(PffGridGetRaster(grid, nb, NULL, NULL));
   PetscCall(PffGridGetSizes(grid, NULL, &glevels, NULL, &h0, NULL));
   nlevels = tc->levels > 0 ? PetscMin(tc->levels, glevels) : glevels;
@@ -108,5 +109,6 @@ PetscErrorCode PffTallSizingLevels(PffTall tc, PetscInt chPhi, PetscInt chU, Pet
     for (PetscInt bj = 0; bj < nb[1]; bj++) level[c % nb[0] + nb[0] * (bj + nb[1] * (c / nb[0]))] = l;
   }
   PetscCall(PetscFree2(want, wantAll));
+  PetscCall(PetscLogEventEnd(PFF_TallSizing, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
