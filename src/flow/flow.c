@@ -86,6 +86,10 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
                            "PffFlowSetFromOptions", f->deleteBubbles, &f->deleteBubbles, NULL));
   PetscCall(PffOptionsEnum("-flow_model", "Flow model: two_phase (PF-FLIP) or liquid (free surface, tall cells)",
                            "PffFlowSetFromOptions", PffFlowModels, (PetscEnum)f->model, (PetscEnum *)&f->model, NULL));
+  PetscCall(PffOptionsBool("-flow_liquid_surface_volume",
+                           "Liquid model: the free surface where the particles' trilinear volume fraction is 1/2, not "
+                           "Eq. 7's phi",
+                           "PffFlowSetFromOptions", f->liquidSurfaceVolume, &f->liquidSurfaceVolume, NULL));
   PetscCall(PffOptionsInt("-flow_extrapolate_layers",
                           "Face layers the liquid velocity is extrapolated into the air for liquid particles (Sec. "
                           "3.7; 0: off)",
@@ -132,6 +136,9 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
              "-flow_flip %g is invalid: must be in [0, 1]", (double)f->flip);
   PetscCheck(f->volCorr >= 0 && f->volCorr <= 1, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-flow_volume_correction %g is invalid: must be in [0, 1]", (double)f->volCorr);
+  PetscCheck(
+      !f->liquidSurfaceVolume || (f->model == PFF_FLOW_LIQUID && f->volCorr > 0), f->comm, PETSC_ERR_ARG_INCOMP,
+      "-flow_liquid_surface_volume needs -flow_model liquid and -flow_volume_correction > 0 (its volume channels)");
   PetscCheck(f->volCorrMaxDisp > 0 && f->volCorrMaxDisp <= 1, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-flow_volume_correction_max_displacement %g is invalid: must be in (0, 1] cells",
              (double)f->volCorrMaxDisp);

@@ -43,7 +43,8 @@ struct _n_PffFlow {
   PetscReal cfl, dtMax, alphaPhi, deltaPhi, flip;
   PetscReal volCorr, volCorrMaxDisp, volCorrRtol; /* -flow_volume_correction* (correction.c) */
   PetscBool usePressure, deleteBubbles;
-  PetscReal rho0; /* kernel sum rho~_0 (Eq. 7) */
+  PetscBool liquidSurfaceVolume; /* the liquid model's surface from the particles' volume fraction (liquid.c) */
+  PetscReal rho0;                /* kernel sum rho~_0 (Eq. 7) */
 
   PffSolidFn    solid;
   void         *solidCtx;

@@ -15,22 +15,75 @@
    - in cells whose centre lies inside a solid: the particles never go there, so psi is extrapolated, the mean
      of the face neighbours' outside the solid (after Batty et al. 2007); read from the particles, a cell cut by
      a solid wall would be air, a free surface with p = 0 at the wall. */
+/* -flow_liquid_surface_volume: the cell's liquid fraction from the particles' trilinear volume (P2G's volume over
+   the lattice's, per face, the mean over the axes of each axis' open faces) into chF. Trilinear weights are
+   separable and a partition of unity, so a flat pool's fraction is the same beside a wall as inside, and a face
+   on the particles' surface reads 1/2; Eq. 7's kernel is radial (a wall cuts it differently at the surface) and its
+   square root puts phi = 1/2 where a cell is a quarter full. */
+static PetscErrorCode PffFlowVolumeFraction(PffFlow f, PetscInt chF)
+{
+  PetscInt nlocal;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridHaloBegin(f->grid, f->chVol));
+  PetscCall(PffGridHaloEnd(f->grid, f->chVol));
+  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo   info;
+    const PffView *vv[3], *vr[3], *vo[3];
+    float         *out;
+    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+    PetscCall(PffGridGetBlockData(f->grid, chF, lb, 0, &out));
+    for (PetscInt a = 0; a < 3; a++) {
+      PetscCall(PffGridGetBlockViews(f->grid, f->chVol, lb, a, &vv[a]));
+      PetscCall(PffGridGetBlockViews(f->grid, f->chVolRef, lb, a, &vr[a]));
+      PetscCall(PffGridGetBlockViews(f->grid, f->chOpen, lb, a, &vo[a]));
+    }
+    const PetscInt n = info.n;
+    for (PetscInt k = 0; k < n; k++)
+      for (PetscInt j = 0; j < n; j++)
+        for (PetscInt i = 0; i < n; i++) {
+          PetscReal axes  = 0;
+          PetscInt  naxes = 0;
+          for (PetscInt a = 0; a < 3; a++) {
+            PetscReal sum = 0;
+            PetscInt  cnt = 0;
+            for (PetscInt side = 0; side < 2; side++) {
+              const PetscInt  ii = i + (a == 0) * side, jj = j + (a == 1) * side, kk = k + (a == 2) * side;
+              const PetscReal ref = *PffViewsAt(vr[a], ii, jj, kk, n);
+              if (!(*PffViewsAt(vo[a], ii, jj, kk, n) > 0) || !(ref > 0)) continue;
+              sum += PetscMin(1.0, (PetscReal)*PffViewsAt(vv[a], ii, jj, kk, n) / ref);
+              cnt++;
+            }
+            if (cnt) {
+              axes += sum / (PetscReal)cnt;
+              naxes++;
+            }
+          }
+          out[i + n * (j + n * k)] = naxes ? (float)(axes / (PetscReal)naxes) : 0.0f;
+        }
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 static PetscErrorCode PffFlowLevelSet(PffFlow f)
 {
   const PetscInt d[6][3] = {{-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
+  const PetscInt chF = f->liquidSurfaceVolume ? f->chCdiv : f->chPhi; /* the liquid fraction the surface is at 1/2 of */
   PetscInt       nlocal;
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridHaloBegin(f->grid, f->chPhi));
-  PetscCall(PffGridHaloEnd(f->grid, f->chPhi));
+  if (f->liquidSurfaceVolume) PetscCall(PffFlowVolumeFraction(f, chF));
+  PetscCall(PffGridHaloBegin(f->grid, chF));
+  PetscCall(PffGridHaloEnd(f->grid, chF));
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo   info;
     const PffView *v, *vs = NULL;
     float         *phi, *ls, *sd = NULL;
     PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
-    PetscCall(PffGridGetBlockData(f->grid, f->chPhi, lb, 0, &phi));
-    PetscCall(PffGridGetBlockViews(f->grid, f->chPhi, lb, 0, &v));
+    PetscCall(PffGridGetBlockData(f->grid, chF, lb, 0, &phi));
+    PetscCall(PffGridGetBlockViews(f->grid, chF, lb, 0, &v));
     PetscCall(PffGridGetBlockData(f->grid, f->chLS, lb, 0, &ls));
     if (f->chSolidD >= 0) {
       PetscCall(PffGridGetBlockData(f->grid, f->chSolidD, lb, 0, &sd));
