@@ -37,26 +37,20 @@ typedef struct {
    reference seeds at every step. */
 static PetscBool PffReferenceReaches(const PffReferenceCtx *c, const PetscReal x[3])
 {
-  PetscInt lo[3], hi[3], b0[3];
+  PetscInt lo[3], hi[3], b0[3], d[3];
 
   for (PetscInt a = 0; a < 3; a++)
     b0[a] = PetscMax(0, PetscMin(c->nb[a] - 1, (PetscInt)PetscFloorReal((x[a] - c->origin[a]) / c->blen)));
   const PetscReal reach = 1.5 * c->h0 * (PetscReal)(1 << c->level[b0[0] + c->nb[0] * (b0[1] + c->nb[1] * b0[2])]);
-  for (PetscInt a = 0; a < 3; a++) {
-    lo[a] = (PetscInt)PetscFloorReal((x[a] - reach - c->origin[a]) / c->blen);
-    hi[a] = (PetscInt)PetscFloorReal((x[a] + reach - c->origin[a]) / c->blen);
+  for (PetscInt a = 0; a < 3; a++) { /* reach is under a block: the neighbours are one block away at most */
+    lo[a] = (PetscInt)PetscFloorReal((x[a] - reach - c->origin[a]) / c->blen) - b0[a];
+    hi[a] = (PetscInt)PetscFloorReal((x[a] + reach - c->origin[a]) / c->blen) - b0[a];
   }
-  for (PetscInt k = lo[2]; k <= hi[2]; k++)
-    for (PetscInt j = lo[1]; j <= hi[1]; j++)
-      for (PetscInt i = lo[0]; i <= hi[0]; i++) {
-        PetscInt q[3] = {i, j, k}, inside = 1;
-        for (PetscInt a = 0; a < 3; a++) {
-          if (c->periodic[a])
-            q[a] = ((q[a] % c->nb[a]) + c->nb[a]) % c->nb[a];
-          else if (q[a] < 0 || q[a] >= c->nb[a])
-            inside = 0;
-        }
-        if (inside && c->r1[q[0] + c->nb[0] * (q[1] + c->nb[1] * q[2])]) return PETSC_TRUE;
+  for (d[2] = lo[2]; d[2] <= hi[2]; d[2]++)
+    for (d[1] = lo[1]; d[1] <= hi[1]; d[1]++)
+      for (d[0] = lo[0]; d[0] <= hi[0]; d[0]++) {
+        const PetscInt q = PffRasterNeighbour(c->nb, c->periodic, b0, d);
+        if (q >= 0 && c->r1[q]) return PETSC_TRUE;
       }
   return PETSC_FALSE;
 }
@@ -275,11 +269,7 @@ PetscErrorCode PffFlowReferenceBodies_Private(PffFlow f)
     PetscCall(PffGridGetSizes(f->grid, NULL, NULL, NULL, NULL, periodic));
     PffDilate(nb, periodic, r1, f->refBody);
   }
-  for (PetscInt b = 0; b < nblocks; b++) {
-    const PetscBool now = r1[b];
-    r1[b]               = (PetscBool)(now || f->refBody[b]);
-    f->refBody[b]       = now;
-  }
+  PffFlowBlocksSince_Private(nblocks, r1, f->refBody);
   PetscCall(ReferenceBlocks(f, r1, PETSC_FALSE));
   PetscCall(PetscFree(r1));
   PetscCall(PetscLogEventEnd(PFF_FlowRefBodies, 0, 0, 0, 0));

@@ -22,11 +22,7 @@ static PetscErrorCode LiquidOpenFaces(PffFlow f, PetscBool moved)
     PetscCall(PetscCalloc1(nblocks, &r));
     /* a distance is clipped at PFF_TALL_SOLID_DISTANCE_MAX cells of its block's level, the coarsest at most */
     PetscCall(PffFlowBodyBlocks_Private(f, (PFF_TALL_SOLID_DISTANCE_MAX + 1) * h * (PetscReal)(1 << (nlevels - 1)), r));
-    for (PetscInt b = 0; b < nblocks; b++) {
-      const PetscBool now = r[b];
-      r[b]                = (PetscBool)(now || f->openBody[b]);
-      f->openBody[b]      = now;
-    }
+    PffFlowBlocksSince_Private(nblocks, r, f->openBody);
   }
   PetscCall(PffTallFillSolid(f->grid, f->solid, f->solidCtx, f->chOpen, f->chSolidD, moved ? r : NULL));
   PetscCall(PetscFree(r));

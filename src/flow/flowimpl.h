@@ -158,6 +158,15 @@ PETSC_INTERN PetscErrorCode PffFlowPhaseField_Private(PffFlow);
 /* correction.c */
 PETSC_INTERN PetscErrorCode PffFlowReferenceVolume_Private(PffFlow);
 PETSC_INTERN PetscErrorCode PffFlowReferenceBodies_Private(PffFlow);
+/* now[] becomes now or last (the blocks a body is at or has left since the last call), last[] becomes now. */
+static inline void PffFlowBlocksSince_Private(PetscInt nblocks, PetscBool now[], PetscBool last[])
+{
+  for (PetscInt b = 0; b < nblocks; b++) {
+    const PetscBool n = now[b];
+    now[b]            = (PetscBool)(n || last[b]);
+    last[b]           = n;
+  }
+}
 /* Sets r[b] for the raster blocks within margin of a body's bounding box (others untouched). */
 PETSC_INTERN PetscErrorCode PffFlowBodyBlocks_Private(PffFlow, PetscReal, PetscBool[]);
 PETSC_INTERN PetscErrorCode PffFlowVolumeCorrection_Private(PffFlow, PffFlowStepStats *);
