@@ -124,6 +124,11 @@ PETSC_EXTERN PetscErrorCode PffTallProject(PffTall tc, PetscInt chU, PetscReal d
 PETSC_EXTERN PetscErrorCode PffTallMaxDivergence(PffTall tc, PetscInt chU, PetscReal *maxdiv);
 /* Largest |u_row| over the rows (the row averages of chU). Collective. */
 PETSC_EXTERN PetscErrorCode PffTallMaxRowVelocity(PffTall tc, PetscInt chU, PetscReal *umax);
+/* The liquid's momentum (x, y, z) in the projection's own measure: the sum over the rows of rho V A u_row / F, the
+   weights of the kinetic energy the variational projection minimises (a free-surface row, F = 1 / theta, counts
+   the liquid part theta of its control volume), which the projection changes only by the pressure's impulse on
+   the walls and the bodies. Collective. */
+PETSC_EXTERN PetscErrorCode PffTallLiquidMomentum(PffTall tc, PetscInt chU, PetscReal rho, PetscReal mom[3]);
 /* The assembled operator [grad]^T V F [grad] (borrowed, valid until the next Build) and the solution of
    the last projection (samples, global numbering). */
 PETSC_EXTERN PetscErrorCode PffTallGetOperator(PffTall tc, Mat *A);

@@ -93,6 +93,26 @@ static PetscErrorCode BodyJacobian(PffTall tc, const PffTallBody *body, Vec J[6]
             dA[a] = s * s * ((1 - PffTallCellFaceOpen(corner, a, 1)) - (1 - PffTallCellFaceOpen(corner, a, 0)));
             r[a]  = tc->origin[a] + ((PetscReal)g[a] + 0.5) * s - body->X[a];
           }
+          { /* y-faces over their control volumes, as PffTallFillSolid fills them */
+            PetscReal lvl[3][4], face[2][4], open[2];
+            for (PetscInt q = 0; q < 4; q++) {
+              const PetscInt dx = q >= 2, dz = q == 1 || q == 2;
+              x[0] = tc->origin[0] + (PetscReal)(gi + dx) * s;
+              x[2] = tc->origin[2] + (PetscReal)(gk + dz) * s;
+              for (PetscInt e = 0; e < 3; e++) { /* the centre heights of the cells below, this one and above */
+                x[1]      = tc->origin[1] + ((PetscReal)j - 0.5 + (PetscReal)e) * s;
+                lvl[e][q] = body->fn(x, grad, body->ctx);
+              }
+              for (PetscInt side = 0; side < 2; side++) face[side][q] = corner[(side << 1) | (dz << 2) | dx];
+            }
+            for (PetscInt side = 0; side < 2; side++) {
+              x[0]       = tc->origin[0] + (PetscReal)gi * s;
+              x[1]       = tc->origin[1] + (PetscReal)(j + side) * s;
+              x[2]       = tc->origin[2] + (PetscReal)gk * s;
+              open[side] = PffTallYFaceOpen_Private(body->fn, body->ctx, x, s, lvl[side], face[side], lvl[side + 1]);
+            }
+            dA[1] = s * s * ((1 - open[1]) - (1 - open[0]));
+          }
           if (dA[0] == 0 && dA[1] == 0 && dA[2] == 0) continue;
           jc[0] = dA[0];
           jc[1] = dA[1];

@@ -47,17 +47,63 @@ PetscReal PffTallCellFaceOpen(const PetscReal corner[8], PetscInt a, PetscInt si
   return PffTallOpenFraction(phi);
 }
 
+PetscReal PffTallYFaceOpen_Private(PffSolidFn fn, void *ctx, const PetscReal x0[3], PetscReal s,
+                                   const PetscReal below[4], const PetscReal face[4], const PetscReal above[4])
+{
+  PetscReal sum = 0, g[3];
+  PetscInt  n   = 0;
+
+  for (PetscInt q = 0; q < 4; q++) {
+    if ((below[q] > 0) == (above[q] > 0)) continue;
+    const PetscBool lowOpen = (PetscBool)(below[q] > 0);
+    PetscReal       a = x0[1] - 0.5 * s, b = x0[1] + 0.5 * s;
+    PetscReal       x[3] = {x0[0] + (PetscReal)(q >= 2) * s, 0, x0[2] + (PetscReal)(q == 1 || q == 2) * s};
+    for (PetscInt it = 0; it < 32; it++) { /* bisection: a box's distance is not linear along an edge near its sides */
+      x[1] = 0.5 * (a + b);
+      if ((fn(x, g, ctx) > 0) == lowOpen)
+        a = x[1];
+      else
+        b = x[1];
+    }
+    sum += 0.5 * (a + b);
+    n++;
+  }
+  if (!n) return PffTallOpenFraction(face);
+  const PetscReal t = (sum / (PetscReal)n - (x0[1] - 0.5 * s)) / s;
+  return t * PffTallOpenFraction(below) + (1 - t) * PffTallOpenFraction(above);
+}
+
+/* Open fraction of the lower y-face of cell (i, j, k) of a block (j = n: the face on top of the block) from the
+   block's nodes and half-height nodes. */
+static PetscReal YFace(PffSolidFn fn, void *ctx, const PffBlockInfo *info, const PetscReal node[],
+                       const PetscReal half[], PetscInt i, PetscInt j, PetscInt k)
+{
+  const PetscInt m = info->n + 1;
+  PetscReal      below[4], face[4], above[4], x0[3];
+
+  for (PetscInt q = 0; q < 4; q++) {
+    const PetscInt ii = i + (q >= 2), kk = k + (q == 1 || q == 2), h0 = ii + m * (j + (m + 1) * kk);
+    below[q] = half[h0];
+    above[q] = half[h0 + m];
+    face[q]  = node[ii + m * (j + m * kk)];
+  }
+  x0[0] = info->lo[0] + (PetscReal)i * info->h;
+  x0[1] = info->lo[1] + (PetscReal)j * info->h;
+  x0[2] = info->lo[2] + (PetscReal)k * info->h;
+  return PffTallYFaceOpen_Private(fn, ctx, x0, info->h, below, face, above);
+}
+
 PetscErrorCode PffTallFillSolid(PffGrid grid, PffSolidFn fn, void *ctx, PetscInt chA, PetscInt chSolid,
                                 const PetscBool blocks[])
 {
   PetscInt   nlocal, n0;
   PetscBool  periodic[3];
-  PetscReal *node;
+  PetscReal *node, *half;
 
   PetscFunctionBeginUser;
   PetscCheck(fn != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "tallcell: no solid distance function");
   PetscCall(PffGridGetSizes(grid, &n0, NULL, NULL, NULL, periodic));
-  PetscCall(PetscMalloc1((n0 + 1) * (n0 + 1) * (n0 + 1), &node));
+  PetscCall(PetscMalloc2((n0 + 1) * (n0 + 1) * (n0 + 1), &node, (n0 + 1) * (n0 + 2) * (n0 + 1), &half));
   PetscCall(PffGridGetLocalBlocks(grid, &nlocal));
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo info;
@@ -67,11 +113,13 @@ PetscErrorCode PffTallFillSolid(PffGrid grid, PffSolidFn fn, void *ctx, PetscInt
     if (blocks && !blocks[info.gid]) continue;
     const PetscInt n = info.n, m = n + 1;
     for (PetscInt k = 0; k <= n; k++)
-      for (PetscInt j = 0; j <= n; j++)
+      for (PetscInt j = 0; j <= n + 1; j++)
         for (PetscInt i = 0; i <= n; i++) {
           const PetscInt ijk[3] = {i, j, k};
           for (PetscInt d = 0; d < 3; d++) x[d] = info.lo[d] + (PetscReal)ijk[d] * info.h;
-          node[i + m * (j + m * k)] = fn(x, g, ctx);
+          if (j <= n) node[i + m * (j + m * k)] = fn(x, g, ctx);
+          x[1] -= 0.5 * info.h; /* the y-faces' control volumes reach half a cell below and above them */
+          half[i + m * (j + (m + 1) * k)] = fn(x, g, ctx);
         }
     for (PetscInt d = 0; d < 3; d++) PetscCall(PffGridGetBlockData(grid, chA, lb, d, &a[d]));
     PetscCall(PffGridGetBlockData(grid, chSolid, lb, 0, &sd));
@@ -87,14 +135,18 @@ PetscErrorCode PffTallFillSolid(PffGrid grid, PffSolidFn fn, void *ctx, PetscInt
           }
           for (PetscInt d = 0; d < 3; d++) {
             const PetscBool wall = (PetscBool)(!periodic[d] && info.ijk[d] == 0 && ijk[d] == 0);
-            a[d][c]              = wall ? 0.0f : (float)PffTallCellFaceOpen(corner, d, 0);
+            a[d][c] =
+                wall ? 0.0f
+                     : (float)(d == 1 ? YFace(fn, ctx, &info, node, half, i, j, k) : PffTallCellFaceOpen(corner, d, 0));
           }
+          /* a cell with its corners inside may still open downwards or upwards over a y-face's control volume */
+          if (inside) inside = (PetscBool)(a[1][c] == 0 && YFace(fn, ctx, &info, node, half, i, j + 1, k) == 0);
           for (PetscInt d = 0; d < 3; d++) x[d] = info.lo[d] + ((PetscReal)ijk[d] + 0.5) * info.h;
           sd[c] = (float)PetscMin(fn(x, g, ctx) / info.h, PFF_TALL_SOLID_DISTANCE_MAX);
           if (inside) sd[c] = PetscMin(sd[c], -1.0f);
         }
   }
-  PetscCall(PetscFree(node));
+  PetscCall(PetscFree2(node, half));
   PetscCall(PffGridHaloBegin(grid, chA));
   PetscCall(PffGridHaloEnd(grid, chA));
   PetscCall(PffGridHaloBegin(grid, chSolid));

@@ -372,6 +372,22 @@ PetscErrorCode PffTallMaxRowVelocity(PffTall tc, PetscInt chU, PetscReal *umax)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+PetscErrorCode PffTallLiquidMomentum(PffTall tc, PetscInt chU, PetscReal rho, PetscReal mom[3])
+{
+  const PetscScalar *u;
+  PetscReal          loc[3] = {0, 0, 0};
+
+  PetscFunctionBeginUser;
+  PetscCheck(tc->built, tc->comm, PETSC_ERR_ORDER, "tallcell: call PffTallBuild() first");
+  PetscCall(RowVelocity(tc, chU, tc->w));
+  PetscCall(VecGetArrayRead(tc->w, &u));
+  for (PetscInt r = 0; r < tc->nrows; r++)
+    loc[tc->faceComp[tc->rowFace[r]]] += rho * tc->rowV[r] * tc->rowA[r] / tc->rowF[r] * PetscRealPart(u[r]);
+  PetscCall(VecRestoreArrayRead(tc->w, &u));
+  PetscCallMPI(MPIU_Allreduce(loc, mom, 3, MPIU_REAL, MPI_SUM, tc->comm));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffTallGetOperator(PffTall tc, Mat *A)
 {
   PetscFunctionBeginUser;

@@ -129,6 +129,15 @@ static inline void PffTallCentreWeights(const PetscInt ri[], const PetscReal rr[
    eight corners (corner v at offset (v & 1, v >> 1 & 1, v >> 2) cells). */
 PETSC_INTERN PetscReal PffTallCellFaceOpen(const PetscReal corner[8], PetscInt a, PetscInt side);
 
+/* Open fraction of the face normal to y with lower corner x0 (its height y_f) and size s, over its control volume
+   y_f -+ s/2: where a solid's boundary crosses a corner's vertical in it, the open areas at y_f - s/2 and y_f + s/2
+   weighted by the mean crossing height, otherwise the face's own open area. below, face, above: the signed
+   distance fn at the face's corners, in the cyclic order (x, z) offsets (0,0), (0,1), (1,1), (1,0), at the
+   heights y_f - s/2, y_f, y_f + s/2. */
+PETSC_INTERN PetscReal PffTallYFaceOpen_Private(PffSolidFn fn, void *ctx, const PetscReal x0[3], PetscReal s,
+                                                const PetscReal below[4], const PetscReal face[4],
+                                                const PetscReal above[4]);
+
 /* Whether a record kind is a liquid cell (cubic or part of a tall cell). */
 static inline PetscBool PffTallLiquidKind(PetscInt kind)
 {

@@ -15,7 +15,9 @@ typedef struct {
   PetscReal H;     /* pool height */
   PetscInt  shape; /* 0 flat pool; 1 wavy surface, a drop and an air pocket; 2 flat pool and a drop;
                       3 two pools, H for z < 1/2 and H - 0.2 beyond (with the wall of solid 2) */
-  PetscInt solid;  /* 0 none, 1 the three obstacles of Obstacles(), 2 a wall across z = 1/2, 3 a round tank */
+  PetscInt solid;  /* 0 none, 1 the three obstacles of Obstacles(), 2 a wall across z = 1/2, 3 a round tank,
+                      4 the floating box */
+  PetscReal lift;  /* the floating box raised by this from FLOAT_LO, FLOAT_HI (m) */
 } Scene;
 
 /* Signed distance to the union of boxes, none aligned with the cells (h = 1/32 on the finest level). Solid 1:
@@ -42,7 +44,7 @@ static PetscReal Obstacles(const PetscReal x[3], PetscReal grad[3], void *ctx)
   for (PetscInt b = first[sc->solid]; b <= last[sc->solid]; b++) {
     PetscReal e[3], half[3];
     for (PetscInt a = 0; a < 3; a++) {
-      e[a]    = x[a] - 0.5 * (box[b][0][a] + box[b][1][a]);
+      e[a]    = x[a] - 0.5 * (box[b][0][a] + box[b][1][a]) - (b == 4 && a == 1 ? sc->lift : 0);
       half[a] = 0.5 * (box[b][1][a] - box[b][0][a]);
     }
     dmin = PetscMin(dmin, PffBoxDistance(e, half, NULL));
@@ -126,20 +128,22 @@ typedef struct {
   PffTallStats st;
 } Problem;
 
-/* Whether cell (i, j, k) of local block lb lies inside the obstacles (all eight corners): the cells without a
+/* Whether cell (i, j, k) of local block lb lies inside the obstacles (all eight corners, and the verticals
+   through them half a cell below and above, where the control volumes of its y-faces reach): the cells without a
    pressure sample. */
 static PetscErrorCode CellClosed(Problem *pb, PetscInt lb, PetscInt i, PetscInt j, PetscInt k, PetscBool *closed)
 {
   PffBlockInfo info;
-  Scene        sc = {0, 0, pb->solid};
+  Scene        sc = {0, 0, pb->solid, 0};
 
   PetscFunctionBeginUser;
   *closed = (PetscBool)(pb->A >= 0);
   if (!*closed) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PffGridGetBlockInfo(pb->t.grid, lb, &info));
-  for (PetscInt v = 0; v < 8 && *closed; v++) {
-    const PetscInt  q[3] = {i + (v & 1), j + ((v >> 1) & 1), k + (v >> 2)};
-    const PetscReal x[3] = {info.lo[0] + q[0] * info.h, info.lo[1] + q[1] * info.h, info.lo[2] + q[2] * info.h};
+  for (PetscInt v = 0; v < 16 && *closed; v++) { /* the corners, and half a cell below and above them */
+    const PetscInt  q[3] = {i + (v & 1), j + ((v >> 1) & 1), k + ((v >> 2) & 1)};
+    const PetscReal dy   = v < 8 ? 0 : (((v >> 1) & 1) ? 0.5 : -0.5) * info.h;
+    const PetscReal x[3] = {info.lo[0] + q[0] * info.h, info.lo[1] + q[1] * info.h + dy, info.lo[2] + q[2] * info.h};
     *closed              = (PetscBool)(Obstacles(x, NULL, &sc) <= 0);
   }
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -281,7 +285,7 @@ static PETSC_UNUSED PetscErrorCode RandomQuadtrees(MPI_Comm comm, PetscInt solid
 
   PetscFunctionBeginUser;
   for (uint64_t seed = 1; seed <= 3; seed++) {
-    Scene      sc = {0.5, 1, solid};
+    Scene      sc = {0.5, 1, solid, 0};
     Problem    pb;
     Mat        A;
     KSP        eig;

@@ -27,7 +27,7 @@ static PetscReal DropU(const PetscReal x[3], PetscInt comp, void *vctx)
 static PetscErrorCode PartitionIndependence(MPI_Comm comm)
 {
   const PetscInt nb[3] = {4, 4, 4};
-  Scene          sc    = {0.55, 1, 0};
+  Scene          sc    = {0.55, 1, 0, 0};
   Problem        pa, ps;
   PetscReal      ea, es, wa, ws;
 
@@ -61,7 +61,7 @@ static PetscErrorCode Sizing(MPI_Comm comm)
 
   PetscFunctionBeginUser;
   for (PetscInt shape = 0; shape <= 2; shape += 2) {
-    Scene   sc = {0.61, shape, 0};
+    Scene   sc = {0.61, shape, 0, 0};
     Problem pb;
     PetscCall(ProblemCreate(comm, nb, 0, 1, PETSC_TRUE, &sc, &pb));
     PetscCall(PffGridFillChannel(pb.t.grid, pb.u, shape ? DropU : Gravity, NULL));
@@ -172,7 +172,7 @@ static PetscErrorCode BadInput(MPI_Comm comm)
   }
   {
     const PetscInt nb[3] = {2, 2, 2};
-    Scene          sc    = {0.5, 0, 0};
+    Scene          sc    = {0.5, 0, 0, 0};
     Problem        pb;
     PetscCall(ProblemCreate(comm, nb, 0, 1, PETSC_TRUE, &sc, &pb));
     PetscCall(PetscOptionsSetValue(NULL, "-tall_layer_fraction", "2"));
@@ -191,7 +191,7 @@ int main(int argc, char **argv)
 {
   PetscCall(PetscInitialize(&argc, &argv, NULL, NULL));
   {
-    const Scene sc = {0.61, 0, 0};
+    const Scene sc = {0.61, 0, 0, 0};
     PetscCall(StillWater(PETSC_COMM_WORLD, "uniform cubic", 0, PETSC_FALSE, &sc));
     PetscCall(StillWater(PETSC_COMM_WORLD, "uniform tall", 0, PETSC_TRUE, &sc));
     PetscCall(StillWater(PETSC_COMM_WORLD, "quadtree tall", -1, PETSC_TRUE, &sc));

@@ -57,7 +57,7 @@ static PetscReal Rotation(const PetscReal x[3], PetscInt comp, void *vctx)
 static PetscErrorCode RotationChange(MPI_Comm comm, PetscInt uniform, PetscBool staircase, PetscReal *change)
 {
   const PetscInt nb[3] = {4, 4, 4};
-  Scene          sc    = {0.61, 0, 3};
+  Scene          sc    = {0.61, 0, 3, 0};
   Problem        pb;
   PetscInt       chD;
 
@@ -123,14 +123,14 @@ int main(int argc, char **argv)
   PetscCall(PetscInitialize(&argc, &argv, NULL, NULL));
   PetscCall(Fractions(PETSC_COMM_WORLD));
   {
-    const Scene sc = {0.61, 0, 1};
+    const Scene sc = {0.61, 0, 1, 0};
     PetscCall(StillWater(PETSC_COMM_WORLD, "obstacles, uniform cubic", 0, PETSC_FALSE, &sc));
     PetscCall(StillWater(PETSC_COMM_WORLD, "obstacles, uniform tall", 0, PETSC_TRUE, &sc));
     PetscCall(StillWater(PETSC_COMM_WORLD, "obstacles, quadtree tall", -1, PETSC_TRUE, &sc));
     PetscCall(StillWater(PETSC_COMM_WORLD, "obstacles, quadtree cubic", -1, PETSC_FALSE, &sc));
   }
   {
-    const Scene sc = {0.61, 3, 2};
+    const Scene sc = {0.61, 3, 2, 0};
     PetscCall(StillWater(PETSC_COMM_WORLD, "two pools behind a wall, uniform cubic", 0, PETSC_FALSE, &sc));
     PetscCall(StillWater(PETSC_COMM_WORLD, "two pools behind a wall, uniform tall", 0, PETSC_TRUE, &sc));
   }
