@@ -136,10 +136,12 @@ PetscReal PffFlowLiquidSolid_Private(const PetscReal x[3], PetscReal grad[3], vo
   return d;
 }
 
-/* In face channel ch, faces the solids close wholly and whose centre lies inside a body move with the body (v +
-   omega x r along the face's axis): G2P and the advection near a moving body read the body's motion there, as
-   the projection's flux balance does through J, instead of rest. */
-static PetscErrorCode BodyFaceVelocities(PffFlow f, PetscInt ch)
+/* What G2P and the advection read at a face the solids cut: the mean over the whole face, A u + (1 - A) u_solid
+   for the velocity and A du for its change (the solid's part moves with the solid: v + omega x r of a body
+   holding the face's centre, rest otherwise), instead of the liquid part's u alone. The projection leaves a
+   nearly closed face's u free to take whatever pressure jump its few open square millimetres see (the flux A u
+   is what it balances), and a particle beside a body read those as velocities of metres per second. */
+static PetscErrorCode SolidFaceVelocities(PffFlow f, PetscInt chU, PetscInt chDu)
 {
   PetscInt nlocal;
 
@@ -150,17 +152,23 @@ static PetscErrorCode BodyFaceVelocities(PffFlow f, PetscInt ch)
     PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
     const PetscInt n = info.n;
     for (PetscInt d = 0; d < 3; d++) {
-      float *u, *open;
-      PetscCall(PffGridGetBlockData(f->grid, ch, lb, d, &u));
+      float *u, *du, *open;
+      PetscCall(PffGridGetBlockData(f->grid, chU, lb, d, &u));
+      PetscCall(PffGridGetBlockData(f->grid, chDu, lb, d, &du));
       PetscCall(PffGridGetBlockData(f->grid, f->chOpen, lb, d, &open));
       for (PetscInt k = 0; k < n; k++)
         for (PetscInt j = 0; j < n; j++)
           for (PetscInt i = 0; i < n; i++) {
-            const PetscInt c = i + n * (j + n * k);
-            PetscReal      x[3], vel[3];
-            if (open[c] > 0) continue;
-            PffFacePosition(&info, i, j, k, d, x);
-            if (PffBodiesVelocityAt(f->bodies, x, vel)) u[c] = (float)vel[d];
+            const PetscInt  c = i + n * (j + n * k);
+            const PetscReal a = PetscMax(0, open[c]);
+            PetscReal       x[3], vel[3] = {0, 0, 0};
+            if (a >= 1) continue;
+            if (f->bodies) {
+              PffFacePosition(&info, i, j, k, d, x);
+              (void)PffBodiesVelocityAt(f->bodies, x, vel);
+            }
+            u[c]  = (float)(a * u[c] + (1 - a) * vel[d]);
+            du[c] = (float)(a * du[c]);
           }
     }
   }
@@ -210,10 +218,12 @@ PetscErrorCode PffFlowLiquidG2P_Private(PffFlow f, const PetscReal alpha[])
   PetscFunctionBeginUser;
   PetscCall(PffExtrapolateLiquidVelocities(f->grid, 2, src, f->chPhiF, f->chOpen, f->extrapLayers, f->chUlMask, dst,
                                            work, NULL));
-  if (f->bodies) {
-    PetscCall(BodyFaceVelocities(f, f->chUl));
+  if (f->solid) {
+    PetscCall(SolidFaceVelocities(f, f->chUl, f->chDuL));
     PetscCall(PffGridHaloBegin(f->grid, f->chUl));
     PetscCall(PffGridHaloEnd(f->grid, f->chUl));
+    PetscCall(PffGridHaloBegin(f->grid, f->chDuL));
+    PetscCall(PffGridHaloEnd(f->grid, f->chDuL));
   }
   PetscCall(PffParticlesG2P(f->part, f->chUl, f->chDuL, alpha));
   PetscFunctionReturn(PETSC_SUCCESS);
