@@ -1,11 +1,14 @@
 /* Solid fractions of the variational pressure (tall cells Sec. 4.3.2, [A] of Eq. 1, after Ando & Batty 2020):
    the open area fraction of every face from a solid signed distance, and the distance at every cell centre.
 
-   A cell inside the solids (all eight corners, hence all six faces closed) gets a centre distance of at most
-   -1 cell, which PffTall reads as "no sample"; any other cell's centre lies less than sqrt(3)/2 cells deep.
-   A face's fraction comes from the distance at its four corners: the square is cut into four triangles
-   around its centre (the corners' mean there) and the distance is linear on each triangle, so a planar
-   solid boundary gets its exact fraction and a curved one a second-order one. The nodes of a block are
+   A cell inside the solids (all six faces closed) gets a centre distance of at most -1 cell, which PffTall reads
+   as "no sample"; any other cell's centre lies less than about a cell deep. A face's fraction comes from the
+   distance at its four corners: the square is cut into four triangles around its centre (the corners' mean
+   there) and the distance is linear on each triangle, so a planar solid boundary gets its exact fraction and a
+   curved one a second-order one. A face normal to y that a horizontal boundary crosses within half a cell takes
+   the open part of its control volume instead (PffTallYFaceOpen_Private), so that a body's bottom between two
+   cell centres shares its area between the two cells' J in proportion and the buoyancy follows the draft
+   continuously, not in steps of a cell. The nodes of a block (and the heights half a cell between them) are
    evaluated once and shared by the faces that meet there. */
 #include "tallimpl.h"
 #include <pff/particles.h>
