@@ -4,20 +4,23 @@
 # -tall_merge false), uniform tall cells (-grid_levels 1) and the quadtree (3 levels), 2 ranks x 1 thread, to
 # t = 3 s. postproc/slosh_period.py measures the period from the liquid centroid; one CSV row per method goes to
 # docs/data/tall_slosh_issue15.csv (commit, UTC time, load, period, error, run time, liquid volume drift).
-# Usage: bash jobs/bench/tall_slosh.sh
+# Usage: bash jobs/bench/tall_slosh.sh [options...] (extra pfflip options for every run, e.g. -tall_theta_min 0.1;
+# they are appended to the CSV's method column).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/../setup.sh"
 out=$PFF_ROOT/output/bench
 csv=$PFF_ROOT/docs/data/tall_slosh_issue15.csv
 mkdir -p "$out"
+extra=("$@")
 commit=$(git -C "$PFF_ROOT" describe --always --dirty)
 [ -f "$csv" ] || echo "commit,utc,load1,method,steps,wall_s,s_per_step,period_s,analytic_s,period_error,liquid_volume_drift" > "$csv"
 for m in "uniform:-grid_levels 1 -tall_merge false" "tall:-grid_levels 1" "quadtree:"; do
-  name=${m%%:*}
+  name=${m%%:*}${extra[*]+ ${extra[*]}}
   read -r -a opts <<< "${m#*:}"
+  opts+=(${extra[@]+"${extra[@]}"})
   load=$(cut -d' ' -f1 /proc/loadavg)
   utc=$(date -u +%FT%TZ)
-  dir=$out/tall_slosh_$name
+  dir=$out/tall_slosh_${m%%:*}
   OMP_NUM_THREADS=1 "${PFF_MPIEXEC[@]}" -n 2 "$PFF_BUILD_DIR/bin/pfflip" -options_file_yaml "$PFF_ROOT/config/tall_slosh_small.yaml" \
     -sim_frames false -output_dir "$dir" ${opts[@]+"${opts[@]}"} > "$dir.log" 2>&1
   res=$(/usr/bin/python3 "$PFF_ROOT/postproc/slosh_period.py" "$dir/fluid_diag.csv")

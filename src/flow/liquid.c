@@ -221,8 +221,8 @@ PetscErrorCode PffFlowLiquidG2P_Private(PffFlow f, const PetscReal alpha[])
   if (f->solid) {
     PetscCall(SolidFaceVelocities(f, f->chUl, f->chDuL));
     PetscCall(PffGridHaloBegin(f->grid, f->chUl));
-    PetscCall(PffGridHaloEnd(f->grid, f->chUl));
     PetscCall(PffGridHaloBegin(f->grid, f->chDuL));
+    PetscCall(PffGridHaloEnd(f->grid, f->chUl));
     PetscCall(PffGridHaloEnd(f->grid, f->chDuL));
   }
   PetscCall(PffParticlesG2P(f->part, f->chUl, f->chDuL, alpha));

@@ -90,10 +90,11 @@ static PetscErrorCode BodyJacobian(PffTall tc, const PffTallBody *body, Vec J[6]
             corner[v] = body->fn(x, grad, body->ctx);
           }
           for (PetscInt a = 0; a < 3; a++) { /* the covered fractions 1 - open of the upper and the lower face */
-            dA[a] = s * s * ((1 - PffTallCellFaceOpen(corner, a, 1)) - (1 - PffTallCellFaceOpen(corner, a, 0)));
-            r[a]  = tc->origin[a] + ((PetscReal)g[a] + 0.5) * s - body->X[a];
+            if (a != 1)
+              dA[a] = s * s * ((1 - PffTallCellFaceOpen(corner, a, 1)) - (1 - PffTallCellFaceOpen(corner, a, 0)));
+            r[a] = tc->origin[a] + ((PetscReal)g[a] + 0.5) * s - body->X[a];
           }
-          { /* y-faces over their control volumes, as PffTallFillSolid fills them */
+          { /* y-faces over their control volumes, as PffTallFillSolid fills them (their own area without a crossing) */
             PetscReal lvl[3][4], face[2][4], open[2];
             for (PetscInt q = 0; q < 4; q++) {
               const PetscInt dx = q >= 2, dz = q == 1 || q == 2;
