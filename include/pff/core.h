@@ -16,7 +16,7 @@ PETSC_EXTERN PetscLogEvent PFF_GridSetUp, PFF_GridAdapt, PFF_GridRefine, PFF_Gri
     PFF_IORead, PFF_PartSeed, PFF_PartAdapt, PFF_FlowAdaptDist, PFF_FlowAdaptMap, PFF_PartBin, PFF_PartMigrate, PFF_P2G,
     PFF_G2P, PFF_Advect, PFF_PressSetUp, PFF_PressAssemble, PFF_PressSolve, PFF_PhaseField, PFF_Forces, PFF_FlowExtrap,
     PFF_CkptWrite, PFF_CkptRead, PFF_MGSetUp, PFF_MGApply, PFF_MGSmooth, PFF_MGCoarse, PFF_FlowRefBodies, PFF_TallBuild,
-    PFF_TallSizing;
+    PFF_TallSizing, PFF_FlowBandAdvect, PFF_FlowBandSeed, PFF_FlowBandDist;
 
 /* Registers the class id and every log event. Not collective; idempotent. */
 PETSC_EXTERN PetscErrorCode PffInitializePackage(void);

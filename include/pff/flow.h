@@ -45,12 +45,13 @@ typedef struct {
 
 /* What one step did; the scene prints it in the progress line. */
 typedef struct {
-  PetscReal         dt, cfl; /* time step and the CFL number it realised (max |u| dt / h0) */
-  PetscReal         umax;    /* max particle speed at the start of the step */
-  PetscInt64        particles;
-  PetscInt64        bubblesDeleted, dropletCandidates; /* escaped particles this step (Sec. 3.4) */
-  PffPressureStats  pressure;                          /* its = 0 when the solve is off */
-  PffPressureStats  correction;                        /* the volume-correction solve (its = 0 when off) */
+  PetscReal  dt, cfl; /* time step and the CFL number it realised (max |u| dt / h0) */
+  PetscReal  umax;    /* max particle speed at the start of the step */
+  PetscInt64 particles;
+  PetscInt64 bubblesDeleted, dropletCandidates; /* escaped particles this step (Sec. 3.4) */
+  PetscInt64 bandDeleted, bandSeeded; /* narrow-band FLIP (-flow_liquid_band): particles below the band, reseeded */
+  PffPressureStats  pressure;         /* its = 0 when the solve is off */
+  PffPressureStats  correction;       /* the volume-correction solve (its = 0 when off) */
   PffParticleStats  advect;
   PffFlowAdaptStats adapt;                       /* zero when no adaptation ran this step */
   PetscLogDouble    stageTime[PFF_FLOW_NSTAGES]; /* wall seconds per stage, see PffFlowStageNames */

@@ -8,7 +8,7 @@ PetscLogEvent PFF_GridSetUp, PFF_GridAdapt, PFF_GridRefine, PFF_GridPartition, P
     PFF_PartSeed, PFF_PartAdapt, PFF_FlowAdaptDist, PFF_FlowAdaptMap, PFF_PartBin, PFF_PartMigrate, PFF_P2G, PFF_G2P,
     PFF_Advect, PFF_PressSetUp, PFF_PressAssemble, PFF_PressSolve, PFF_PhaseField, PFF_Forces, PFF_FlowExtrap,
     PFF_CkptWrite, PFF_CkptRead, PFF_MGSetUp, PFF_MGApply, PFF_MGSmooth, PFF_MGCoarse, PFF_FlowRefBodies, PFF_TallBuild,
-    PFF_TallSizing;
+    PFF_TallSizing, PFF_FlowBandAdvect, PFF_FlowBandSeed, PFF_FlowBandDist;
 
 static PetscBool PffPackageInitialized = PETSC_FALSE;
 
@@ -49,6 +49,9 @@ PetscErrorCode PffInitializePackage(void)
   PetscCall(PetscLogEventRegister("FlowRefBodies", PFF_CLASSID, &PFF_FlowRefBodies));
   PetscCall(PetscLogEventRegister("TallBuild", PFF_CLASSID, &PFF_TallBuild));
   PetscCall(PetscLogEventRegister("TallSizing", PFF_CLASSID, &PFF_TallSizing));
+  PetscCall(PetscLogEventRegister("FlowBandAdvect", PFF_CLASSID, &PFF_FlowBandAdvect));
+  PetscCall(PetscLogEventRegister("FlowBandSeed", PFF_CLASSID, &PFF_FlowBandSeed));
+  PetscCall(PetscLogEventRegister("FlowBandDist", PFF_CLASSID, &PFF_FlowBandDist));
   PetscCall(PetscLogEventRegister("CkptWrite", PFF_CLASSID, &PFF_CkptWrite));
   PetscCall(PetscLogEventRegister("CkptRead", PFF_CLASSID, &PFF_CkptRead));
   PetscCall(PetscLogEventRegister("MGSetUp", PFF_CLASSID, &PFF_MGSetUp));

@@ -39,7 +39,8 @@ PetscErrorCode PffFlowCreate(PffGrid grid, PffFlow *flow)
       f->chVort                                                                                       = -1;
   f->chUl = f->chUlMask = f->chUlWork = f->chVol = f->chVolRef = f->chQ = f->chUa = -1;
   f->chLS = f->chDuL = f->chSolidD = f->chLSs = f->chTallH = -1;
-  f->model                                                 = PFF_FLOW_TWO_PHASE;
+  f->chLSg = f->chLSgWork = f->chUg = -1;
+  f->model                          = PFF_FLOW_TWO_PHASE;
   PetscCall(PffParticlesCreate(grid, &f->part));
   PetscCall(PffPressureCreate(grid, &f->press));
   *flow = f;
@@ -86,6 +87,10 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
                            "PffFlowSetFromOptions", f->deleteBubbles, &f->deleteBubbles, NULL));
   PetscCall(PffOptionsEnum("-flow_model", "Flow model: two_phase (PF-FLIP) or liquid (free surface, tall cells)",
                            "PffFlowSetFromOptions", PffFlowModels, (PetscEnum)f->model, (PetscEnum *)&f->model, NULL));
+  PetscCall(PffOptionsReal("-flow_liquid_band",
+                           "Liquid model: FLIP particles only within this many cells under the surface, the grid's "
+                           "level set and velocity below (narrow-band FLIP; 0: particles fill the liquid)",
+                           "PffFlowSetFromOptions", f->band, &f->band, NULL));
   PetscCall(PffOptionsBool("-flow_liquid_surface_volume",
                            "Liquid model: the free surface where the particles' trilinear volume fraction is 1/2, not "
                            "Eq. 7's phi",
@@ -139,6 +144,10 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
   PetscCheck(
       !f->liquidSurfaceVolume || (f->model == PFF_FLOW_LIQUID && f->volCorr > 0), f->comm, PETSC_ERR_ARG_INCOMP,
       "-flow_liquid_surface_volume needs -flow_model liquid and -flow_volume_correction > 0 (its volume channels)");
+  PetscCheck(f->band == 0 || (f->band >= 2 && f->band <= 64), f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-flow_liquid_band %g is invalid: must be 0 (off) or in [2, 64] cells", (double)f->band);
+  PetscCheck(f->band == 0 || f->model == PFF_FLOW_LIQUID, f->comm, PETSC_ERR_ARG_INCOMP,
+             "-flow_liquid_band needs -flow_model liquid (the two-phase model keeps its particles everywhere)");
   PetscCheck(f->volCorrMaxDisp > 0 && f->volCorrMaxDisp <= 1, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-flow_volume_correction_max_displacement %g is invalid: must be in (0, 1] cells",
              (double)f->volCorrMaxDisp);
@@ -275,6 +284,7 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
       PetscCall(PffTallSetSolid(f->tall, f->chOpen, f->chSolidD));
     }
   }
+  if (f->model == PFF_FLOW_LIQUID) PetscCall(PffFlowLiquidBandSetUp_Private(f));
   /* the volume correction needs the projection and moves particles, so a prescribed field has none */
   if (!f->prescribed && f->usePressure && f->volCorr > 0) {
     PetscCall(PffGridAddChannel(f->grid, "volume", PFF_CHANNEL_FACE, 1, &f->chVol));
@@ -386,6 +396,10 @@ PetscErrorCode PffFlowSeed(PffFlow f, PffSeedFn fn, void *ctx)
   else {
     PetscCall(PffParticlesSeed(f->part, fn, ctx));
     PetscCall(PffFlowUpdateFields(f, PETSC_FALSE));
+    if (f->band > 0) { /* narrow-band FLIP: the grid takes the liquid below the band */
+      PetscCall(PffFlowLiquidBandInit_Private(f));
+      PetscCall(PffFlowUpdateFields(f, PETSC_FALSE));
+    }
   }
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -34,9 +34,14 @@ struct _n_PffFlow {
   PetscInt     chSolidD;    /* liquid model with solids: solid distance at cell centres in cells (chOpen: fractions) */
   PetscInt     chLSs;       /* liquid model, quadtree during the run: the level set smoothed for the sizing function */
   PetscInt     chTallH;     /* liquid model: the tall cells' heights, for frames */
-  PffBodies    bodies;      /* liquid model: rigid bodies (NULL: none) */
-  PffSolidFn   staticSolid; /* with bodies, the scene's static solids; solid is then the union with the bodies */
-  void        *staticSolidCtx;
+  /* liquid model, narrow-band FLIP (liquidband.c): -flow_liquid_band (cells; 0: particles fill the liquid), the grid's
+     level set (cell, a distance to the surface down to the band's depth) and its advection's scratch, the grid's
+     velocity below the band (face) */
+  PetscReal  band;
+  PetscInt   chLSg, chLSgWork, chUg;
+  PffBodies  bodies;      /* liquid model: rigid bodies (NULL: none) */
+  PffSolidFn staticSolid; /* with bodies, the scene's static solids; solid is then the union with the bodies */
+  void      *staticSolidCtx;
 
   /* physics and numerics */
   PetscReal rho[PFF_PARTICLE_NTYPES], nu[PFF_PARTICLE_NTYPES], gravity[3];
@@ -171,6 +176,12 @@ static inline void PffFlowBlocksSince_Private(PetscInt nblocks, PetscBool now[],
 PETSC_INTERN PetscErrorCode PffFlowBodyBlocks_Private(PffFlow, PetscReal, PetscBool[]);
 PETSC_INTERN PetscErrorCode PffFlowVolumeCorrection_Private(PffFlow, PffFlowStepStats *);
 PETSC_INTERN PetscErrorCode PffFlowCorrectionVelocity_Private(PffFlow, PetscReal dt, PetscBool extrapolated);
+/* liquidband.c */
+PETSC_INTERN PetscErrorCode PffFlowLiquidBandSetUp_Private(PffFlow);
+PETSC_INTERN PetscErrorCode PffFlowLiquidBandInit_Private(PffFlow);
+PETSC_INTERN PetscErrorCode PffFlowLiquidBandFill_Private(PffFlow);
+PETSC_INTERN PetscErrorCode PffFlowLiquidBandDistance_Private(PffFlow);
+PETSC_INTERN PetscErrorCode PffFlowLiquidBandAdvect_Private(PffFlow, PetscReal dt, PetscInt chVel, PffFlowStepStats *);
 /* liquidcorr.c */
 PETSC_INTERN PetscErrorCode PffFlowLiquidCorrection_Private(PffFlow, PetscReal dt);
 /* fields.c */

@@ -57,6 +57,7 @@ static PetscErrorCode PffFlowTransfer(PffFlow f, PffFlowStepStats *st)
   PetscFunctionBeginUser;
   PetscCall(PffStageBegin(PFF_STAGE_P2G, &t0));
   PetscCall(PffParticlesP2G(f->part, f->rho, f->chMass, f->chUt, f->chVol));
+  if (f->band > 0) PetscCall(PffFlowLiquidBandFill_Private(f));
   PetscCall(PffStageEnd(st, PFF_STAGE_P2G, t0));
   PetscCall(PffStageBegin(PFF_STAGE_PHASE, &t0));
   PetscCall(PffFlowPhaseField_Private(f));
@@ -164,6 +165,7 @@ static PetscErrorCode PffFlowAdvect(PffFlow f, PetscReal dt, PffFlowStepStats *s
        volume correction added the displacement in chUa (liquidcorr.c) */
     ch[PFF_PARTICLE_LIQUID] = f->chUa >= 0 ? f->chUa : f->chUl;
     PetscCall(PffParticlesAdvectPerType(f->part, ch, dt, f->solid, f->solidCtx, &st->advect));
+    if (f->band > 0) PetscCall(PffFlowLiquidBandAdvect_Private(f, dt, ch[PFF_PARTICLE_LIQUID], st));
     PetscFunctionReturn(PETSC_SUCCESS);
   } else if (f->chUlMask >= 0) {
     PetscInt64 faces = 0;
@@ -229,6 +231,11 @@ PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
     PetscCall(PffStageEnd(st, PFF_STAGE_FORCES, t0));
   } else {
     PetscCall(PffFlowTransfer(f, st));
+    if (f->band > 0) { /* the grid's level set from the particles and the grid's liquid together */
+      PetscCall(PffStageBegin(PFF_STAGE_PHASE, &t0));
+      PetscCall(PffFlowLiquidBandDistance_Private(f));
+      PetscCall(PffStageEnd(st, PFF_STAGE_PHASE, t0));
+    }
 
     PetscCall(PffStageBegin(PFF_STAGE_FORCES, &t0));
     PetscCall(PffFlowFaceVelocity_Private(f, dt));

@@ -223,11 +223,13 @@ static PetscErrorCode PffFlowSceneConservation(PffFlowScene *fs)
   const PetscReal  *dmax = fs->driftMax, *bound = fs->driftBound;
   PetscBool         counts  = (PetscBool)(c1[PFF_PARTICLE_LIQUID] == c0[PFF_PARTICLE_LIQUID] &&
                                  c1[PFF_PARTICLE_AIR] == c0[PFF_PARTICLE_AIR] - fs->bubblesDeletedRun);
-  PetscBool         volumes = PETSC_TRUE;
+  PetscBool         volumes = PETSC_TRUE, band = (PetscBool)(fs->bandDeletedRun || fs->bandSeededRun);
   PetscInt          adapt;
 
   PetscFunctionBeginUser;
   PetscCall(PffFlowGetAdaptLevels(fs->flow, &adapt));
+  /* the narrow band deletes and reseeds particles: the count (corrected by them) is the check, not the mass */
+  if (band) adapt = 0;
   if (adapt) {
     /* splits and coarsening change the counts; coarsening keeps the mass in expectation only */
     PetscReal drift[PFF_PARTICLE_NTYPES];
@@ -241,6 +243,11 @@ static PetscErrorCode PffFlowSceneConservation(PffFlowScene *fs)
   }
   for (PetscInt k = 0; k < PFF_PARTICLE_NTYPES; k++)
     if (bound[k] > 0 && dmax[k] > bound[k]) volumes = PETSC_FALSE;
+  if (fs->bandDeletedRun || fs->bandSeededRun)
+    PetscCall(PetscPrintf(fs->scene->comm,
+                          "narrow band: %" PetscInt64_FMT " liquid particles deleted below the band, %" PetscInt64_FMT
+                          " reseeded in it (the start count below includes both)\n",
+                          fs->bandDeletedRun, fs->bandSeededRun));
   PetscCall(PetscPrintf(fs->scene->comm,
                         "conservation: liquid particles %" PetscInt64_FMT " (start %" PetscInt64_FMT
                         ")  gas particles %" PetscInt64_FMT " (start %" PetscInt64_FMT ", %" PetscInt64_FMT
@@ -481,6 +488,9 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
     for (PetscInt k = 0; k < PFF_FLOW_NSTAGES; k++) total[k] += st.stageTime[k];
     stepTime += t1 - t0;
     if (deleteBubbles) fs->bubblesDeletedRun += st.bubblesDeleted;
+    fs->bandDeletedRun += st.bandDeleted;
+    fs->bandSeededRun += st.bandSeeded;
+    fs->countStart[PFF_PARTICLE_LIQUID] += st.bandSeeded - st.bandDeleted;
     PetscCall(PffFlowSceneDiagRow(fs, step, t - st.dt, &st, t1 - t0));
     if (bodies) PetscCall(PffBodiesWriteCSV(bodies, s->outdir, step, t));
     PetscCall(PetscSNPrintf(extra, sizeof(extra),
@@ -488,6 +498,11 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
                             " %.1e  bubbles %" PetscInt64_FMT "  droplets %" PetscInt64_FMT,
                             (double)st.dt, (double)st.cfl, st.particles, st.pressure.its, (double)st.pressure.rnorm,
                             st.bubblesDeleted, st.dropletCandidates));
+    if (st.bandDeleted || st.bandSeeded) {
+      const size_t len = strlen(extra);
+      PetscCall(PetscSNPrintf(extra + len, sizeof(extra) - len, "  band -%" PetscInt64_FMT " +%" PetscInt64_FMT,
+                              st.bandDeleted, st.bandSeeded));
+    }
     if (st.adapt.repartitioned) {
       const size_t len = strlen(extra);
       PetscCall(PetscSNPrintf(extra + len, sizeof(extra) - len,

@@ -44,6 +44,9 @@ struct _PffFlowScene {
   /* particle bookkeeping of this run (since the seed or the restart): counts per type at the start
      and at the end, and the gas particles deleted as bubbles in between; set before ops.finish */
   PetscInt64 countStart[PFF_PARTICLE_NTYPES], countEnd[PFF_PARTICLE_NTYPES], bubblesDeletedRun;
+  /* narrow-band FLIP: particles deleted below the band and reseeded in it over this run (countStart[liquid] follows
+     their difference, so that the count stays exact) */
+  PetscInt64 bandDeletedRun, bandSeededRun;
   PetscReal  massStart[PFF_PARTICLE_NTYPES], massEnd[PFF_PARTICLE_NTYPES]; /* particle mass per type */
   /* volume bookkeeping per phase (index PFF_PARTICLE_LIQUID, PFF_PARTICLE_AIR), since the seed: the
      reference volumes V0 (after the seed; carried through checkpoints), the relative drift (V - V0) / V0
