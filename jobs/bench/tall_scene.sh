@@ -3,8 +3,10 @@
 # drop of config/tall_drop_small.yaml or the breaking dam with pillars of config/tall_dam_small.yaml
 # (-flow_model liquid) on uniform cubic cells (-grid_levels 1 -tall_merge false), uniform tall cells
 # (-grid_levels 1) and quadtree tall cells (3 levels, the sizing function's quadtree), 2 ranks x 1 thread, no
-# frames. Usage: bash jobs/bench/tall_scene.sh [N [t_end [drop|dam]]] (default 64, 0.5 s, drop; N cells across
-# the unit box, the dam's tank is 3N/4 high). Appends the summaries to output/bench/tall_scene.txt and one CSV row
+# frames. Usage: bash jobs/bench/tall_scene.sh [N [t_end [drop|dam [options [methods]]]]] (default 64, 0.5 s, drop;
+# N cells across the unit box, the dam's tank is 3N/4 high; options, one string, are added to every run and to the
+# method's name in the CSVs, e.g. "-flow_liquid_band 4" gives quadtree+flow_liquid_band_4; methods a subset of
+# "uniform tall quadtree"). Appends the summaries to output/bench/tall_scene.txt and one CSV row
 # per method to docs/data/tall_scene_issue15.csv (drop) or docs/data/tall_dam_issue15.csv (dam): commit, UTC time,
 # load average, steps, seconds per step, the Pressure stage's seconds per step, particles, liquid volume drift; and
 # one row per method to docs/data/tall_table1_issue15.csv with the paper's Table 1 columns in seconds per step
@@ -15,6 +17,10 @@ source "$(dirname "${BASH_SOURCE[0]}")/../setup.sh"
 n=${1:-64}
 tend=${2:-0.5}
 scene=${3:-drop}
+extra=${4:-}
+methods=${5:-uniform tall quadtree}
+suffix=""
+[ -n "$extra" ] && suffix="+$(echo "$extra" | sed 's/^-//; s/ -/+/g; s/ /_/g')"
 h=$(awk -v n="$n" 'BEGIN{printf "%.10g", 1.0/n}')
 out=$PFF_ROOT/output/bench
 case $scene in
@@ -29,7 +35,9 @@ t1csv=$PFF_ROOT/docs/data/tall_table1_issue15.csv
 [ -f "$csv" ] || echo "commit,utc,load1,n,method,t_end,steps,wall_s,s_per_step,pressure_s_per_step,pressure_share,particles,liquid_volume_drift,max_abs_drift" > "$csv"
 for m in "uniform:-grid_levels 1 -tall_merge false" "tall:-grid_levels 1" "quadtree:"; do
   name=${m%%:*}
-  read -r -a opts <<< "${m#*:}"
+  [[ " $methods " == *" $name "* ]] || continue
+  read -r -a opts <<< "${m#*:} $extra"
+  name=$name$suffix
   load=$(cut -d' ' -f1 /proc/loadavg)
   utc=$(date -u +%FT%TZ)
   log=$out/${tag}_${n}_${name}.log
