@@ -145,6 +145,9 @@ PETSC_EXTERN PetscErrorCode PffParticlesReset(PffParticles p);
 /* Removes the particles flagged PFF_PARTICLE_FLAG_REMOVE (keeps the order of the others; binned particles
    stay binned, with their bins shrunk). Not collective. */
 PETSC_EXTERN PetscErrorCode PffParticlesRemove(PffParticles p);
+/* Gives back memory after many particles were removed: the store's capacity shrinks to an eighth above the count
+   and the scratch is freed (it grows again on demand). The particles and their bins are kept. Not collective. */
+PETSC_EXTERN PetscErrorCode PffParticlesTrim(PffParticles p);
 /* Removes every particle (the store keeps its capacity). Not collective. */
 PETSC_EXTERN PetscErrorCode PffParticlesClear(PffParticles p);
 /* What one PffParticlesAdaptLevels did, summed over ranks. */

@@ -18,6 +18,9 @@
      the dam gained 3 to 5 %.
    Distances are in cells of each block's level: a coarse column's band is as many of its cells deep. */
 #include "flowimpl.h"
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 
 /* The fill reaches faces deeper than B - PFF_BAND_FILL_OFFSET cells, u_g is kept a cell above that */
 #define PFF_BAND_FILL_OFFSET 1.5
@@ -507,6 +510,11 @@ PetscErrorCode PffFlowLiquidBandInit_Private(PffFlow f)
   PetscCall(PffGridHaloBegin(f->grid, f->chLSg));
   PetscCall(PffGridHaloEnd(f->grid, f->chLSg));
   PetscCall(DeleteDeep(f, &deleted));
+  /* the seed filled the whole liquid: its store and scratch would stay resident */
+  PetscCall(PffParticlesTrim(f->part));
+#if defined(__GLIBC__)
+  malloc_trim(0);
+#endif
   PetscCall(PetscInfo(NULL, "narrow band: %" PetscInt64_FMT " particles below %g cells removed after the seed\n",
                       deleted, (double)(f->band + 0.5)));
   PetscFunctionReturn(PETSC_SUCCESS);

@@ -116,6 +116,24 @@ PetscErrorCode PffParticlesReserve_Private(PffParticles p, PetscInt m)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+PetscErrorCode PffParticlesTrim(PffParticles p)
+{
+  PetscFunctionBeginUser;
+  const PetscInt cap = PetscMax(1024, p->n + p->n / 8);
+  if (cap < p->cap) {
+    PetscCall(PffParticleSoAGrow(&p->s, cap));
+    p->cap = cap;
+  }
+  PetscCall(PetscFree(p->i32work));
+  PetscCall(PetscFree(p->fwork));
+  p->ni32work = p->nfwork = 0;
+  for (int k = 0; k < PFF_SCRATCH_N; k++) {
+    PetscCall(PetscFree(p->scratch[k]));
+    p->nscratch[k] = 0;
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffParticlesGetIntWork_Private(PffParticles p, size_t n, int32_t **w)
 {
   PetscFunctionBeginUser;
