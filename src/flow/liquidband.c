@@ -58,22 +58,37 @@ static PetscErrorCode CopyCells(PffGrid grid, PetscInt src, PetscInt dst)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Whether cell channel ch holds one value on block lb and its halo of width w (then any sample is that value). */
-static PetscErrorCode ConstantBlock(PffGrid grid, PetscInt ch, PetscInt lb, PetscInt n, PetscInt w, PetscBool *flat)
+/* Whether cell channel ch holds one value on block lb and its halo of width w, walls aside (holes: the block's mask;
+   samples never read across a wall). Then any sample there is that value. The block's own cells first (a block the
+   surface crosses fails there), then the halo region by region. */
+static PetscErrorCode ConstantBlock(PffGrid grid, PetscInt ch, PetscInt lb, PetscInt n, PetscInt holes, PetscInt w,
+                                    PetscBool *flat)
 {
   const PffView *v;
+  float         *own;
 
   PetscFunctionBeginUser;
+  *flat = PETSC_FALSE;
+  PetscCall(PffGridGetBlockData(grid, ch, lb, 0, &own));
+  const float v0 = own[0];
+  for (PetscInt c = 1; c < n * n * n; c++)
+    if (own[c] != v0) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PffGridGetBlockViews(grid, ch, lb, 0, &v));
-  const float v0 = *PffViewsAt(v, 0, 0, 0, n);
-  *flat          = PETSC_TRUE;
-  for (PetscInt k = -w; k < n + w && *flat; k++)
-    for (PetscInt j = -w; j < n + w && *flat; j++)
-      for (PetscInt i = -w; i < n + w; i++)
-        if (*PffViewsAt(v, i, j, k, n) != v0) {
-          *flat = PETSC_FALSE;
-          break;
-        }
+  for (PetscInt r = 0; r < 27; r++) {
+    PetscInt d[3], lo[3], hi[3];
+    if (r == 13 || ((holes >> r) & 1)) continue;
+    PffRegionDirection(r, d);
+    for (PetscInt a = 0; a < 3; a++) {
+      lo[a] = d[a] < 0 ? -w : (d[a] > 0 ? n : 0);
+      hi[a] = d[a] < 0 ? 0 : (d[a] > 0 ? n + w : n);
+    }
+    const PffView *vr = &v[r];
+    for (PetscInt k = lo[2]; k < hi[2]; k++)
+      for (PetscInt j = lo[1]; j < hi[1]; j++)
+        for (PetscInt i = lo[0]; i < hi[0]; i++)
+          if (vr->ptr[vr->off + i * vr->sx + j * vr->sy + k * vr->sz] != v0) PetscFunctionReturn(PETSC_SUCCESS);
+  }
+  *flat = PETSC_TRUE;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -92,12 +107,12 @@ static inline PetscBool Interior(const PffBlockInfo *info, const PffView *v, con
 }
 
 /* psi_g from the phase field: (1/2 - phi) 2 h in the interface layer and the air, as the liquid model's level set;
-   in full cells the largest of the face neighbours' minus h, at most -h, by B + 2 passes of one halo exchange each
-   (on the width-1 scratch), so a distance in cells down to B + 2 cells; deeper cells keep -(B + 2) h. */
+   in interior cells the largest of the face neighbours' minus h, at most -h, by B + 1 passes of one halo exchange
+   each (on the width-1 scratch), so a distance in cells down to the deletion's depth; deeper cells keep -(B + 2) h. */
 PetscErrorCode PffFlowLiquidBandDistance_Private(PffFlow f)
 {
   const PetscInt d6[6][3] = {{-1, 0, 0}, {1, 0, 0}, {0, -1, 0}, {0, 1, 0}, {0, 0, -1}, {0, 0, 1}};
-  const PetscInt passes   = (PetscInt)PetscCeilReal(f->band) + 2;
+  const PetscInt passes   = (PetscInt)PetscCeilReal(f->band) + 1; /* values down to B + 1 cells: the deletion's depth */
   PetscInt       nlocal, ncells = 0;
   PetscBT        interior;
 
@@ -148,7 +163,7 @@ PetscErrorCode PffFlowLiquidBandDistance_Private(PffFlow f)
       PetscBool      flat = PETSC_FALSE;
       c0 += n * n * n;
       /* deep everywhere within one cell: no value changes in this pass */
-      PetscCall(ConstantBlock(f->grid, f->chLSgWork, lb, n, 1, &flat));
+      PetscCall(ConstantBlock(f->grid, f->chLSgWork, lb, n, info.holes, 1, &flat));
       if (flat) continue;
       for (PetscInt k = 0; k < n; k++)
         for (PetscInt j = 0; j < n; j++)
@@ -296,7 +311,7 @@ static PetscErrorCode AdvectGrid(PffFlow f, PetscReal dt, PetscInt chV)
     PetscCall(PffGridGetBlockData(f->grid, f->chLSg, lb, 0, &src));
     const PetscInt n = info.n;
     /* all air or all deep: nothing to advect */
-    PetscCall(ConstantBlock(f->grid, f->chLSg, lb, n, f->uWidth, &flat));
+    PetscCall(ConstantBlock(f->grid, f->chLSg, lb, n, info.holes, f->uWidth, &flat));
     if (flat) {
       PetscCall(PetscArraycpy(ls, src, n * n * n));
       continue;
