@@ -68,8 +68,9 @@ PETSC_EXTERN const char
    -flow_volume_correction_max_displacement (cells, > 0), -flow_volume_correction_rtol (0, 1),
    -flow_delete_bubbles (bool, default true), -flow_extrapolate_layers (>= 0; 0 = off), -flow_model
    two_phase|liquid (liquid: no air particles are seeded, the projection is PffTall's on quadtree tall cells, which
-   needs -partition_type columns and levels constant along y; no volume correction and no dynamic adaptivity yet),
-   and the particle and pressure (or tall_) options. */
+   needs -partition_type columns and levels constant along y; a local volume correction of its own, no dynamic
+   adaptivity), -flow_liquid_surface_volume (bool, liquid only), -flow_liquid_band (liquid only: 0 = off, or [2, 64]
+   cells of narrow-band FLIP), and the particle and pressure (or tall_) options. */
 PETSC_EXTERN PetscErrorCode PffFlowCreate(PffGrid grid, PffFlow *flow);
 PETSC_EXTERN PetscErrorCode PffFlowSetFromOptions(PffFlow flow);
 /* Static solids (signed distance, negative inside); faces inside are closed. Before SetUp. */
