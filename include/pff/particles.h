@@ -124,11 +124,10 @@ PETSC_EXTERN PetscErrorCode PffParticlesSeed(PffParticles p, PffSeedFn fn, void 
    at a time. Bins the particles. Not collective. */
 PETSC_EXTERN PetscErrorCode PffParticlesSeedBlocks(PffParticles p, PffSeedFn fn, void *ctx, PetscInt lb0, PetscInt lb1,
                                                    const PetscBool mask[]);
-/* Reseeding: the lattice particles of the given cells only (cells[3q] a local block, cells[3q + 1] its cell index,
-   x fastest, cells[3q + 2] a mask of the cell's 8 sub-cells to seed, bit s for sub-cell s = sx + 2 sy + 4 sz), at the
-   block's level, as PffParticlesSeed places them, with ids hashed from the lattice ids and key (non-zero, e.g. the
-   step; top bit set) so that they do not repeat the ids of the cell's first seeding. Bins the particles. Not
-   collective. */
+/* Reseeding: the lattice particles of the given cells only (cells[2q] a local block, cells[2q + 1] its cell index,
+   x fastest), at the block's level, as PffParticlesSeed places them, with ids hashed from the lattice ids and key
+   (non-zero, e.g. the step; top bit set) so that they do not repeat the ids of the cell's first seeding. Bins the
+   particles. Not collective. */
 PETSC_EXTERN PetscErrorCode PffParticlesSeedCells(PffParticles p, PffSeedFn fn, void *ctx, PetscInt ncells,
                                                   const PetscInt cells[], uint64_t key);
 PETSC_EXTERN PetscErrorCode PffParticlesGetArrays(PffParticles p, PffParticleArrays *a);

@@ -324,6 +324,7 @@ PetscErrorCode PffFlowReset(PffFlow f)
   PetscCall(PffFlowOpenFaces_Private(f, PETSC_FALSE));
   PetscCall(PffFlowReferenceVolume_Private(f));
   PetscCall(PffGridGetTopologyState(f->grid, &f->topology));
+  f->lsgGhosts = PETSC_FALSE; /* a new grid: the narrow band's level set was moved without its halo */
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

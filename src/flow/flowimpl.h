@@ -39,6 +39,7 @@ struct _n_PffFlow {
      velocity below the band (face) */
   PetscReal  band;
   PetscInt   chLSg, chLSgWork, chUg;
+  PetscBool  lsgGhosts;   /* the ghosts of chLSg are current (liquidband.c) */
   PffBodies  bodies;      /* liquid model: rigid bodies (NULL: none) */
   PffSolidFn staticSolid; /* with bodies, the scene's static solids; solid is then the union with the bodies */
   void      *staticSolidCtx;

@@ -13,18 +13,39 @@
      and the liquid volume read the grid's liquid below the band as a full lattice of particles would, and blend
      with the particles across the band's lowest cells. The fill reaches a cell and a half above the deletion depth
      and half a cell into the reseeded range: with the fill only below B - 1 cells the particles thinned at the
-     band's bottom read as rarefied liquid, and the 128^3 drop lost 2.9 % of its volume in 0.35 s (0.1 % with
+     band's bottom read as rarefied liquid, and the 128^3 drop lost 2.5 to 2.9 % of its volume in 0.35 s (0.1 % with
      B - 3/2, 0.1 % without the band); from 1.5 cells down, spread particles everywhere read as full and the drop and
-     the dam gained 3 to 5 %.
+     the dam gained 3 to 5 % (experiments whose switches were not kept; docs/tallcell.md).
    Distances are in cells of each block's level: a coarse column's band is as many of its cells deep. */
 #include "flowimpl.h"
+#include <petscbt.h>
 #if defined(__GLIBC__)
 #include <malloc.h>
 #endif
 
-/* The fill reaches faces deeper than B - PFF_BAND_FILL_OFFSET cells, u_g is kept a cell above that */
-#define PFF_BAND_FILL_OFFSET 1.5
-#include <petscbt.h>
+/* The depth (negative, metres) below which a face of a block of cell size h takes the grid's fill: B - 3/2 cells. */
+static inline PetscReal FillDepth(PffFlow f, PetscReal h)
+{
+  return -(f->band - 1.5) * h;
+}
+
+/* psi_g at the lower d-face of cell (i, j, k): the mean of its two cells (views with current ghosts). */
+static inline PetscReal FacePsi(const PffView *v, PetscInt i, PetscInt j, PetscInt k, PetscInt d, PetscInt n)
+{
+  return 0.5 * ((PetscReal)*PffViewsAt(v, i, j, k, n) +
+                (PetscReal)*PffViewsAt(v, i - (d == 0), j - (d == 1), k - (d == 2), n));
+}
+
+/* Halo exchange of psi_g; it marks the ghosts current until psi_g changes (the distance) or the grid does
+   (PffFlowReset). */
+static PetscErrorCode ExchangeLevelSet(PffFlow f)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffGridHaloBegin(f->grid, f->chLSg));
+  PetscCall(PffGridHaloEnd(f->grid, f->chLSg));
+  f->lsgGhosts = PETSC_TRUE;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
 
 PetscErrorCode PffFlowLiquidBandSetUp_Private(PffFlow f)
 {
@@ -158,7 +179,7 @@ PetscErrorCode PffFlowLiquidBandDistance_Private(PffFlow f)
       PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
       PetscCall(PffGridGetBlockData(f->grid, f->chLSgWork, lb, 0, &ls));
       PetscCall(PffGridGetBlockViews(f->grid, f->chLSgWork, lb, 0, &v));
-      const PetscInt n    = info.n;
+      const PetscInt n = info.n, base = c0;
       const float    h    = (float)info.h;
       PetscBool      flat = PETSC_FALSE;
       c0 += n * n * n;
@@ -170,7 +191,7 @@ PetscErrorCode PffFlowLiquidBandDistance_Private(PffFlow f)
           for (PetscInt i = 0; i < n; i++) {
             const PetscInt c = i + n * (j + n * k);
             float          m = -PETSC_MAX_REAL;
-            if (!PetscBTLookup(interior, c0 - n * n * n + c)) continue;
+            if (!PetscBTLookup(interior, base + c)) continue;
             for (PetscInt q = 0; q < 6; q++) {
               const PetscInt ii = i + d6[q][0], jj = j + d6[q][1], kk = k + d6[q][2];
               const PetscInt r = PffRegionIndex(ii, jj, kk, n);
@@ -183,6 +204,7 @@ PetscErrorCode PffFlowLiquidBandDistance_Private(PffFlow f)
   }
   PetscCall(PetscBTDestroy(&interior));
   PetscCall(CopyCells(f->grid, f->chLSgWork, f->chLSg));
+  f->lsgGhosts = PETSC_FALSE;
   PetscCall(PetscLogEventEnd(PFF_FlowBandDist, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -195,8 +217,8 @@ PetscErrorCode PffFlowLiquidBandFill_Private(PffFlow f)
   PetscInt        nlocal;
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridHaloBegin(f->grid, f->chLSg));
-  PetscCall(PffGridHaloEnd(f->grid, f->chLSg));
+  /* current after the last step's advection; not after a restart or a change of the grid */
+  if (!f->lsgGhosts) PetscCall(ExchangeLevelSet(f));
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo   info;
@@ -204,7 +226,7 @@ PetscErrorCode PffFlowLiquidBandFill_Private(PffFlow f)
     PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
     PetscCall(PffGridGetBlockViews(f->grid, f->chLSg, lb, 0, &vls));
     const PetscInt  n   = info.n;
-    const PetscReal thr = -(f->band - PFF_BAND_FILL_OFFSET) * info.h;
+    const PetscReal thr = FillDepth(f, info.h);
     for (PetscInt d = 0; d < 3; d++) {
       float *m, *mom, *ref, *ug, *vol = NULL, *vref = NULL;
       PetscCall(PffGridGetBlockData(f->grid, f->chMass, lb, d, &m));
@@ -218,10 +240,8 @@ PetscErrorCode PffFlowLiquidBandFill_Private(PffFlow f)
       for (PetscInt k = 0; k < n; k++)
         for (PetscInt j = 0; j < n; j++)
           for (PetscInt i = 0; i < n; i++) {
-            const PetscInt  c   = i + n * (j + n * k);
-            const PetscReal psi = 0.5 * ((PetscReal)*PffViewsAt(vls, i, j, k, n) +
-                                         (PetscReal)*PffViewsAt(vls, i - (d == 0), j - (d == 1), k - (d == 2), n));
-            if (!(psi < thr)) continue;
+            const PetscInt c = i + n * (j + n * k);
+            if (!(FacePsi(vls, i, j, k, d, n) < thr)) continue;
             const PetscReal add = rho * (PetscReal)ref[c] - (PetscReal)m[c];
             if (add > 0) {
               m[c]   = (float)((PetscReal)m[c] + add);
@@ -293,14 +313,14 @@ static inline void BackTrace(PffGrid grid, const VelBlock *vb, PetscReal dt, Pet
 
 /* psi_g and u_g advected semi-Lagrangian through chV (ghosts current): psi_g from itself, u_g from the step's
    projected liquid velocity chUl, both sampled where the liquid at each cell centre and face was a step ago. u_g is
-   needed where the next step's fill may reach (a cell above its depth after the advection) and is 0 elsewhere. */
+   read only where the next fill reaches, on faces deeper than the fill's depth in this advected psi_g, and is 0
+   elsewhere. */
 static PetscErrorCode AdvectGrid(PffFlow f, PetscReal dt, PetscInt chV)
 {
   PetscInt nlocal;
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridHaloBegin(f->grid, f->chLSg));
-  PetscCall(PffGridHaloEnd(f->grid, f->chLSg));
+  PetscCall(ExchangeLevelSet(f));
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo info;
@@ -332,8 +352,7 @@ static PetscErrorCode AdvectGrid(PffFlow f, PetscReal dt, PetscInt chV)
         }
   }
   PetscCall(CopyCells(f->grid, f->chLSgWork, f->chLSg));
-  PetscCall(PffGridHaloBegin(f->grid, f->chLSg));
-  PetscCall(PffGridHaloEnd(f->grid, f->chLSg));
+  PetscCall(ExchangeLevelSet(f));
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo   info;
     const PffView *vls;
@@ -341,7 +360,7 @@ static PetscErrorCode AdvectGrid(PffFlow f, PetscReal dt, PetscInt chV)
     PetscCall(PffGridGetBlockViews(f->grid, f->chLSg, lb, 0, &vls));
     const PetscInt  n  = info.n;
     const PetscReal lo = -(PetscReal)(f->uWidth - 1), hi = (PetscReal)(n + f->uWidth - 2);
-    const PetscReal thr = -(f->band - PFF_BAND_FILL_OFFSET - 1) * info.h;
+    const PetscReal thr = FillDepth(f, info.h);
     VelBlock        vb, ul;
     PetscCall(VelBlockGet(f->grid, chV, lb, n, &vb));
     PetscCall(VelBlockGet(f->grid, f->chUl, lb, n, &ul));
@@ -352,10 +371,8 @@ static PetscErrorCode AdvectGrid(PffFlow f, PetscReal dt, PetscInt chV)
         for (PetscInt j = 0; j < n; j++)
           for (PetscInt i = 0; i < n; i++) {
             const PetscReal lp[3] = {i + (d == 0 ? 0 : 0.5), j + (d == 1 ? 0 : 0.5), k + (d == 2 ? 0 : 0.5)};
-            const PetscReal psi   = 0.5 * ((PetscReal)*PffViewsAt(vls, i, j, k, n) +
-                                         (PetscReal)*PffViewsAt(vls, i - (d == 0), j - (d == 1), k - (d == 2), n));
             PetscReal       b[3];
-            if (!(psi < thr)) {
+            if (!(FacePsi(vls, i, j, k, d, n) < thr)) {
               ug[i + n * (j + n * k)] = 0;
               continue;
             }
@@ -428,14 +445,16 @@ static PetscErrorCode ReseedFn(const PetscReal x[3], PetscInt *type, PetscReal v
 static PetscErrorCode Reseed(PffFlow f, PetscInt64 *seeded)
 {
   PffParticleArrays a;
-  PetscInt          nlocal, n0, ncells = 0, cap = 0, *cells = NULL;
-  uint8_t          *occ;
+  PetscInt          nlocal, n0, ncells, *cells;
+  PetscBool        *occupied;
+  PetscSegBuffer    sb;
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetSizes(f->grid, &n0, NULL, NULL, NULL, NULL));
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
   PetscCall(PffParticlesGetArrays(f->part, &a));
-  PetscCall(PetscMalloc1(n0 * n0 * n0, &occ));
+  PetscCall(PetscMalloc1(n0 * n0 * n0, &occupied));
+  PetscCall(PetscSegBufferCreate(sizeof(PetscInt), 128, &sb));
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo info;
     float       *ls;
@@ -446,35 +465,29 @@ static PetscErrorCode Reseed(PffFlow f, PetscInt64 *seeded)
     PetscBool      any = PETSC_FALSE;
     for (PetscInt c = 0; c < n * n * n && !any; c++) any = (PetscBool)(ls[c] >= lo && ls[c] <= hi);
     if (!any) continue;
-    PetscCall(PetscArrayzero(occ, n * n * n));
+    PetscCall(PetscArrayzero(occupied, n * n * n));
     for (PetscInt p = a.start[lb]; p < a.start[lb + 1]; p++) {
-      PetscInt idx[3], sub = 0;
-      for (PetscInt d = 0; d < 3; d++) {
-        const float r = (a.x[3 * p + d] - (float)(info.ijk[d] * n0)) / scale;
-        idx[d]        = PetscMin(PetscMax((PetscInt)r, 0), n - 1);
-        sub |= (r - (float)idx[d] >= 0.5f) << d;
-      }
-      occ[idx[0] + n * (idx[1] + n * idx[2])] |= (uint8_t)(1u << sub);
+      PetscInt idx[3];
+      for (PetscInt d = 0; d < 3; d++)
+        idx[d] = PetscMin(PetscMax((PetscInt)((a.x[3 * p + d] - (float)(info.ijk[d] * n0)) / scale), 0), n - 1);
+      occupied[idx[0] + n * (idx[1] + n * idx[2])] = PETSC_TRUE;
     }
     for (PetscInt c = 0; c < n * n * n; c++) {
-      PetscInt subs = 0;
-      if (ls[c] >= lo && ls[c] <= hi && !occ[c]) subs = 0xff;
-      if (!subs) continue;
-      if (ncells == cap) {
-        PetscInt *tmp;
-        cap = PetscMax(64, 2 * cap);
-        PetscCall(PetscMalloc1(3 * cap, &tmp));
-        if (cells) PetscCall(PetscArraycpy(tmp, cells, 3 * ncells));
-        PetscCall(PetscFree(cells));
-        cells = tmp;
-      }
-      cells[3 * ncells]     = lb;
-      cells[3 * ncells + 1] = c;
-      cells[3 * ncells + 2] = subs;
-      ncells++;
+      PetscInt *q;
+      if (occupied[c] || !(ls[c] >= lo && ls[c] <= hi)) continue;
+      PetscCall(PetscSegBufferGet(sb, 2, &q));
+      q[0] = lb;
+      q[1] = c;
     }
   }
-  PetscCall(PetscFree(occ));
+  PetscCall(PetscFree(occupied));
+  {
+    size_t len;
+    PetscCall(PetscSegBufferGetSize(sb, &len));
+    ncells = (PetscInt)(len / 2);
+  }
+  PetscCall(PetscSegBufferExtractAlloc(sb, &cells));
+  PetscCall(PetscSegBufferDestroy(&sb));
   {
     const PetscInt before = a.n;
     /* a key per step: the ids of one cell reseeded in two steps differ */
@@ -519,11 +532,8 @@ PetscErrorCode PffFlowLiquidBandInit_Private(PffFlow f)
       PetscCall(PffFlowBlockData_Private(f, lb, d, 3, ch, a, &n3));
       for (PetscInt c = 0; c < n3; c++) a[2][c] = a[0][c] > 0 ? a[1][c] / a[0][c] : 0.0f;
     }
-  PetscCall(PffGridHaloBegin(f->grid, f->chUg));
-  PetscCall(PffGridHaloEnd(f->grid, f->chUg));
   PetscCall(PffFlowLiquidBandDistance_Private(f));
-  PetscCall(PffGridHaloBegin(f->grid, f->chLSg));
-  PetscCall(PffGridHaloEnd(f->grid, f->chLSg));
+  PetscCall(ExchangeLevelSet(f));
   PetscCall(DeleteDeep(f, &deleted));
   /* the seed filled the whole liquid: its store and scratch would stay resident */
   PetscCall(PffParticlesTrim(f->part));

@@ -18,12 +18,11 @@ PetscErrorCode PffParticlesSeed(PffParticles p, PffSeedFn fn, void *ctx)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* The lattice particles of cell (i, j, k) of block info in the sub-cells of mask subs (bit s: sub-cell s, x fastest)
-   that fn accepts, appended to the store (reserved). With
+/* The 8 lattice particles of cell (i, j, k) of block info that fn accepts, appended to the store (reserved). With
    key != 0 the ids are the lattice ids hashed with key, top bit set (reseeded particles: the lattice id of the cell
    may still be in use). */
 static PetscErrorCode SeedCell(PffParticles p, const PffBlockInfo *info, PetscInt i, PetscInt j, PetscInt k,
-                               PffSeedFn fn, void *ctx, uint64_t key, PetscInt subs)
+                               PffSeedFn fn, void *ctx, uint64_t key)
 {
   const PetscInt  n     = info->n;
   const PetscReal scale = (PetscReal)((PetscInt)1 << info->level);
@@ -31,7 +30,6 @@ static PetscErrorCode SeedCell(PffParticles p, const PffBlockInfo *info, PetscIn
 
   PetscFunctionBeginUser;
   for (PetscInt sub = 0; sub < 8; sub++) {
-    if (!((subs >> sub) & 1)) continue;
     uint64_t       id   = ((uint64_t)info->gid * (uint64_t)(p->n0 * p->n0 * p->n0) + cell) * 8 + (uint64_t)sub;
     const PetscInt c[3] = {i, j, k};
     PetscReal      x[3], v[3] = {0, 0, 0};
@@ -103,7 +101,7 @@ PetscErrorCode PffParticlesSeedBlocks(PffParticles p, PffSeedFn fn, void *ctx, P
     PetscCall(PffGridGetBlockInfo(p->grid, lb, &info));
     for (PetscInt k = 0; k < info.n; k++)
       for (PetscInt j = 0; j < info.n; j++)
-        for (PetscInt i = 0; i < info.n; i++) PetscCall(SeedCell(p, &info, i, j, k, fn, ctx, 0, 0xff));
+        for (PetscInt i = 0; i < info.n; i++) PetscCall(SeedCell(p, &info, i, j, k, fn, ctx, 0));
   }
   p->binned = PETSC_FALSE;
   PetscCall(PetscLogEventEnd(PFF_PartSeed, 0, 0, 0, 0));
@@ -122,11 +120,11 @@ PetscErrorCode PffParticlesSeedCells(PffParticles p, PffSeedFn fn, void *ctx, Pe
   PetscCall(PffParticlesReserve_Private(p, p->n + 8 * ncells));
   for (PetscInt q = 0; q < ncells; q++) {
     PffBlockInfo info;
-    PetscCall(PffGridGetBlockInfo(p->grid, cells[3 * q], &info));
-    const PetscInt c = cells[3 * q + 1], n = info.n;
+    PetscCall(PffGridGetBlockInfo(p->grid, cells[2 * q], &info));
+    const PetscInt c = cells[2 * q + 1], n = info.n;
     PetscCheck(c >= 0 && c < n * n * n, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
                "PffParticlesSeedCells: cell %" PetscInt_FMT " is not in a block of %" PetscInt_FMT "^3", c, n);
-    PetscCall(SeedCell(p, &info, c % n, (c / n) % n, c / (n * n), fn, ctx, key, cells[3 * q + 2] & 0xff));
+    PetscCall(SeedCell(p, &info, c % n, (c / n) % n, c / (n * n), fn, ctx, key));
   }
   p->binned = PETSC_FALSE;
   PetscCall(PetscLogEventEnd(PFF_PartSeed, 0, 0, 0, 0));

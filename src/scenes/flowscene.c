@@ -243,7 +243,7 @@ static PetscErrorCode PffFlowSceneConservation(PffFlowScene *fs)
   }
   for (PetscInt k = 0; k < PFF_PARTICLE_NTYPES; k++)
     if (bound[k] > 0 && dmax[k] > bound[k]) volumes = PETSC_FALSE;
-  if (fs->bandDeletedRun || fs->bandSeededRun)
+  if (band)
     PetscCall(PetscPrintf(fs->scene->comm,
                           "narrow band: %" PetscInt64_FMT " liquid particles deleted below the band, %" PetscInt64_FMT
                           " reseeded in it (the start count below includes both)\n",
