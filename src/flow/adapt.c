@@ -7,12 +7,14 @@
       computes the same d, from interface cells (a neighbour across the threshold, d = half a cell)
       by a two-pass 26-neighbour chamfer (weights 1, sqrt 2, sqrt 3), first-order as the paper's;
    2. the level each particle asks for (step 6), l = min(L - 1, floor(beta |d(x_p)| / n0)) with d
-      interpolated trilinearly; the deferred-coarsening counters D_p advance, and a particle whose
-      coarsening is pending (D_p < delay) asks for its current level;
+      interpolated trilinearly, or finer where the optional vorticity criterion asks (Sec. 5.2), or the
+      level of a user region that contains it; the deferred-coarsening counters D_p advance, and a
+      particle whose coarsening is pending (D_p < delay) asks for its current level;
    3. the block map (step 1): the minimum level asked by the particles whose box x_p +- (r + margin)
       touches a block, r = 2^l finest cells for the level l asked; blocks no particle touches take level
-      L - 1, blocks inactive at set-up stay inactive; graded 2:1. Each particle's level is then capped by
-      its block's, so that particles are never coarser than their block (see GradedTargets);
+      L - 1, blocks inactive at set-up stay inactive, blocks a user region overlaps take its level; graded 2:1. Each
+   particle's level is then capped by its block's, so that particles are never coarser than their block (see
+   GradedTargets);
    4. the split and probabilistic coarsening of PffParticlesAdaptLevels to the capped levels, and
       PffGridAdapt when the map differs from the last one (steps 2-3: grading, re-partition, moving
       channels); particles, pressure and flow follow the topology state on their next call.
@@ -20,28 +22,29 @@
    with fine particles near the interface only, instead of seeding everything fine. */
 #include "flowimpl.h"
 
-/* Mean phase field per cell of the distance lattice, -1 outside active blocks; the same on every rank. */
-static PetscErrorCode CoarsePhase(PffFlow f, float *phi)
+/* Per cell of the distance lattice, the mean (or the largest) value of cell channel ch over the block cells under it,
+   fill outside active blocks; the same on every rank. */
+static PetscErrorCode LatticeValues(PffFlow f, PetscInt ch, PetscBool max, float fill, float *out)
 {
   PffFlowAdaptCtx *a = &f->adapt;
   const PetscInt   m = a->m, ntot = a->C[0] * a->C[1] * a->C[2];
   PetscInt         nlocal;
 
   PetscFunctionBeginUser;
-  for (PetscInt c = 0; c < ntot; c++) phi[c] = -1;
+  for (PetscInt c = 0; c < ntot; c++) out[c] = fill;
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo info;
     float       *v;
     PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
-    PetscCall(PffGridGetBlockData(f->grid, f->chPhi, lb, 0, &v));
+    PetscCall(PffGridGetBlockData(f->grid, ch, lb, 0, &v));
     const PetscInt n = info.n;
     for (PetscInt ck = 0; ck < m; ck++)
       for (PetscInt cj = 0; cj < m; cj++)
         for (PetscInt ci = 0; ci < m; ci++) {
           const PetscInt cc[3] = {ci, cj, ck};
           PetscInt       lo[3], hi[3];
-          double         sum = 0;
+          double         sum = 0, big = 0;
           /* the block's cells under this lattice cell (one cell when the block is coarser) */
           for (int d = 0; d < 3; d++) {
             lo[d] = n >= m ? cc[d] * (n / m) : cc[d] / (m / n);
@@ -49,13 +52,16 @@ static PetscErrorCode CoarsePhase(PffFlow f, float *phi)
           }
           for (PetscInt k = lo[2]; k < hi[2]; k++)
             for (PetscInt j = lo[1]; j < hi[1]; j++)
-              for (PetscInt i = lo[0]; i < hi[0]; i++) sum += v[i + n * (j + n * k)];
+              for (PetscInt i = lo[0]; i < hi[0]; i++) {
+                sum += v[i + n * (j + n * k)];
+                big = PetscMax(big, v[i + n * (j + n * k)]);
+              }
           const PetscInt g[3] = {info.ijk[0] * m + ci, info.ijk[1] * m + cj, info.ijk[2] * m + ck};
-          phi[g[0] + a->C[0] * (g[1] + a->C[1] * g[2])] =
-              (float)(sum / (double)((hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2])));
+          out[g[0] + a->C[0] * (g[1] + a->C[1] * g[2])] =
+              (float)(max ? big : sum / (double)((hi[0] - lo[0]) * (hi[1] - lo[1]) * (hi[2] - lo[2])));
         }
   }
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, phi, (PetscMPIInt)ntot, MPI_FLOAT, MPI_MAX, f->comm));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, out, (PetscMPIInt)ntot, MPI_FLOAT, MPI_MAX, f->comm));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -131,6 +137,119 @@ static inline PetscInt LevelAt(const PffFlowAdaptCtx *a, const float g[3])
   return l != 0xff ? (PetscInt)l : LevelOf(a, DistanceAt(a, g));
 }
 
+/* The level forced by the last user region (boxes, then spheres) that contains grid position g, or -1. */
+static inline PetscInt RegionLevel(const PffFlowAdaptCtx *a, const float g[3])
+{
+  PetscInt l = -1;
+  for (PetscInt r = 0; r < a->nbox; r++) {
+    const PetscReal *b = a->box + 6 * r;
+    if (g[0] >= b[0] && g[0] <= b[3] && g[1] >= b[1] && g[1] <= b[4] && g[2] >= b[2] && g[2] <= b[5])
+      l = a->boxLevel[r];
+  }
+  for (PetscInt r = 0; r < a->nsphere; r++) {
+    const PetscReal *c  = a->sphere + 4 * r;
+    const PetscReal  d2 = (g[0] - c[0]) * (g[0] - c[0]) + (g[1] - c[1]) * (g[1] - c[1]) + (g[2] - c[2]) * (g[2] - c[2]);
+    if (d2 <= c[3] * c[3]) l = a->sphereLevel[r];
+  }
+  return l;
+}
+
+/* The same for the block at raster position ijk: the last region its box [ijk n0, (ijk + 1) n0] overlaps. */
+static PetscInt BlockRegionLevel(const PffFlowAdaptCtx *a, const PetscInt ijk[3])
+{
+  PetscReal lo[3], hi[3];
+  PetscInt  l = -1;
+  for (int d = 0; d < 3; d++) {
+    lo[d] = (PetscReal)(ijk[d] * a->n0);
+    hi[d] = lo[d] + (PetscReal)a->n0;
+  }
+  for (PetscInt r = 0; r < a->nbox; r++) {
+    const PetscReal *b    = a->box + 6 * r;
+    PetscBool        over = PETSC_TRUE;
+    for (int d = 0; d < 3; d++) over = (PetscBool)(over && b[d] < hi[d] && b[3 + d] > lo[d]);
+    if (over) l = a->boxLevel[r];
+  }
+  for (PetscInt r = 0; r < a->nsphere; r++) {
+    const PetscReal *c  = a->sphere + 4 * r;
+    PetscReal        d2 = 0;
+    for (int d = 0; d < 3; d++) {
+      const PetscReal q = PetscMin(PetscMax(c[d], lo[d]), hi[d]) - c[d]; /* to the closest point of the box */
+      d2 += q * q;
+    }
+    if (d2 < c[3] * c[3]) l = a->sphereLevel[r];
+  }
+  return l;
+}
+
+/* The level particle position g asks for: a user region's, else the finer of the distance's and the
+   vorticity's (the lattice cell's largest |curl u|, so that no vortex within it is missed). */
+static inline PetscInt Ask(const PffFlowAdaptCtx *a, const float g[3])
+{
+  const PetscInt r = RegionLevel(a, g);
+  if (r >= 0) return r;
+  PetscInt l = LevelAt(a, g);
+  if (a->vlev) {
+    PetscInt c[3];
+    for (int d = 0; d < 3; d++) c[d] = PetscMin((PetscInt)(g[d] * a->is), a->C[d] - 1);
+    l = PetscMin(l, (PetscInt)a->vlev[c[0] + a->C[0] * (c[1] + a->C[1] * c[2])]);
+  }
+  return l;
+}
+
+/* The vorticity criterion (Sec. 5.2, the magnitude of the curl after Popinet 2003): per lattice cell the
+   coarsest level l at which |curl u| h0 2^l <= delta max|u|, from the largest |curl u| of the cells under it
+   (central differences of the cell-centred velocity, the output's vorticity channel) and the largest face
+   speed of the grid, of face channel ch: the last projected velocity in a step, the particles' P2G (u*) at the
+   seed. */
+static PetscErrorCode VorticityLevels(PffFlow f, PetscInt ch)
+{
+  PffFlowAdaptCtx *a    = &f->adapt;
+  const PetscInt   ntot = a->C[0] * a->C[1] * a->C[2];
+  float           *w    = a->work;
+  PetscReal        h0, umax = 0;
+  PetscInt         nlocal;
+
+  PetscFunctionBeginUser;
+  if (!a->vlev) PetscFunctionReturn(PETSC_SUCCESS);
+  PetscCall(PetscLogEventBegin(PFF_FlowAdaptDist, 0, 0, 0, 0));
+  PetscCall(PffGridHaloBegin(f->grid, ch));
+  PetscCall(PffGridHaloEnd(f->grid, ch));
+  PetscCall(PffFlowVorticity_Private(f, ch));
+  PetscCall(LatticeValues(f, f->chVort, PETSC_TRUE, 0, w));
+  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+    for (PetscInt d = 0; d < 3; d++) {
+      float *u;
+      PetscCall(PffGridGetBlockData(f->grid, ch, lb, d, &u));
+      for (PetscInt c = 0; c < info.n * info.n * info.n; c++) umax = PetscMax(umax, PetscAbsReal((PetscReal)u[c]));
+    }
+  }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &umax, 1, MPIU_REAL, MPI_MAX, f->comm));
+  PetscCall(PffGridGetSizes(f->grid, NULL, NULL, NULL, &h0, NULL));
+  for (PetscInt c = 0; c < ntot; c++) {
+    const PetscReal ratio = (PetscReal)w[c] > 0 && umax > 0 ? a->vort * umax / ((PetscReal)w[c] * h0) : PETSC_MAX_REAL;
+    PetscInt        l     = 0;
+    while (l < a->levels - 1 && ratio >= (PetscReal)((PetscInt)2 << l)) l++; /* h0 2^(l+1) |w| <= delta umax */
+    a->vlev[c] = (uint8_t)l;
+  }
+  if (PetscDefined(USE_INFO)) {
+    float    wmax = 0;
+    PetscInt fine = 0;
+    for (PetscInt c = 0; c < ntot; c++) {
+      wmax = PetscMax(wmax, w[c]);
+      fine += a->vlev[c] < a->levels - 1;
+    }
+    PetscCall(PetscInfo(NULL,
+                        "adapt: vorticity up to %g 1/s, max |u| %g; %" PetscInt_FMT " of %" PetscInt_FMT
+                        " lattice cells ask for a finer level than %" PetscInt_FMT "\n",
+                        (double)wmax, (double)umax, fine, ntot, a->levels - 1));
+  }
+  PetscCall(PetscLogEventEnd(PFF_FlowAdaptDist, 0, 0, 0, 0));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /* Step 5: the distance to the thresholded interface in finest cells, a->dist. */
 static PetscErrorCode Distance(PffFlow f)
 {
@@ -141,7 +260,7 @@ static PetscErrorCode Distance(PffFlow f)
 
   PetscFunctionBeginUser;
   PetscCall(PetscLogEventBegin(PFF_FlowAdaptDist, 0, 0, 0, 0));
-  PetscCall(CoarsePhase(f, phi));
+  PetscCall(LatticeValues(f, f->chPhi, PETSC_FALSE, -1, phi)); /* -1: no fluid */
   for (PetscInt k = 0, c = 0; k < a->C[2]; k++)
     for (PetscInt j = 0; j < a->C[1]; j++)
       for (PetscInt i = 0; i < a->C[0]; i++, c++) {
@@ -221,7 +340,7 @@ static PetscErrorCode TargetsAndMap(PffFlow f, PetscBool counters, PetscInt map[
     const PffFlowAdaptCtx ac = *a;
     const float *const    x  = pa.x;
 #pragma omp parallel for schedule(static)
-    for (PetscInt i = 0; i < pa.n; i++) target[i] = (int8_t)LevelAt(&ac, &x[3 * i]);
+    for (PetscInt i = 0; i < pa.n; i++) target[i] = (int8_t)Ask(&ac, &x[3 * i]);
   }
   /* a particle whose coarsening is pending holds the grid at its level (the blocks' hysteresis) */
   if (counters) PetscCall(PffParticlesAdaptCounters(f->part, target, a->delay));
@@ -276,6 +395,14 @@ static PetscErrorCode TargetsAndMap(PffFlow f, PetscBool counters, PetscInt map[
   for (PetscInt b = 0; b < nblocks; b++)
     map[b] = a->base[b] < 0 ? -1 : PetscMin(PetscMin(both[b], PetscMax(both[nblocks + b], cur[b])), lmax);
   PetscCall(PetscFree(both));
+  /* a user region forces its level on every block it overlaps, whatever the particles asked (grading may still
+     refine a block forced coarse beside a finer one) */
+  if (a->nbox + a->nsphere > 0)
+    for (PetscInt b = 0; b < nblocks; b++) {
+      const PetscInt ijk[3] = {b % nb[0], (b / nb[0]) % nb[1], b / (nb[0] * nb[1])};
+      const PetscInt l      = a->base[b] < 0 ? -1 : BlockRegionLevel(a, ijk);
+      if (l >= 0) map[b] = l;
+    }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -329,6 +456,84 @@ PetscErrorCode PffFlowAdaptSetUp_Private(PffFlow f)
     a->base[b]    = level[b] < 0 ? -1 : 0;
     a->request[b] = level[b];
   }
+  if (a->vort > 0) PetscCall(PetscMalloc1(ntot, &a->vlev));
+  {
+    PetscReal origin[3], h0;
+    PetscCall(PffGridGetSizes(f->grid, NULL, NULL, origin, &h0, NULL));
+    for (PetscInt r = 0; r < a->nbox; r++)
+      for (int q = 0; q < 6; q++) a->box[6 * r + q] = (a->box[6 * r + q] - origin[q % 3]) / h0;
+    for (PetscInt r = 0; r < a->nsphere; r++) {
+      for (int q = 0; q < 3; q++) a->sphere[4 * r + q] = (a->sphere[4 * r + q] - origin[q]) / h0;
+      a->sphere[4 * r + 3] /= h0;
+    }
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* -adapt_region_box x0,y0,z0,x1,y1,z1[,...] with -adapt_region_box_level l[,...], and -adapt_region_sphere
+   cx,cy,cz,r[,...] with -adapt_region_sphere_level (domain coordinates); read inside PffFlowSetFromOptions. */
+PetscErrorCode PffFlowAdaptRegionOptions_Private(PffFlow f, PetscOptionItems *PetscOptionsObject)
+{
+  PffFlowAdaptCtx *a  = &f->adapt;
+  const PetscInt   mx = PFF_FLOW_ADAPT_MAX_REGIONS;
+  PetscInt         nb = 6 * mx, nbl = mx, ns = 4 * mx, nsl = mx;
+  PetscBool        setb = PETSC_FALSE, setbl = PETSC_FALSE, sets = PETSC_FALSE, setsl = PETSC_FALSE;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffOptionsRealArray("-adapt_region_box", "Boxes that force a grid level: x0,y0,z0,x1,y1,z1 per box",
+                                "PffFlowSetFromOptions", a->box, &nb, &setb));
+  PetscCall(PffOptionsIntArray("-adapt_region_box_level", "The level each -adapt_region_box forces (0: finest)",
+                               "PffFlowSetFromOptions", a->boxLevel, &nbl, &setbl));
+  PetscCall(PffOptionsRealArray("-adapt_region_sphere", "Spheres that force a grid level: cx,cy,cz,r per sphere",
+                                "PffFlowSetFromOptions", a->sphere, &ns, &sets));
+  PetscCall(PffOptionsIntArray("-adapt_region_sphere_level", "The level each -adapt_region_sphere forces (0: finest)",
+                               "PffFlowSetFromOptions", a->sphereLevel, &nsl, &setsl));
+  if (!setb) nb = 0;
+  if (!setbl) nbl = 0;
+  if (!sets) ns = 0;
+  if (!setsl) nsl = 0;
+  PetscCheck(nb % 6 == 0, f->comm, PETSC_ERR_ARG_SIZ,
+             "-adapt_region_box is invalid: takes 6 values per box (x0,y0,z0,x1,y1,z1), got %" PetscInt_FMT, nb);
+  PetscCheck(ns % 4 == 0, f->comm, PETSC_ERR_ARG_SIZ,
+             "-adapt_region_sphere is invalid: takes 4 values per sphere (cx,cy,cz,r), got %" PetscInt_FMT, ns);
+  a->nbox    = nb / 6;
+  a->nsphere = ns / 4;
+  PetscCheck(nbl == a->nbox, f->comm, PETSC_ERR_ARG_SIZ,
+             "-adapt_region_box_level is invalid: takes one level per box (%" PetscInt_FMT " boxes, %" PetscInt_FMT
+             " levels)",
+             a->nbox, nbl);
+  PetscCheck(nsl == a->nsphere, f->comm, PETSC_ERR_ARG_SIZ,
+             "-adapt_region_sphere_level is invalid: takes one level per sphere (%" PetscInt_FMT
+             " spheres, %" PetscInt_FMT " levels)",
+             a->nsphere, nsl);
+  for (PetscInt r = 0; r < a->nbox; r++) {
+    const PetscReal *b = a->box + 6 * r;
+    for (int d = 0; d < 6; d++)
+      PetscCheck(PetscIsNormalReal(b[d]) || b[d] == 0, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+                 "-adapt_region_box is invalid: box %" PetscInt_FMT " has a value that is not a finite number", r);
+    PetscCheck(b[0] < b[3] && b[1] < b[4] && b[2] < b[5], f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+               "-adapt_region_box is invalid: box %" PetscInt_FMT " must have x0 < x1, y0 < y1 and z0 < z1", r);
+  }
+  for (PetscInt r = 0; r < a->nsphere; r++) {
+    const PetscReal *c = a->sphere + 4 * r;
+    for (int d = 0; d < 3; d++)
+      PetscCheck(PetscIsNormalReal(c[d]) || c[d] == 0, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+                 "-adapt_region_sphere is invalid: sphere %" PetscInt_FMT " has a centre that is not finite", r);
+    PetscCheck(c[3] > 0 && PetscIsNormalReal(c[3]), f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+               "-adapt_region_sphere is invalid: sphere %" PetscInt_FMT " must have a positive radius", r);
+  }
+  if (a->levels > 0) {
+    for (PetscInt r = 0; r < a->nbox; r++)
+      PetscCheck(a->boxLevel[r] >= 0 && a->boxLevel[r] < a->levels, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+                 "-adapt_region_box_level %" PetscInt_FMT
+                 " is invalid: must be in [0, -adapt_levels - 1 = %" PetscInt_FMT "]",
+                 a->boxLevel[r], a->levels - 1);
+    for (PetscInt r = 0; r < a->nsphere; r++)
+      PetscCheck(a->sphereLevel[r] >= 0 && a->sphereLevel[r] < a->levels, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+                 "-adapt_region_sphere_level %" PetscInt_FMT
+                 " is invalid: must be in [0, -adapt_levels - 1 = %" PetscInt_FMT "]",
+                 a->sphereLevel[r], a->levels - 1);
+  }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -341,6 +546,7 @@ PetscErrorCode PffFlowAdaptDestroy_Private(PffFlow f)
   PetscCall(PetscFree(a->target));
   PetscCall(PetscFree(a->lev));
   PetscCall(PetscFree(a->pwork));
+  PetscCall(PetscFree(a->vlev));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -418,6 +624,7 @@ PetscErrorCode PffFlowAdapt_Private(PffFlow f, PffFlowAdaptStats *st)
   PetscCall(PffGridGetRaster(f->grid, nb, NULL, NULL));
   PetscCall(PetscMalloc1(nb[0] * nb[1] * nb[2], &map));
   PetscCall(Distance(f));
+  PetscCall(VorticityLevels(f, f->chU));
   PetscCall(GradedTargets(f, PETSC_TRUE, map));
   PetscCall(PffParticlesAdaptLevels(f->part, a->target, a->delay, (uint64_t)f->step + 1, &st->particles));
   /* the new map is partitioned with this step's particle counts; an unchanged one is re-partitioned only
@@ -453,6 +660,7 @@ PetscErrorCode PffFlowAdaptSeed_Private(PffFlow f, PffSeedFn fn, void *ctx)
     PetscCall(PffParticlesSeed(f->part, fn, ctx));
     PetscCall(PffFlowUpdateFields(f, PETSC_FALSE));
     PetscCall(Distance(f));
+    PetscCall(VorticityLevels(f, f->chUt));
     PetscCall(GradedTargets(f, PETSC_FALSE, map)); /* a fresh seed has nothing pending */
     if (it == a->levels || SameMap(a, nb[0] * nb[1] * nb[2], map)) break;
     PetscCall(PffParticlesClear(f->part));

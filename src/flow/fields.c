@@ -134,8 +134,8 @@ PetscErrorCode PffFlowPrescribe_Private(PffFlow f, PetscReal t)
 }
 
 /* Vorticity magnitude at cell centres from central differences of the cell-centred velocity
-   (mean of the two faces), using the halo of chU. */
-PetscErrorCode PffFlowVorticity_Private(PffFlow f)
+   (mean of the two faces) of face channel ch, using its halo. */
+PetscErrorCode PffFlowVorticity_Private(PffFlow f, PetscInt ch)
 {
   PetscInt nlocal;
 
@@ -147,7 +147,7 @@ PetscErrorCode PffFlowVorticity_Private(PffFlow f)
     float         *w;
     PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
     PetscCall(PffGridGetBlockData(f->grid, f->chVort, lb, 0, &w));
-    for (PetscInt d = 0; d < 3; d++) PetscCall(PffGridGetBlockViews(f->grid, f->chU, lb, d, &vu[d]));
+    for (PetscInt d = 0; d < 3; d++) PetscCall(PffGridGetBlockViews(f->grid, ch, lb, d, &vu[d]));
     const PetscInt  n   = info.n;
     const PetscReal inv = 1.0 / (2 * info.h);
     for (PetscInt k = 0; k < n; k++)

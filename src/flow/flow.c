@@ -115,6 +115,10 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
                            "PffFlowSetFromOptions", f->adapt.pweight, &f->adapt.pweight, NULL));
   PetscCall(PffOptionsReal("-adapt_imbalance", "Re-partition when the max/mean work per rank exceeds this",
                            "PffFlowSetFromOptions", f->adapt.imbalance, &f->adapt.imbalance, NULL));
+  PetscCall(PffOptionsReal("-adapt_vorticity",
+                           "Vorticity criterion delta: refine where |curl u| h > delta max|u| (0: off; Sec. 5.2)",
+                           "PffFlowSetFromOptions", f->adapt.vort, &f->adapt.vort, NULL));
+  PetscCall(PffFlowAdaptRegionOptions_Private(f, PetscOptionsObject));
   PetscOptionsEnd();
   for (int t = 0; t < PFF_PARTICLE_NTYPES; t++) {
     const char *key = t == PFF_PARTICLE_LIQUID ? "liquid" : "gas";
@@ -170,6 +174,11 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
              "-adapt_particle_weight %g is invalid: must be in [0, 1000]", (double)f->adapt.pweight);
   PetscCheck(f->adapt.imbalance >= 1 && PetscIsNormalReal(f->adapt.imbalance), f->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-adapt_imbalance %g is invalid: must be >= 1", (double)f->adapt.imbalance);
+  PetscCheck(f->adapt.vort >= 0 && PetscIsNormalReal(f->adapt.vort + 1), f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-adapt_vorticity %g is invalid: must be >= 0 (0: off)", (double)f->adapt.vort);
+  PetscCheck(f->adapt.levels > 0 || (f->adapt.vort == 0 && f->adapt.nbox == 0 && f->adapt.nsphere == 0), f->comm,
+             PETSC_ERR_ARG_INCOMP,
+             "-adapt_vorticity, -adapt_region_box and -adapt_region_sphere need -adapt_levels (dynamic adaptivity)");
   if (f->model == PFF_FLOW_LIQUID) {
     /* what the liquid model does not have yet fails here, before any work */
     PetscCheck(f->adapt.levels == 0, f->comm, PETSC_ERR_ARG_INCOMP,

@@ -6,6 +6,7 @@
 #include <pff/flow.h>
 
 /* Dynamic adaptivity (adapt.c). */
+#define PFF_FLOW_ADAPT_MAX_REGIONS 8
 typedef struct {
   PetscInt    levels, interval, delay; /* -adapt_levels (0: off), -adapt_interval, -adapt_coarsen_delay */
   PetscReal   band, margin;            /* -adapt_band (beta_bw), -adapt_margin (finest cells) */
@@ -20,6 +21,14 @@ typedef struct {
   uint8_t    *lev;         /* [C + 1] level of each dual lattice cell, 0xff where it varies */
   int8_t     *target;      /* per particle */
   size_t      ntarget;
+  /* -adapt_vorticity delta (0: off): a particle asks for no coarser a level than the one at which |curl u| h stays
+     below delta max|u| (Sec. 5.2, after Popinet 2003), from the largest |curl u| of its lattice cell */
+  PetscReal vort;
+  uint8_t  *vlev; /* [C] the level the vorticity asks for per lattice cell (levels - 1 with the criterion off) */
+  /* user regions that force a level: boxes lo, hi and spheres centre, radius (grid units after set-up) */
+  PetscInt  nbox, nsphere;
+  PetscReal box[6 * PFF_FLOW_ADAPT_MAX_REGIONS], sphere[4 * PFF_FLOW_ADAPT_MAX_REGIONS];
+  PetscInt  boxLevel[PFF_FLOW_ADAPT_MAX_REGIONS], sphereLevel[PFF_FLOW_ADAPT_MAX_REGIONS];
 } PffFlowAdaptCtx;
 
 struct _n_PffFlow {
@@ -154,6 +163,7 @@ PETSC_INTERN PetscErrorCode PffFlowAdaptSetUp_Private(PffFlow);
 PETSC_INTERN PetscErrorCode PffFlowAdaptDestroy_Private(PffFlow);
 PETSC_INTERN PetscErrorCode PffFlowAdapt_Private(PffFlow, PffFlowAdaptStats *);
 PETSC_INTERN PetscErrorCode PffFlowAdaptSeed_Private(PffFlow, PffSeedFn, void *);
+PETSC_INTERN PetscErrorCode PffFlowAdaptRegionOptions_Private(PffFlow, PetscOptionItems *);
 /* flow.c */
 PETSC_INTERN PetscErrorCode PffFlowLiquidProject_Private(PffFlow, PetscReal dt, PffPressureStats *);
 PETSC_INTERN PetscErrorCode PffFlowLiquidG2P_Private(PffFlow, const PetscReal alpha[]);
@@ -200,7 +210,7 @@ PETSC_INTERN PetscReal      PffFlowLiquidSolid_Private(const PetscReal x[3], Pet
 PETSC_INTERN PetscErrorCode PffFlowLiquidQuadtreeStep_Private(PffFlow, PffFlowAdaptStats *);
 PETSC_INTERN PetscErrorCode PffFlowPrescribe_Private(PffFlow, PetscReal t);
 PETSC_INTERN PetscErrorCode PffFlowVelocityChange_Private(PffFlow);
-PETSC_INTERN PetscErrorCode PffFlowVorticity_Private(PffFlow);
+PETSC_INTERN PetscErrorCode PffFlowVorticity_Private(PffFlow, PetscInt ch);
 PETSC_INTERN PetscErrorCode PffFlowFlipRatios_Private(PffFlow, PetscReal dt, PetscReal alpha[]);
 PETSC_INTERN PetscErrorCode PffFlowEscaped_Private(PffFlow, PetscInt64 *bubbles, PetscInt64 *droplets);
 PETSC_INTERN PetscErrorCode PffFlowMaxParticleSpeed_Private(PffFlow, PetscReal *umax);

@@ -77,7 +77,7 @@ PetscErrorCode PffFlowUpdateFields(PffFlow f, PetscBool vorticity)
   if (vorticity) {
     PetscCall(PffGridHaloBegin(f->grid, f->chU));
     PetscCall(PffGridHaloEnd(f->grid, f->chU));
-    PetscCall(PffFlowVorticity_Private(f));
+    PetscCall(PffFlowVorticity_Private(f, f->chU));
   }
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -10,6 +10,10 @@ pff_add_unit(test_flow_volumes RANKS 1 2 4)
 # map; also threaded.
 pff_add_unit(test_adapt_flow RANKS 1 2 4)
 pff_add_unit(test_adapt_flow RANKS 2 THREADS 2)
+# flow: user regions force their level on blocks and particles, the vorticity criterion refines a spinning ball of
+# air (issue 14); also threaded.
+pff_add_unit(test_adapt_regions RANKS 1 2 4)
+pff_add_unit(test_adapt_regions RANKS 2 THREADS 2)
 # flow: a block coarsens only after its particles asked for it -adapt_coarsen_delay times in a row (a drop
 # that appears and goes again)
 pff_add_unit(test_adapt_hold RANKS 1 2 4)
