@@ -464,6 +464,8 @@ PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
   PetscCall(PetscMalloc6(mg->nlocal, &mg->gid, mg->nlocal, &mg->colour, mg->nlocal, &mg->next, mg->nlocal, &mg->r0,
                          mg->Rsize * (size_t)omp_get_max_threads(), &mg->R, mg->Rsize * (size_t)omp_get_max_threads(),
                          &mg->BB));
+  mg->XFsize = 2 * mg->Rsize + 2 * (size_t)n0;
+  PetscCall(PetscMalloc1(mg->XFsize * (size_t)omp_get_max_threads(), &mg->XF));
   for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
     PffBlockInfo info;
     PetscCall(PffGridGetBlockInfo(mg->grid, lb, &info));
@@ -654,6 +656,7 @@ PetscErrorCode PffMGDestroyLevels_Private(PffMG *mg)
     PetscCall(PetscFree2(mg->actLeaf, mg->actRoot));
     PetscCall(PetscSFDestroy(&mg->actSF));
     PetscCall(PetscFree6(mg->gid, mg->colour, mg->next, mg->r0, mg->R, mg->BB));
+    PetscCall(PetscFree(mg->XF));
   }
   mg->nlevels = 0;
   mg->built   = PETSC_FALSE;

@@ -357,6 +357,7 @@ PetscErrorCode PffMGStencilBuild_Private(PffMG *mg, PetscInt L)
   PetscCall(NumberingDestroy(&t));
 
   PetscCall(PetscMalloc4(3 * lv->nrows, &st->cf, lv->nrows, &st->dx, lv->nrows, &st->ds, st->nslot, &st->cghost));
+  PetscCall(PetscMalloc2(lv->nrows, &st->dsf, lv->nrows, &st->idf));
   if (lv->idiag == NULL) PetscCall(PetscMalloc1(lv->nrows, &lv->idiag));
   if (lv->mf) {
     IS is;
@@ -384,6 +385,7 @@ PetscErrorCode PffMGStencilDestroy_Private(PffMGLevel *lv)
   PetscCall(PetscFree3(st->drow, st->dref, st->dfac));
   PetscCall(PetscFree(st->ghostRow));
   PetscCall(PetscFree4(st->cf, st->dx, st->ds, st->cghost));
+  PetscCall(PetscFree2(st->dsf, st->idf));
   PetscCall(PetscSFDestroy(&st->sfSlot));
   PetscCall(MatDestroy(&st->Aview));
   PetscCall(PetscFree(lv->st));
@@ -548,6 +550,8 @@ PetscErrorCode PffMGStencilUpdate_Private(PffMG *mg, PetscInt L)
              AIJ levels, and the pinned coarsest operator takes care of it */
           const PetscReal d = Diagonal(st, nr, r, i, j, k, n);
           lv->idiag[r]      = d > 0 ? 1.0 / d : 0.0;
+          st->dsf[r]        = (float)st->ds[r];
+          st->idf[r]        = (float)lv->idiag[r];
         }
   }
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -762,6 +766,111 @@ static inline PetscReal RelaxRowEnds(const PffMGLevel *lv, const PffMGStencil *s
     rmax              = rmax > e ? rmax : e;
   }
   return rmax;
+}
+
+/* Whether a visit of local block lb runs in float (PffMGStencilVisitBlock_Private): blocks of at least 4^3 cells
+   without in-block side terms (own, a coarse level's cells under one coarse face above the block). */
+PetscBool PffMGStencilVisitFloat_Private(const PffMGLevel *lv, PetscInt lb, PetscBool own)
+{
+  return (PetscBool)(!own && lv->n[lb] >= 4);
+}
+
+/* One red-black sweep of a block in float: xs holds the block's x (x fastest) with a pad of n before and after,
+   bs its right-hand side with the side couplings folded in. Each row computes all its cells from the values
+   before the colour's update and adds the update to the cells of the colour only (the others add 0, so they
+   keep their value bit for bit), as RelaxRow does, in one float vector for n = 16. The row goes through a
+   buffer and back with whole-vector stores: a masked store into x stalls the next row's loads of it (no store
+   forwarding from masked stores). The faces to cells outside the block have weight 0 (their couplings are in
+   bs), so the row reads the pads or the block's other rows there, never a value it uses. Returns the largest
+   |omega s| of the sweep, and R (or NULL) receives it per cell. Inlined with n constant for 16, 8 and 4. */
+static inline PetscReal SweepFloat(const PffMGStencil *st, PetscInt nr, PetscInt r0, const PetscInt n,
+                                   const float *restrict bs, float *xs, float omega, PetscReal *R)
+{
+  const float *restrict cx = st->cf + r0, *restrict cy = st->cf + nr + r0, *restrict cz = st->cf + 2 * nr + r0;
+  const float *restrict ds = st->dsf + r0, *restrict id = st->idf + r0;
+  const PetscInt n2 = n * n;
+  float          lo[PFF_GRID_BLOCK_SIZE_MAX], hi[PFF_GRID_BLOCK_SIZE_MAX], mx[PFF_GRID_BLOCK_SIZE_MAX];
+  float          col[2][PFF_GRID_BLOCK_SIZE_MAX];
+  PetscReal      rmax = 0;
+
+  for (PetscInt i = 0; i < n; i++) {
+    lo[i]     = i > 0;
+    hi[i]     = i < n - 1;
+    mx[i]     = 0;
+    col[0][i] = (i & 1) == 0;
+    col[1][i] = (i & 1) == 1;
+  }
+  for (PetscInt c = 0; c < 2; c++)
+    for (PetscInt k = 0; k < n; k++)
+      for (PetscInt j = 0; j < n; j++) {
+        const PetscInt o = n * (j + n * k), i0 = (j + k + c) & 1;
+        const PetscInt sym = j > 0 ? n : 0, syp = j < n - 1 ? n : 0, szm = k > 0 ? n2 : 0, szp = k < n - 1 ? n2 : 0;
+        const float    mym = j > 0, myp = j<n - 1, mzm = k> 0, mzp = k < n - 1;
+        const float *restrict xr = xs + o, *restrict m = col[i0];
+        float nx[PFF_GRID_BLOCK_SIZE_MAX], ev[PFF_GRID_BLOCK_SIZE_MAX];
+        for (PetscInt i = 0; i < n; i++) {
+          const float c0 = lo[i] * cx[o + i], c1 = hi[i] * cx[o + i + 1], c2 = mym * cy[o + i],
+                      c3 = myp * cy[o + i + syp];
+          const float c4 = mzm * cz[o + i], c5 = mzp * cz[o + i + szp];
+          const float d = c0 + c1 + c2 + c3 + c4 + c5 + ds[o + i];
+          const float s = bs[o + i] - d * xr[i] + c0 * xr[i - 1] + c1 * xr[i + 1] + c2 * xr[i - sym] +
+                          c3 * xr[i + syp] + c4 * xr[i - szm] + c5 * xr[i + szp];
+          const float os = m[i] * (omega * s);
+          ev[i]          = os < 0 ? -os : os;
+          nx[i]          = xr[i] + os * id[o + i]; /* id = 0: a zero row is not relaxed */
+          mx[i]          = mx[i] > ev[i] ? mx[i] : ev[i];
+        }
+        float *restrict xw = xs + o;
+        for (PetscInt i = 0; i < n; i++) xw[i] = nx[i];
+        if (R)
+          for (PetscInt i = i0; i < n; i += 2) R[o + i] = ev[i];
+      }
+  for (PetscInt i = 0; i < n; i++) rmax = PetscMax(rmax, (PetscReal)mx[i]);
+  return rmax;
+}
+
+static PetscReal SweepFloatN(const PffMGStencil *st, PetscInt nr, PetscInt r0, PetscInt n, const float *bs, float *xs,
+                             float omega, PetscReal *R)
+{
+  switch (n) {
+  case 16:
+    return SweepFloat(st, nr, r0, 16, bs, xs, omega, R);
+  case 8:
+    return SweepFloat(st, nr, r0, 8, bs, xs, omega, R);
+  case 4:
+    return SweepFloat(st, nr, r0, 4, bs, xs, omega, R);
+  default:
+    return SweepFloat(st, nr, r0, n, bs, xs, omega, R);
+  }
+}
+
+/* One visit of local block lb in float (PffMGStencilVisitFloat_Private): x and bb (the block's right-hand side
+   with its side couplings, PffMGStencilBlockRhs_Private) go into float copies once, the block-local sweeps run on
+   them (one, or in adaptive relaxation until the update falls by 1/3, at most maxSweeps), and x comes back once.
+   The visit is the smoother's inner loop: in float a row of 16 cells is one vector and no lane permutes are
+   needed, and the block's working set halves. The smoother is a preconditioner's, so the float rounding of x
+   (relative 6e-8 per visit) is far below what it reduces per cycle; the outer FCG works in double. first
+   receives the first sweep's largest |omega s|, the return value the last one's, k the sweeps. */
+PetscReal PffMGStencilVisitBlock_Private(const PffMGLevel *lv, PetscInt lb, const PetscScalar *bb, PetscScalar *x,
+                                         PetscReal omega, PetscReal *R, float *scratch, PetscInt maxSweeps,
+                                         PetscBool adaptive, PetscReal *first, PetscInt *k)
+{
+  const PetscInt n = lv->n[lb], r0 = lv->start[lb], nc = n * n * n;
+  float *restrict xs = scratch + n, *restrict bs = scratch + nc + 2 * n; /* pads of n floats around xs */
+  PetscReal r = 0;
+
+  for (PetscInt i = 0; i < n; i++) xs[i - n] = xs[nc + i] = 0;
+  for (PetscInt i = 0; i < nc; i++) {
+    xs[i] = (float)x[r0 + i];
+    bs[i] = (float)bb[i];
+  }
+  for (*k = 0; *k < maxSweeps;) {
+    r = SweepFloatN(lv->st, lv->nrows, r0, n, bs, xs, (float)omega, R);
+    if ((*k)++ == 0) *first = r;
+    if (!adaptive || !(*first > 0) || r < *first / 3) break;
+  }
+  for (PetscInt i = 0; i < nc; i++) x[r0 + i] = xs[i];
+  return r;
 }
 
 /* One in-place red-black sweep over the cells of local block lb (cells (i + j + k) even, then odd),
