@@ -32,6 +32,7 @@ typedef struct {
   PetscInt  *rowptr; /* [nrows + 1] side couplings of each row to other cells */
   PetscInt  *side;   /* the rows that have any, in order (the block's sides: about a third of the cells for n = 16) */
   PetscInt  *bside;  /* [nblk + 1] the rows of block lb are side[bside[lb] .. bside[lb + 1] - 1] */
+  PetscBool *own;    /* [nblk] the block has side terms between its own cells (PffMGStencilBlockRhs_Private) */
   PetscInt  *col;    /* local row, or nrows + ghost index */
   PffMGReal *val;    /* matrix entry: fac * c of the face */
   PetscInt  *ref;    /* the face: slot d nrows + row of cf, or 3 nrows + ghost slot */
@@ -134,8 +135,8 @@ typedef struct {
   PetscReal     *R;                 /* [Rsize * threads] effective residual per cell of the block each thread relaxes */
   size_t         Rsize;             /* n0^3 */
   PetscScalar   *BB;     /* [Rsize * threads] right-hand side of the block each thread relaxes (stencil levels) */
-  float         *XF;     /* [XFsize * threads] float copies of x and bb of the block each thread relaxes */
-  size_t         XFsize; /* 2 n0^3 + 2 n0 */
+  float         *XF;     /* [XFsize * threads] float copies of x, bb and R of the block each thread relaxes */
+  size_t         XFsize; /* 3 n0^3 + 2 n0 */
   unsigned char *colour; /* [nlocal] block colour (x_b + y_b + z_b) mod 2 */
   PffMGStats     stats;
 } PffMG;
@@ -164,9 +165,9 @@ PETSC_INTERN PetscErrorCode PffMGStencilProlongAdd_Private(PffMG *, PetscInt, Ve
 PETSC_INTERN PetscErrorCode PffMGBuildProlongation_Private(PffMG *, PetscInt);
 PETSC_INTERN PetscBool      PffMGStencilBlockRhs_Private(const PffMGLevel *, PetscInt, const PetscScalar *,
                                                          const PetscScalar *, const PetscScalar *, PetscScalar *);
-PETSC_INTERN PetscBool      PffMGStencilVisitFloat_Private(const PffMGLevel *, PetscInt, PetscBool);
+PETSC_INTERN PetscBool      PffMGStencilVisitFloat_Private(const PffMGLevel *, PetscInt);
 PETSC_INTERN PetscReal PffMGStencilVisitBlock_Private(const PffMGLevel *, PetscInt, const PetscScalar *, PetscScalar *,
-                                                      PetscReal, PetscReal *, float *, PetscInt, PetscBool, PetscReal *,
-                                                      PetscInt *);
+                                                      const PetscScalar *, PetscReal, PetscReal *, float *, PetscInt,
+                                                      PetscBool, PetscReal *, PetscInt *);
 PETSC_INTERN PetscReal PffMGStencilRelaxBlock_Private(const PffMGLevel *, PetscInt, const PetscScalar *, PetscBool,
                                                       PetscScalar *, PetscReal, PetscReal *);

@@ -76,12 +76,10 @@ static inline PetscReal VisitBlock(const PffMG *mg, const PffMGLevel *lv, PetscI
   PetscReal       r     = 0;
   PetscBool       own   = PETSC_FALSE;
 
-  if (lv->mf) {
-    own = PffMGStencilBlockRhs_Private(lv, lb, b, x, g, bb);
-    if (PffMGStencilVisitFloat_Private(lv, lb, own))
-      return PffMGStencilVisitBlock_Private(lv, lb, bb, x, omega, R, mg->XF + mg->XFsize * (size_t)omp_get_thread_num(),
-                                            maxSweeps, adaptive, first, k);
-  }
+  if (lv->mf && PffMGStencilVisitFloat_Private(lv, lb))
+    return PffMGStencilVisitBlock_Private(lv, lb, b, x, g, omega, R, mg->XF + mg->XFsize * (size_t)omp_get_thread_num(),
+                                          maxSweeps, adaptive, first, k);
+  if (lv->mf) own = PffMGStencilBlockRhs_Private(lv, lb, b, x, g, bb);
   for (*k = 0; *k < maxSweeps;) {
     if (lv->mf)
       r = PffMGStencilRelaxBlock_Private(lv, lb, bb, own, x, omega, R);

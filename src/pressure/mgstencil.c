@@ -343,12 +343,16 @@ PetscErrorCode PffMGStencilBuild_Private(PffMG *mg, PetscInt L)
   {
     PetscInt nside = 0;
     for (PetscInt r = 0; r < lv->nrows; r++) nside += st->rowptr[r + 1] > st->rowptr[r];
-    PetscCall(PetscMalloc2(nside, &st->side, lv->nblk + 1, &st->bside));
+    PetscCall(PetscMalloc3(nside, &st->side, lv->nblk + 1, &st->bside, lv->nblk, &st->own));
     nside = 0;
     for (PetscInt lb = 0; lb < lv->nblk; lb++) {
       st->bside[lb] = nside;
-      for (PetscInt r = lv->start[lb]; r < lv->start[lb + 1]; r++)
+      st->own[lb]   = PETSC_FALSE;
+      for (PetscInt r = lv->start[lb]; r < lv->start[lb + 1]; r++) {
         if (st->rowptr[r + 1] > st->rowptr[r]) st->side[nside++] = r;
+        for (PetscInt e = st->rowptr[r]; e < st->rowptr[r + 1]; e++)
+          if (st->col[e] >= lv->start[lb] && st->col[e] < lv->start[lb + 1]) st->own[lb] = PETSC_TRUE;
+      }
     }
     st->bside[lv->nblk] = nside;
   }
@@ -380,7 +384,7 @@ PetscErrorCode PffMGStencilDestroy_Private(PffMGLevel *lv)
   PetscFunctionBeginUser;
   if (!st) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PetscFree(st->rowptr));
-  PetscCall(PetscFree2(st->side, st->bside));
+  PetscCall(PetscFree3(st->side, st->bside, st->own));
   PetscCall(PetscFree4(st->col, st->val, st->ref, st->fac));
   PetscCall(PetscFree3(st->drow, st->dref, st->dfac));
   PetscCall(PetscFree(st->ghostRow));
@@ -770,9 +774,24 @@ static inline PetscReal RelaxRowEnds(const PffMGLevel *lv, const PffMGStencil *s
 
 /* Whether a visit of local block lb runs in float (PffMGStencilVisitBlock_Private): blocks of at least 4^3 cells
    without in-block side terms (own, a coarse level's cells under one coarse face above the block). */
-PetscBool PffMGStencilVisitFloat_Private(const PffMGLevel *lv, PetscInt lb, PetscBool own)
+PetscBool PffMGStencilVisitFloat_Private(const PffMGLevel *lv, PetscInt lb)
 {
-  return (PetscBool)(!own && lv->n[lb] >= 4);
+  return (PetscBool)(!lv->st->own[lb] && lv->n[lb] >= 4);
+}
+
+/* bs = b - (the side couplings of the cells of local block lb to other blocks), block-local, in float: as
+   PffMGStencilBlockRhs_Private for a block without in-block side terms, rounded once per cell. */
+static void BlockRhsFloat(const PffMGLevel *lv, PetscInt lb, const PetscScalar *b, const PetscScalar *x,
+                          const PetscScalar *g, float *restrict bs)
+{
+  const PffMGStencil *st = lv->st;
+  const PetscInt      r0 = lv->start[lb], nc = lv->n[lb] * lv->n[lb] * lv->n[lb];
+
+  for (PetscInt i = 0; i < nc; i++) bs[i] = (float)b[r0 + i];
+  for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++) {
+    const PetscInt r = st->side[q];
+    bs[r - r0]       = (float)(b[r] - SideSum(st, lv->nrows, r, x, g, 0, 0, NULL));
+  }
 }
 
 /* One red-black sweep of a block in float: xs holds the block's x (x fastest) with a pad of n before and after,
@@ -784,7 +803,7 @@ PetscBool PffMGStencilVisitFloat_Private(const PffMGLevel *lv, PetscInt lb, Pets
    bs), so the row reads the pads or the block's other rows there, never a value it uses. Returns the largest
    |omega s| of the sweep, and R (or NULL) receives it per cell. Inlined with n constant for 16, 8 and 4. */
 static inline PetscReal SweepFloat(const PffMGStencil *st, PetscInt nr, PetscInt r0, const PetscInt n,
-                                   const float *restrict bs, float *xs, float omega, PetscReal *R)
+                                   const float *restrict bs, float *xs, float omega, float *restrict R)
 {
   const float *restrict cx = st->cf + r0, *restrict cy = st->cf + nr + r0, *restrict cz = st->cf + 2 * nr + r0;
   const float *restrict ds = st->dsf + r0, *restrict id = st->idf + r0;
@@ -823,14 +842,14 @@ static inline PetscReal SweepFloat(const PffMGStencil *st, PetscInt nr, PetscInt
         float *restrict xw = xs + o;
         for (PetscInt i = 0; i < n; i++) xw[i] = nx[i];
         if (R)
-          for (PetscInt i = i0; i < n; i += 2) R[o + i] = ev[i];
+          for (PetscInt i = 0; i < n; i++) R[o + i] = m[i] != 0 ? ev[i] : R[o + i];
       }
   for (PetscInt i = 0; i < n; i++) rmax = PetscMax(rmax, (PetscReal)mx[i]);
   return rmax;
 }
 
 static PetscReal SweepFloatN(const PffMGStencil *st, PetscInt nr, PetscInt r0, PetscInt n, const float *bs, float *xs,
-                             float omega, PetscReal *R)
+                             float omega, float *R)
 {
   switch (n) {
   case 16:
@@ -844,32 +863,33 @@ static PetscReal SweepFloatN(const PffMGStencil *st, PetscInt nr, PetscInt r0, P
   }
 }
 
-/* One visit of local block lb in float (PffMGStencilVisitFloat_Private): x and bb (the block's right-hand side
-   with its side couplings, PffMGStencilBlockRhs_Private) go into float copies once, the block-local sweeps run on
+/* One visit of local block lb in float (PffMGStencilVisitFloat_Private): x and the block's right-hand side with its
+   side couplings (BlockRhsFloat) go into float copies once, the block-local sweeps run on
    them (one, or in adaptive relaxation until the update falls by 1/3, at most maxSweeps), and x comes back once.
    The visit is the smoother's inner loop: in float a row of 16 cells is one vector and no lane permutes are
    needed, and the block's working set halves. The smoother is a preconditioner's, so the float rounding of x
    (relative 6e-8 per visit) is far below what it reduces per cycle; the outer FCG works in double. first
    receives the first sweep's largest |omega s|, the return value the last one's, k the sweeps. */
-PetscReal PffMGStencilVisitBlock_Private(const PffMGLevel *lv, PetscInt lb, const PetscScalar *bb, PetscScalar *x,
-                                         PetscReal omega, PetscReal *R, float *scratch, PetscInt maxSweeps,
-                                         PetscBool adaptive, PetscReal *first, PetscInt *k)
+PetscReal PffMGStencilVisitBlock_Private(const PffMGLevel *lv, PetscInt lb, const PetscScalar *b, PetscScalar *x,
+                                         const PetscScalar *g, PetscReal omega, PetscReal *R, float *scratch,
+                                         PetscInt maxSweeps, PetscBool adaptive, PetscReal *first, PetscInt *k)
 {
   const PetscInt n = lv->n[lb], r0 = lv->start[lb], nc = n * n * n;
   float *restrict xs = scratch + n, *restrict bs = scratch + nc + 2 * n; /* pads of n floats around xs */
-  PetscReal r = 0;
+  float *restrict Rf = R ? bs + nc : NULL;
+  PetscReal r        = 0;
 
+  BlockRhsFloat(lv, lb, b, x, g, bs);
   for (PetscInt i = 0; i < n; i++) xs[i - n] = xs[nc + i] = 0;
-  for (PetscInt i = 0; i < nc; i++) {
-    xs[i] = (float)x[r0 + i];
-    bs[i] = (float)bb[i];
-  }
+  for (PetscInt i = 0; i < nc; i++) xs[i] = (float)x[r0 + i];
   for (*k = 0; *k < maxSweeps;) {
-    r = SweepFloatN(lv->st, lv->nrows, r0, n, bs, xs, (float)omega, R);
+    r = SweepFloatN(lv->st, lv->nrows, r0, n, bs, xs, (float)omega, Rf);
     if ((*k)++ == 0) *first = r;
     if (!adaptive || !(*first > 0) || r < *first / 3) break;
   }
   for (PetscInt i = 0; i < nc; i++) x[r0 + i] = xs[i];
+  if (R) /* per sweep in float, whole rows; the border maxima read it in double */
+    for (PetscInt i = 0; i < nc; i++) R[i] = Rf[i];
   return r;
 }
 
