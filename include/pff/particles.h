@@ -228,8 +228,32 @@ PETSC_EXTERN PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const Pets
 
 /* Appends m particles anywhere in the domain, ids chosen by the caller, from world positions (rounded to
    the store's float grid units; a position the store wrote comes back exactly) and velocities; flags
-   (the files' byte, PffParticleFlagsByte: flags in bits 0-3, D_p in bits 4-7) may be NULL. Call PffParticlesMigrate
-   next to send them to their owners and bin them. For restart and tests. Not collective. */
+   (the files' byte, PffParticleFlagsByte: flags in bits 0-3, D_p in bits 4-7) may be NULL; id may be NULL (0,
+   for a caller that fills the fields of PffParticlesGetFileFields itself, as the files' reader does). Call
+   PffParticlesMigrate next to send them to their owners and bin them. For restart and tests. Not collective. */
 PETSC_EXTERN PetscErrorCode PffParticlesAdd(PffParticles p, PetscInt m, const PetscReal x[], const PetscReal v[],
                                             const uint64_t id[], const uint8_t type[], const int8_t level[],
                                             const uint8_t flags[]);
+
+/* The per-particle fields that frames and checkpoints store by themselves, one dataset /particles/<name> each
+   (the field list of src/particles/particlesimpl.h, entries marked FILE; the others have their own code in
+   src/io/particles.c). A field added to the list with FILE is written, checked and read back with no change to
+   the files' code. */
+typedef enum {
+  PFF_FIELD_FLOAT,
+  PFF_FIELD_DOUBLE,
+  PFF_FIELD_INT32,
+  PFF_FIELD_UINT32,
+  PFF_FIELD_INT64,
+  PFF_FIELD_UINT64
+} PffFieldType;
+typedef struct {
+  const char  *name;
+  PetscInt     ncomp; /* values per particle */
+  PffFieldType type;
+  size_t       size; /* bytes per value */
+} PffParticleFieldInfo;
+/* With info NULL: *n = the number of such fields; otherwise *n is the room in info on entry and the number on exit. */
+PETSC_EXTERN PetscErrorCode PffParticlesGetFileFields(PetscInt *n, PffParticleFieldInfo info[]);
+/* The store's array of field name (particle i at [ncomp i, ncomp i + ncomp)); valid until the store changes. */
+PETSC_EXTERN PetscErrorCode PffParticlesGetFieldArray(PffParticles p, const char name[], void **data);

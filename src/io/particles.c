@@ -11,8 +11,6 @@
 #include <stdint.h>
 #include "h5util.h"
 
-#define PFF_PARTICLE_DATASETS 6
-
 /* Selects rows [start, start + n) of a dataspace of rows x ncol (ncol = 0: 1-D), none when n = 0. */
 static PetscErrorCode PffIOSelectRows(hid_t space, hsize_t start, hsize_t n, hsize_t ncol)
 {
@@ -44,6 +42,32 @@ static PetscErrorCode PffIOWriteRows(hid_t group, const char name[], hid_t filet
   PffCallHDF5(H5Dclose(dset));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
+
+/* File and memory HDF5 types of a particle field (PffParticlesGetFileFields). */
+static void PffIOFieldTypes(PffFieldType t, hid_t *file, hid_t *mem)
+{
+  switch (t) {
+  case PFF_FIELD_FLOAT:
+    *file = H5T_IEEE_F32LE, *mem = H5T_NATIVE_FLOAT;
+    break;
+  case PFF_FIELD_DOUBLE:
+    *file = H5T_IEEE_F64LE, *mem = H5T_NATIVE_DOUBLE;
+    break;
+  case PFF_FIELD_INT32:
+    *file = H5T_STD_I32LE, *mem = H5T_NATIVE_INT32;
+    break;
+  case PFF_FIELD_UINT32:
+    *file = H5T_STD_U32LE, *mem = H5T_NATIVE_UINT32;
+    break;
+  case PFF_FIELD_INT64:
+    *file = H5T_STD_I64LE, *mem = H5T_NATIVE_INT64;
+    break;
+  default:
+    *file = H5T_STD_U64LE, *mem = H5T_NATIVE_UINT64;
+  }
+}
+
+#define PFF_IO_MAX_FILE_FIELDS 16
 
 PetscErrorCode PffIOWriteParticles_Private(PffParticles particles, MPI_Comm comm, hid_t file, hid_t dxpl, PetscBool dbl,
                                            PetscInt64 *count)
@@ -99,8 +123,20 @@ PetscErrorCode PffIOWriteParticles_Private(PffParticles particles, MPI_Comm comm
       PetscCall(PffIOWriteRows(group, "v", ftype, H5T_NATIVE_FLOAT, (hsize_t)total, 3, (hsize_t)start, (hsize_t)n, dxpl,
                                a.v));
     }
-    PetscCall(PffIOWriteRows(group, "id", H5T_STD_U64LE, H5T_NATIVE_UINT64, (hsize_t)total, 0, (hsize_t)start,
-                             (hsize_t)n, dxpl, a.id));
+    {
+      PffParticleFieldInfo info[PFF_IO_MAX_FILE_FIELDS];
+      PetscInt             nf = PFF_IO_MAX_FILE_FIELDS;
+      PetscCall(PffParticlesGetFileFields(&nf, info));
+      for (PetscInt f = 0; f < nf; f++) { /* the fields that need no code of their own, as stored */
+        hid_t ft, mt;
+        void *data;
+        PffIOFieldTypes(info[f].type, &ft, &mt);
+        PetscCall(PffParticlesGetFieldArray(particles, info[f].name, &data));
+        PetscCall(PffIOWriteRows(group, info[f].name, ft, mt, (hsize_t)total,
+                                 info[f].ncomp > 1 ? (hsize_t)info[f].ncomp : 0, (hsize_t)start, (hsize_t)n, dxpl,
+                                 data));
+      }
+    }
     const char *const names[3]  = {"type", "level", "flags"};
     const hid_t       ftypes[3] = {H5T_STD_U8LE, H5T_STD_I8LE, H5T_STD_U8LE};
     for (int k = 0; k < 3; k++) {
@@ -122,7 +158,28 @@ PetscErrorCode PffIOWriteParticles_Private(PffParticles particles, MPI_Comm comm
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-static const char *const PffParticleDatasets[PFF_PARTICLE_DATASETS] = {"x", "v", "id", "type", "level", "flags"};
+/* The datasets of /particles with their values per row: the ones with code of their own, then the store's file
+   fields (PffParticlesGetFileFields). */
+static PetscErrorCode PffParticleDatasets(PetscInt *n, const char *names[], PetscInt ncol[])
+{
+  static const char *const own[] = {"x", "v", "type", "level", "flags"};
+  const PetscInt           nown  = 5;
+  PffParticleFieldInfo     info[PFF_IO_MAX_FILE_FIELDS];
+  PetscInt                 nf = PFF_IO_MAX_FILE_FIELDS;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffParticlesGetFileFields(&nf, info));
+  for (PetscInt k = 0; k < nown; k++) {
+    names[k] = own[k];
+    ncol[k]  = k < 2 ? 3 : 1;
+  }
+  for (PetscInt f = 0; f < nf; f++) {
+    names[nown + f] = info[f].name;
+    ncol[nown + f]  = info[f].ncomp;
+  }
+  *n = nown + nf;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
 
 PetscErrorCode PffIOCheckParticles_Private(hid_t file, const char path[], PetscInt64 *count, char msg[], size_t len)
 {
@@ -141,18 +198,21 @@ PetscErrorCode PffIOCheckParticles_Private(hid_t file, const char path[], PetscI
   PetscCall(PffH5ReadAttribute_Private(group, "count", H5T_NATIVE_INT64, 0, count, &found));
   if (!found || *count < 0)
     PetscCall(PetscSNPrintf(msg, len, "checkpoint %s: /particles has no count attribute (or a negative one)", path));
-  for (int k = 0; k < PFF_PARTICLE_DATASETS && !msg[0]; k++) {
-    const int ncol    = k < 2 ? 3 : 0;
-    hsize_t   dims[2] = {0, 0};
-    int       ndims;
-    hid_t     dset, space;
+  const char *names[5 + PFF_IO_MAX_FILE_FIELDS];
+  PetscInt    ncols[5 + PFF_IO_MAX_FILE_FIELDS], nd = 0;
+  PetscCall(PffParticleDatasets(&nd, names, ncols));
+  for (PetscInt k = 0; k < nd && !msg[0]; k++) {
+    const PetscInt ncol    = ncols[k] > 1 ? ncols[k] : 0;
+    hsize_t        dims[2] = {0, 0};
+    int            ndims;
+    hid_t          dset, space;
 
-    PffCallHDF5(exists = H5Lexists(group, PffParticleDatasets[k], H5P_DEFAULT));
+    PffCallHDF5(exists = H5Lexists(group, names[k], H5P_DEFAULT));
     if (!exists) {
-      PetscCall(PetscSNPrintf(msg, len, "checkpoint %s: no dataset /particles/%s", path, PffParticleDatasets[k]));
+      PetscCall(PetscSNPrintf(msg, len, "checkpoint %s: no dataset /particles/%s", path, names[k]));
       break;
     }
-    PffCallHDF5(dset = H5Dopen2(group, PffParticleDatasets[k], H5P_DEFAULT));
+    PffCallHDF5(dset = H5Dopen2(group, names[k], H5P_DEFAULT));
     PffCallHDF5(space = H5Dget_space(dset));
     PffCallHDF5(ndims = H5Sget_simple_extent_ndims(space));
     if (ndims == (ncol ? 2 : 1)) PffCallHDF5(H5Sget_simple_extent_dims(space, dims, NULL));
@@ -160,7 +220,7 @@ PetscErrorCode PffIOCheckParticles_Private(hid_t file, const char path[], PetscI
       PetscCall(PetscSNPrintf(msg, len,
                               "checkpoint %s: /particles/%s is not an array of %" PetscInt64_FMT " rows%s (count "
                               "attribute)",
-                              path, PffParticleDatasets[k], *count, ncol ? " of 3 values" : ""));
+                              path, names[k], *count, ncol ? " of 3 values" : ""));
     PffCallHDF5(H5Sclose(space));
     PffCallHDF5(H5Dclose(dset));
   }
@@ -193,7 +253,6 @@ PetscErrorCode PffIOReadParticles_Private(PffParticles particles, PffGrid grid, 
   PetscInt64  lo, bad = -1;
   PetscInt    n, nlevels;
   PetscReal  *x, *v;
-  uint64_t   *id;
   uint8_t    *type, *flags;
   int8_t     *level;
   hid_t       group;
@@ -221,28 +280,46 @@ PetscErrorCode PffIOReadParticles_Private(PffParticles particles, PffGrid grid, 
     }
     PetscCall(PetscFree(counts));
   }
-  PetscCall(PetscMalloc6(3 * n + 1, &x, 3 * n + 1, &v, n + 1, &id, n + 1, &type, n + 1, &level, n + 1, &flags));
+  PetscCall(PetscMalloc5(3 * n + 1, &x, 3 * n + 1, &v, n + 1, &type, n + 1, &level, n + 1, &flags));
   PetscCall(PffIOReadRows(group, "x", PFF_H5T_NATIVE_PETSCREAL, 3, (hsize_t)lo, (hsize_t)n, dxpl, x));
   PetscCall(PffIOReadRows(group, "v", PFF_H5T_NATIVE_PETSCREAL, 3, (hsize_t)lo, (hsize_t)n, dxpl, v));
-  PetscCall(PffIOReadRows(group, "id", H5T_NATIVE_UINT64, 0, (hsize_t)lo, (hsize_t)n, dxpl, id));
   PetscCall(PffIOReadRows(group, "type", H5T_NATIVE_UINT8, 0, (hsize_t)lo, (hsize_t)n, dxpl, type));
   PetscCall(PffIOReadRows(group, "level", H5T_NATIVE_INT8, 0, (hsize_t)lo, (hsize_t)n, dxpl, level));
   PetscCall(PffIOReadRows(group, "flags", H5T_NATIVE_UINT8, 0, (hsize_t)lo, (hsize_t)n, dxpl, flags));
-  PffCallHDF5(H5Gclose(group));
   /* PffParticlesAdd would stop on this rank alone; find the first bad row on any rank instead. */
   for (PetscInt i = 0; i < n && bad < 0; i++)
     if (type[i] >= PFF_PARTICLE_NTYPES || level[i] < 0 || level[i] >= nlevels) bad = lo + i;
   if (bad < 0) bad = INT64_MAX;
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &bad, 1, MPIU_INT64, MPI_MIN, comm));
   if (bad != INT64_MAX) {
-    PetscCall(PetscFree6(x, v, id, type, level, flags));
+    PffCallHDF5(H5Gclose(group));
+    PetscCall(PetscFree5(x, v, type, level, flags));
     SETERRQ(comm, PETSC_ERR_FILE_UNEXPECTED,
             "checkpoint %s: particle row %" PetscInt64_FMT
             " has a type that is not a PffParticleType or a level outside the grid's 0..%" PetscInt_FMT,
             path, bad, nlevels - 1);
   }
-  PetscCall(PffParticlesAdd(particles, n, x, v, id, type, level, flags));
-  PetscCall(PetscFree6(x, v, id, type, level, flags));
+  {
+    /* the fields the files take by themselves go straight into the rows Add appended */
+    PffParticleArrays    a;
+    PffParticleFieldInfo info[PFF_IO_MAX_FILE_FIELDS];
+    PetscInt             nf = PFF_IO_MAX_FILE_FIELDS, n0;
+    PetscCall(PffParticlesGetArrays(particles, &a));
+    n0 = a.n;
+    PetscCall(PffParticlesAdd(particles, n, x, v, NULL, type, level, flags));
+    PetscCall(PffParticlesGetFileFields(&nf, info));
+    for (PetscInt f = 0; f < nf; f++) {
+      hid_t ft, mt;
+      char *data;
+      PffIOFieldTypes(info[f].type, &ft, &mt);
+      PetscCall(PffParticlesGetFieldArray(particles, info[f].name, (void **)&data));
+      PetscCall(PffIOReadRows(group, info[f].name, mt, info[f].ncomp > 1 ? (hsize_t)info[f].ncomp : 0, (hsize_t)lo,
+                              (hsize_t)n, dxpl,
+                              data ? data + info[f].size * (size_t)info[f].ncomp * (size_t)n0 : NULL));
+    }
+  }
+  PffCallHDF5(H5Gclose(group));
+  PetscCall(PetscFree5(x, v, type, level, flags));
   PetscCall(PffParticlesMigrate(particles, NULL));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

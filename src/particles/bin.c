@@ -185,7 +185,7 @@ PetscErrorCode PffParticlesSort_Private(PffParticles p)
   else if (moved) {
     float *buf;
     PetscCall(PffParticlesGetFloatWork_Private(p, (size_t)n + 1, &buf));
-#define PFF_PARTICLE_FIELD_SORT(name, type, k)                                                                         \
+#define PFF_PARTICLE_FIELD_SORT(name, type, k, f)                                                                      \
   for (size_t l = 0; l < (k) * sizeof(type) / 4; l++) PffBinScatterLane(p->s.name, (k) * sizeof(type), l, n, dst, buf);
     PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_SORT)
 #undef PFF_PARTICLE_FIELD_SORT

@@ -58,7 +58,7 @@ PetscErrorCode PffParticlesSetFromOptions(PffParticles p)
 static PetscErrorCode PffParticleSoAFree(PffParticleSoA *s)
 {
   PetscFunctionBeginUser;
-#define PFF_PARTICLE_FIELD_FREE(name, type, k) PetscCall(PetscFree(s->name));
+#define PFF_PARTICLE_FIELD_FREE(name, type, k, f) PetscCall(PetscFree(s->name));
   PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_FREE)
 #undef PFF_PARTICLE_FIELD_FREE
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -96,7 +96,7 @@ PetscErrorCode PffParticlesDestroy(PffParticles *part)
 static PetscErrorCode PffParticleSoAGrow(PffParticleSoA *s, PetscInt cap)
 {
   PetscFunctionBeginUser;
-#define PFF_PARTICLE_FIELD_GROW(name, type, k)                                                                         \
+#define PFF_PARTICLE_FIELD_GROW(name, type, k, f)                                                                      \
   PetscCall(PetscRealloc(sizeof(type) * (size_t)(k) * (size_t)cap, &s->name));
   PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_GROW)
 #undef PFF_PARTICLE_FIELD_GROW
@@ -281,7 +281,7 @@ PetscErrorCode PffParticlesAdd(PffParticles p, PetscInt m, const PetscReal x[], 
       p->s.x[3 * j + d] = (float)((x[3 * i + d] - p->origin[d]) / p->h0);
       p->s.v[3 * j + d] = (float)v[3 * i + d];
     }
-    p->s.id[j] = id[i];
+    p->s.id[j] = id ? id[i] : 0;
     /* the flags byte of the files holds D_p in its upper half (PffParticleFlagsByte) */
     const uint8_t fl = flags ? flags[i] : 0;
     p->s.word[j]     = PffParticleWordSetLevel(PffParticleWord(type[i], level[i], fl & 0xfu), level[i], fl >> 4);
@@ -346,5 +346,49 @@ PetscErrorCode PffParticlesGetTotals(PffParticles p, const PetscReal density[PFF
     PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, vol, PFF_PARTICLE_NTYPES, MPIU_REAL, MPI_SUM, p->comm));
     for (int t = 0; t < PFF_PARTICLE_NTYPES; t++) mass[t] = (density ? density[t] : 1.0) * vol[t];
   }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The fields of the list in particlesimpl.h whose files entry is FILE, in list order. */
+#define PFF_PARTICLE_FIELD_TYPE(type)                                                                                  \
+  _Generic((type *)0, float *: PFF_FIELD_FLOAT, double *: PFF_FIELD_DOUBLE, int32_t *: PFF_FIELD_INT32, \
+           uint32_t *: PFF_FIELD_UINT32, int64_t *: PFF_FIELD_INT64, uint64_t *: PFF_FIELD_UINT64)
+#define PFF_PARTICLE_FIELD_IS_FILE_FILE 1
+#define PFF_PARTICLE_FIELD_IS_FILE_OWN 0
+#define PFF_PARTICLE_FIELD_INFO(name, type, k, f)                                                                      \
+  {{#name, k, PFF_PARTICLE_FIELD_TYPE(type), sizeof(type)}, PFF_PARTICLE_FIELD_IS_FILE_##f},
+static const struct {
+  PffParticleFieldInfo info;
+  int                  file;
+} PffParticleFieldTable[] = {PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_INFO)};
+
+PetscErrorCode PffParticlesGetFileFields(PetscInt *n, PffParticleFieldInfo info[])
+{
+  PetscInt m = 0;
+
+  PetscFunctionBeginUser;
+  for (size_t k = 0; k < sizeof(PffParticleFieldTable) / sizeof(PffParticleFieldTable[0]); k++)
+    if (PffParticleFieldTable[k].file) {
+      PetscCheck(!info || m < *n, PETSC_COMM_SELF, PETSC_ERR_ARG_SIZ,
+                 "PffParticlesGetFileFields: room for %" PetscInt_FMT " fields only", *n);
+      if (info) info[m] = PffParticleFieldTable[k].info;
+      m++;
+    }
+  *n = m;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffParticlesGetFieldArray(PffParticles p, const char name[], void **data)
+{
+  PetscBool match;
+
+  PetscFunctionBeginUser;
+  *data = NULL;
+#define PFF_PARTICLE_FIELD_ARRAY(fname, type, k, f)                                                                    \
+  PetscCall(PetscStrcmp(name, #fname, &match));                                                                        \
+  if (match) *data = (void *)p->s.fname;
+  PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_ARRAY)
+#undef PFF_PARTICLE_FIELD_ARRAY
+  PetscCheck(*data || p->cap == 0, PETSC_COMM_SELF, PETSC_ERR_ARG_WRONG, "no particle field %s", name);
   PetscFunctionReturn(PETSC_SUCCESS);
 }

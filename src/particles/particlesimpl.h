@@ -11,15 +11,19 @@
 /* Purposes of the counter-based RNG (the third key besides the seed and the particle id). */
 enum { PFF_RNG_SEED_JITTER = 1, PFF_RNG_SPLIT = 2, PFF_RNG_COARSEN = 3 };
 
-/* The particle fields, declared once: X(name, C type, values per particle). Growth, compaction, the
-   binning's lane sort and the migration record are generated from this list, so a new per-particle
-   field (a spray radius, a lifetime) is one line here; what a field means (Add, GetArrays, the files)
-   is written where it is used. Every field is a multiple of 4 bytes per particle (the sort moves 4-byte
-   lanes). x: position in grid units (world - origin) / h0; word: PffParticleWord(type, level, flags). */
-#define PFF_PARTICLE_FIELDS(X) X(x, float, 3) X(v, float, 3) X(id, uint64_t, 1) X(word, uint32_t, 1)
+/* The particle fields, declared once: X(name, C type, values per particle, files). Growth, compaction, the
+   binning's lane sort, the migration record and, for fields whose last entry is FILE, the frames and
+   checkpoints (a dataset /particles/<name> of that type, PffParticlesGetFileFields) are generated from this
+   list, so a new per-particle field (a spray radius, a lifetime) is one line here; what a field means (Add,
+   GetArrays) is written where it is used. OWN fields are written by the files' own code: x (world
+   positions), v (widened in checkpoints) and word (unpacked into the type, level and flags datasets). Every
+   field is a multiple of 4 bytes per particle (the sort moves 4-byte lanes). x: position in grid units
+   (world - origin) / h0; word: PffParticleWord(type, level, flags). */
+#define PFF_PARTICLE_FIELDS(X)                                                                                         \
+  X(x, float, 3, OWN) X(v, float, 3, OWN) X(id, uint64_t, 1, FILE) X(word, uint32_t, 1, OWN)
 
-#define PFF_PARTICLE_FIELD_DECLARE(name, type, k) type *name;
-#define PFF_PARTICLE_FIELD_BYTES(name, type, k) +(k) * sizeof(type)
+#define PFF_PARTICLE_FIELD_DECLARE(name, type, k, f) type *name;
+#define PFF_PARTICLE_FIELD_BYTES(name, type, k, f) +(k) * sizeof(type)
 
 /* Bytes per particle of the store (36), which is also the migration record. */
 #define PFF_PARTICLE_BYTES (0 PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_BYTES))
@@ -125,7 +129,7 @@ static inline PetscInt PffParticlesLocate_Private(PffParticles p, const float g[
 /* Moves particle src to slot dst (compaction after removals or sends). */
 static inline void PffParticlesMove_Private(PffParticles p, PetscInt dst, PetscInt src)
 {
-#define PFF_PARTICLE_FIELD_MOVE(name, type, k)                                                                         \
+#define PFF_PARTICLE_FIELD_MOVE(name, type, k, f)                                                                      \
   for (int c = 0; c < (k); c++) p->s.name[(k)*dst + c] = p->s.name[(k)*src + c];
   PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_MOVE)
 #undef PFF_PARTICLE_FIELD_MOVE
@@ -134,7 +138,7 @@ static inline void PffParticlesMove_Private(PffParticles p, PetscInt dst, PetscI
 /* Packs particle i into (or unpacks it from) a migration record of PFF_PARTICLE_BYTES bytes. */
 static inline void PffParticlesPack_Private(const PffParticleSoA *s, PetscInt i, char *rec)
 {
-#define PFF_PARTICLE_FIELD_PACK(name, type, k)                                                                         \
+#define PFF_PARTICLE_FIELD_PACK(name, type, k, f)                                                                      \
   memcpy(rec, &s->name[(k)*i], (k) * sizeof(type));                                                                    \
   rec += (k) * sizeof(type);
   PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_PACK)
@@ -143,7 +147,7 @@ static inline void PffParticlesPack_Private(const PffParticleSoA *s, PetscInt i,
 
 static inline void PffParticlesUnpack_Private(PffParticleSoA *s, PetscInt i, const char *rec)
 {
-#define PFF_PARTICLE_FIELD_UNPACK(name, type, k)                                                                       \
+#define PFF_PARTICLE_FIELD_UNPACK(name, type, k, f)                                                                    \
   memcpy(&s->name[(k)*i], rec, (k) * sizeof(type));                                                                    \
   rec += (k) * sizeof(type);
   PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_UNPACK)
