@@ -120,7 +120,8 @@ static PetscErrorCode SmoothJacobi(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, Pets
     PetscCall(VecGetArrayRead(lv->r, &ra));
     for (PetscInt q = 0; q < lv->ncolour[0] + lv->ncolour[1]; q++) { /* every relevant block, colours do not matter */
       const PetscInt lb = lv->colourList[q];
-      for (PetscInt i = lv->start[lb]; i < lv->start[lb + 1]; i++) xa[i] += mg->opt.omega * ra[i] * lv->idiag[i];
+      for (PetscInt i = lv->start[lb]; i < lv->start[lb + 1]; i++)
+        xa[i] += mg->opt.omega * ra[i] * (lv->mf ? (PetscReal)lv->st->idf[i] : lv->idiag[i]);
       mg->stats.blockRelaxations++;
       mg->stats.cellUpdates += lv->start[lb + 1] - lv->start[lb];
     }

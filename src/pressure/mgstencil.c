@@ -362,7 +362,8 @@ PetscErrorCode PffMGStencilBuild_Private(PffMG *mg, PetscInt L)
 
   PetscCall(PetscMalloc4(3 * lv->nrows, &st->cf, lv->nrows, &st->dx, lv->nrows, &st->ds, st->nslot, &st->cghost));
   PetscCall(PetscMalloc2(lv->nrows, &st->dsf, lv->nrows, &st->idf));
-  if (lv->idiag == NULL) PetscCall(PetscMalloc1(lv->nrows, &lv->idiag));
+  /* a matrix-free level keeps 1 / a_ii in float only (idf); the last block level, assembled, in double too */
+  if (lv->idiag == NULL && !lv->mf) PetscCall(PetscMalloc1(lv->nrows, &lv->idiag));
   if (lv->mf) {
     IS is;
     PetscCall(ISCreateGeneral(PETSC_COMM_SELF, st->nghost, st->ghostRow, PETSC_USE_POINTER, &is));
@@ -553,9 +554,9 @@ PetscErrorCode PffMGStencilUpdate_Private(PffMG *mg, PetscInt L)
              face is closed (on the last level, a closed box of one block); it is not relaxed, as on the
              AIJ levels, and the pinned coarsest operator takes care of it */
           const PetscReal d = Diagonal(st, nr, r, i, j, k, n);
-          lv->idiag[r]      = d > 0 ? 1.0 / d : 0.0;
           st->dsf[r]        = (float)st->ds[r];
-          st->idf[r]        = (float)lv->idiag[r];
+          st->idf[r]        = (float)(d > 0 ? 1.0 / d : 0.0);
+          if (lv->idiag) lv->idiag[r] = d > 0 ? 1.0 / d : 0.0;
         }
   }
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -637,7 +638,7 @@ static inline PetscReal RelaxEnd(const PffMGLevel *lv, const PffMGStencil *st, P
 {
   const PetscScalar s   = bb - RowInBlock(st, lv->nrows, r, i, j, k, n, x);
   const PetscReal   eff = PetscAbsScalar(omega * s);
-  x[r] += omega * s * lv->idiag[r];
+  x[r] += omega * s * (PetscReal)st->idf[r];
   if (R) R[r - r0] = eff;
   return eff;
 }
@@ -668,8 +669,8 @@ static inline void RowEnds(PetscInt n, PffMGRowEnds *e)
    go through RelaxRowEnds) and weighted 0; bb is the row's right-hand side with its side couplings
    (PffMGStencilBlockRhs_Private). R (or NULL) receives |omega (bb - A x)| of the colour's cells, and mx
    the running per-lane maximum of it, so that no reduction runs per row. */
-static inline void RelaxRow(const PffMGStencil *st, PetscInt                nr, const PetscScalar *restrict bb,
-                            const PetscScalar *restrict idiag, PetscScalar *x, PetscInt r0, PetscInt i0, PetscInt n,
+static inline void RelaxRow(const PffMGStencil *st, PetscInt          nr, const PetscScalar *restrict bb,
+                            const float *restrict idiag, PetscScalar *x, PetscInt r0, PetscInt i0, PetscInt n,
                             PffMGRowMask m, const PffMGRowEnds *restrict e, PetscReal omega, PetscReal *restrict R,
                             PetscReal *restrict mx)
 {
@@ -704,9 +705,9 @@ static inline void RelaxRow(const PffMGStencil *st, PetscInt                nr, 
    vector of arithmetic instead of two; the new values and R go back to the colour's lanes by masked
    permutes. Reads nothing outside the row. Equal to RelaxRow to rounding (fused multiply-adds);
    about 1.7x faster in isolation (docs/pressure.md). */
-static inline void RelaxRow16(const PffMGStencil *st, PetscInt                nr, const PetscScalar *restrict bb,
-                              const PetscScalar *restrict idiag, PetscScalar *x, PetscInt r0, PetscInt i0,
-                              PffMGRowMask m, PetscReal omega, PetscReal *restrict R, PetscReal *restrict mx)
+static inline void RelaxRow16(const PffMGStencil *st, PetscInt          nr, const PetscScalar *restrict bb,
+                              const float *restrict idiag, PetscScalar *x, PetscInt r0, PetscInt i0, PffMGRowMask m,
+                              PetscReal omega, PetscReal *restrict R, PetscReal *restrict mx)
 {
   const PffMGReal *cx = st->cf, *cy = cx + nr, *cz = cy + nr;
   /* lanes of the colour's cells i0 + 2t in the row's 16 values, and of their x-neighbours (an unused lane
@@ -745,7 +746,7 @@ static inline void RelaxRow16(const PffMGStencil *st, PetscInt                nr
   s                = _mm512_fmadd_pd(c4, PFF_COLOUR_PD(x + r0 - m.szm), s);
   s                = _mm512_fmadd_pd(c5, PFF_COLOUR_PD(x + r0 + m.szp), s);
   const __m512d os = _mm512_mul_pd(_mm512_set1_pd(omega), s), ev = _mm512_abs_pd(os);
-  const __m512d nx = _mm512_fmadd_pd(os, PFF_COLOUR_PD(idiag + r0), xc); /* idiag = 0: not relaxed */
+  const __m512d nx = _mm512_fmadd_pd(os, PFF_COLOUR_PS(idiag + r0, fc), xc); /* idiag = 0: not relaxed */
 #undef PFF_COLOUR_PD
 #undef PFF_COLOUR_PS
   _mm512_storeu_pd(mx, _mm512_max_pd(_mm512_loadu_pd(mx), ev));
@@ -923,12 +924,11 @@ PetscReal PffMGStencilRelaxBlock_Private(const PffMGLevel *lv, PetscInt lb, cons
         } else {
 #if defined(PFF_MG_AVX512)
           if (n == 16) {
-            RelaxRow16(st, nr, rb, lv->idiag, x, base, i0, RowMask(j, k, n), omega, R ? R + (base - r0) : NULL, mx);
+            RelaxRow16(st, nr, rb, st->idf, x, base, i0, RowMask(j, k, n), omega, R ? R + (base - r0) : NULL, mx);
             continue;
           }
 #endif
-          RelaxRow(st, nr, rb, lv->idiag, x, base, i0, n, RowMask(j, k, n), &ends, omega, R ? R + (base - r0) : NULL,
-                   mx);
+          RelaxRow(st, nr, rb, st->idf, x, base, i0, n, RowMask(j, k, n), &ends, omega, R ? R + (base - r0) : NULL, mx);
         }
       }
   for (PetscInt i = 0; i < n; i++) rmax = rmax > mx[i] ? rmax : mx[i];
@@ -1071,7 +1071,15 @@ static PetscErrorCode StencilGetDiagonal(Mat A, Vec dv)
   PetscFunctionBeginUser;
   PetscCall(MatShellGetContext(A, &lv));
   PetscCall(VecGetArrayWrite(dv, &d));
-  for (PetscInt r = 0; r < lv->nrows; r++) d[r] = lv->idiag[r] > 0 ? 1.0 / lv->idiag[r] : 0.0;
+  for (PetscInt lb = 0; lb < lv->nblk; lb++) {
+    const PetscInt n = lv->n[lb];
+    for (PetscInt k = 0, r = lv->start[lb]; k < n; k++)
+      for (PetscInt j = 0; j < n; j++)
+        for (PetscInt i = 0; i < n; i++, r++) {
+          const PetscReal a = Diagonal(lv->st, lv->nrows, r, i, j, k, n);
+          d[r]              = a > 0 ? a : 0.0;
+        }
+  }
   PetscCall(VecRestoreArrayWrite(dv, &d));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
