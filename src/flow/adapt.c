@@ -206,27 +206,14 @@ static PetscErrorCode VorticityLevels(PffFlow f, PetscInt ch)
   PffFlowAdaptCtx *a    = &f->adapt;
   const PetscInt   ntot = a->C[0] * a->C[1] * a->C[2];
   float           *w    = a->work;
-  PetscReal        h0, umax = 0;
-  PetscInt         nlocal;
+  PetscReal        h0, umax;
 
   PetscFunctionBeginUser;
   if (!a->vlev) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PetscLogEventBegin(PFF_FlowAdaptDist, 0, 0, 0, 0));
-  PetscCall(PffGridHaloBegin(f->grid, ch));
-  PetscCall(PffGridHaloEnd(f->grid, ch));
   PetscCall(PffFlowVorticity_Private(f, ch));
   PetscCall(LatticeValues(f, f->chVort, PETSC_TRUE, 0, w));
-  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
-  for (PetscInt lb = 0; lb < nlocal; lb++) {
-    PffBlockInfo info;
-    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
-    for (PetscInt d = 0; d < 3; d++) {
-      float *u;
-      PetscCall(PffGridGetBlockData(f->grid, ch, lb, d, &u));
-      for (PetscInt c = 0; c < info.n * info.n * info.n; c++) umax = PetscMax(umax, PetscAbsReal((PetscReal)u[c]));
-    }
-  }
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &umax, 1, MPIU_REAL, MPI_MAX, f->comm));
+  PetscCall(PffFlowMaxFaceSpeed_Private(f, ch, &umax));
   PetscCall(PffGridGetSizes(f->grid, NULL, NULL, NULL, &h0, NULL));
   for (PetscInt c = 0; c < ntot; c++) {
     const PetscReal ratio = (PetscReal)w[c] > 0 && umax > 0 ? a->vort * umax / ((PetscReal)w[c] * h0) : PETSC_MAX_REAL;

@@ -134,12 +134,14 @@ PetscErrorCode PffFlowPrescribe_Private(PffFlow f, PetscReal t)
 }
 
 /* Vorticity magnitude at cell centres from central differences of the cell-centred velocity
-   (mean of the two faces) of face channel ch, using its halo. */
+   (mean of the two faces) of face channel ch, whose halo it exchanges first. Collective. */
 PetscErrorCode PffFlowVorticity_Private(PffFlow f, PetscInt ch)
 {
   PetscInt nlocal;
 
   PetscFunctionBeginUser;
+  PetscCall(PffGridHaloBegin(f->grid, ch));
+  PetscCall(PffGridHaloEnd(f->grid, ch));
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo   info;

@@ -211,6 +211,7 @@ PETSC_INTERN PetscErrorCode PffFlowLiquidQuadtreeStep_Private(PffFlow, PffFlowAd
 PETSC_INTERN PetscErrorCode PffFlowPrescribe_Private(PffFlow, PetscReal t);
 PETSC_INTERN PetscErrorCode PffFlowVelocityChange_Private(PffFlow);
 PETSC_INTERN PetscErrorCode PffFlowVorticity_Private(PffFlow, PetscInt ch);
+PETSC_INTERN PetscErrorCode PffFlowMaxFaceSpeed_Private(PffFlow, PetscInt ch, PetscReal *umax);
 PETSC_INTERN PetscErrorCode PffFlowFlipRatios_Private(PffFlow, PetscReal dt, PetscReal alpha[]);
 PETSC_INTERN PetscErrorCode PffFlowEscaped_Private(PffFlow, PetscInt64 *bubbles, PetscInt64 *droplets);
 PETSC_INTERN PetscErrorCode PffFlowMaxParticleSpeed_Private(PffFlow, PetscReal *umax);

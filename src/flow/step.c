@@ -74,11 +74,7 @@ PetscErrorCode PffFlowUpdateFields(PffFlow f, PetscBool vorticity)
   PetscCall(PetscMemzero(&st, sizeof(st)));
   PetscCall(PffFlowCheckTopology_Private(f));
   PetscCall(PffFlowTransfer(f, &st));
-  if (vorticity) {
-    PetscCall(PffGridHaloBegin(f->grid, f->chU));
-    PetscCall(PffGridHaloEnd(f->grid, f->chU));
-    PetscCall(PffFlowVorticity_Private(f, f->chU));
-  }
+  if (vorticity) PetscCall(PffFlowVorticity_Private(f, f->chU));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -303,24 +299,30 @@ PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode PffFlowGetDiagnostics(PffFlow f, PetscReal *umax, PetscReal *liquidVolume)
+/* The largest |u| over the owned faces of face channel ch, over all ranks. */
+PetscErrorCode PffFlowMaxFaceSpeed_Private(PffFlow f, PetscInt ch, PetscReal *umax)
 {
   PetscInt  nlocal;
   PetscReal m = 0;
 
   PetscFunctionBeginUser;
-  if (umax) {
-    PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
-    for (PetscInt lb = 0; lb < nlocal; lb++)
-      for (PetscInt d = 0; d < 3; d++) {
-        float   *u;
-        PetscInt n3 = 0;
-        PetscCall(PffFlowBlockData_Private(f, lb, d, 1, &f->chU, &u, &n3));
-        for (PetscInt c = 0; c < n3; c++) m = PetscMax(m, PetscAbsReal((PetscReal)u[c]));
-      }
-    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &m, 1, MPIU_REAL, MPI_MAX, f->comm));
-    *umax = m;
-  }
+  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  for (PetscInt lb = 0; lb < nlocal; lb++)
+    for (PetscInt d = 0; d < 3; d++) {
+      float   *u;
+      PetscInt n3 = 0;
+      PetscCall(PffFlowBlockData_Private(f, lb, d, 1, &ch, &u, &n3));
+      for (PetscInt c = 0; c < n3; c++) m = PetscMax(m, PetscAbsReal((PetscReal)u[c]));
+    }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &m, 1, MPIU_REAL, MPI_MAX, f->comm));
+  *umax = m;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowGetDiagnostics(PffFlow f, PetscReal *umax, PetscReal *liquidVolume)
+{
+  PetscFunctionBeginUser;
+  if (umax) PetscCall(PffFlowMaxFaceSpeed_Private(f, f->chU, umax));
   /* one definition of the liquid volume: the drift checks' */
   if (liquidVolume) PetscCall(PffFlowGetPhaseVolumes(f, liquidVolume, NULL));
   PetscFunctionReturn(PETSC_SUCCESS);

@@ -579,18 +579,14 @@ static inline PetscScalar RowInBlock(const PffMGStencil *st, PetscInt nr, PetscI
   return Diagonal(st, nr, r, i, j, k, n) * x[r] + off;
 }
 
-/* Sum of the side couplings of row r, val x_col, over the columns outside [lo, hi) (an empty range: all);
- *inside (or NULL) is set when a column lies in the range. */
+/* Sum of the side couplings of row r, val x_col, over the columns outside [lo, hi) (an empty range: all). */
 static inline PetscScalar SideSum(const PffMGStencil *st, PetscInt nr, PetscInt r, const PetscScalar *x,
-                                  const PetscScalar *g, PetscInt lo, PetscInt hi, PetscBool *inside)
+                                  const PetscScalar *g, PetscInt lo, PetscInt hi)
 {
   PetscScalar s = 0;
   for (PetscInt e = st->rowptr[r]; e < st->rowptr[r + 1]; e++) {
     const PetscInt c = st->col[e];
-    if (c >= lo && c < hi)
-      *inside = PETSC_TRUE;
-    else
-      s += st->val[e] * (c < nr ? x[c] : g[c - nr]);
+    if (c < lo || c >= hi) s += st->val[e] * (c < nr ? x[c] : g[c - nr]);
   }
   return s;
 }
@@ -600,20 +596,20 @@ static inline PetscScalar SideSum(const PffMGStencil *st, PetscInt nr, PetscInt 
    row is a constant of the block's visit: it is gathered once, in one pass over the block's side list,
    for all the sweeps of the visit, and the sweeps run one uniform loop. The side terms between cells
    of the block itself (fine cells under one coarse face above the block) change within a sweep; they
-   are left out here and added row by row (OwnSums). Returns whether the block has any. */
+   are left out here and added row by row (OwnSums); st->own[lb] says whether the block has any (made at build),
+   and is returned. */
 PetscBool PffMGStencilBlockRhs_Private(const PffMGLevel *lv, PetscInt lb, const PetscScalar *b, const PetscScalar *x,
                                        const PetscScalar *g, PetscScalar *bb)
 {
   const PffMGStencil *st = lv->st;
   const PetscInt      n = lv->n[lb], r0 = lv->start[lb], nc = n * n * n;
-  PetscBool           own = PETSC_FALSE;
 
   for (PetscInt i = 0; i < nc; i++) bb[i] = b[r0 + i];
   for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++) { /* only the rows that have side terms */
     const PetscInt r = st->side[q];
-    bb[r - r0] -= SideSum(st, lv->nrows, r, x, g, r0, r0 + nc, &own);
+    bb[r - r0] -= SideSum(st, lv->nrows, r, x, g, r0, r0 + nc);
   }
-  return own;
+  return st->own[lb];
 }
 
 /* tb = bb - the in-block side terms of the cells i0, i0 + 2, ... of the row starting at base (see above),
@@ -791,7 +787,7 @@ static void BlockRhsFloat(const PffMGLevel *lv, PetscInt lb, const PetscScalar *
   for (PetscInt i = 0; i < nc; i++) bs[i] = (float)b[r0 + i];
   for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++) {
     const PetscInt r = st->side[q];
-    bs[r - r0]       = (float)(b[r] - SideSum(st, lv->nrows, r, x, g, 0, 0, NULL));
+    bs[r - r0]       = (float)(b[r] - SideSum(st, lv->nrows, r, x, g, 0, 0));
   }
 }
 
@@ -949,7 +945,7 @@ static inline void BlockProduct(const PffMGLevel *lv, PetscInt lb, const PetscSc
   /* the side couplings first, from the block's rows that have any; the rows add their in-block part */
   for (PetscInt i = 0; i < n * n * n; i++) yb[i] = 0;
   for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++)
-    yb[st->side[q] - r0] = SideSum(st, nr, st->side[q], x, g, 0, 0, NULL);
+    yb[st->side[q] - r0] = SideSum(st, nr, st->side[q], x, g, 0, 0);
   for (PetscInt k = 0; k < n; k++)
     for (PetscInt j = 0; j < n; j++) {
       const PetscInt     base  = r0 + n * (j + n * k);
