@@ -227,6 +227,10 @@ PETSC_EXTERN PetscErrorCode PffGridGetBlockData(PffGrid grid, PetscInt ch, Petsc
 PETSC_EXTERN PetscErrorCode PffGridGetBlockViews(PffGrid grid, PetscInt ch, PetscInt lb, PetscInt comp,
                                                  const PffView **views);
 
+/* Zeroes channel ch: its owned values and every ghost box its views reach (not the neighbours' storage beyond
+   them), with the threads; what a kernel that adds into a block's neighbourhood (P2G) needs before it starts. */
+PETSC_EXTERN PetscErrorCode PffGridZeroChannel(PffGrid grid, PetscInt ch);
+
 /* How a channel's values follow their block when PffGridAdapt changes its level (blocks keep their place
    and size; only their cells per axis change):
      linear    restriction by the mean of the fine samples (8 cells, or the 4 coplanar faces); prolongation

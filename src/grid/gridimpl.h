@@ -134,6 +134,7 @@ PETSC_INTERN PetscErrorCode PffHaloPlanDestroy_Private(PffHaloPlan **);
 PETSC_INTERN PetscErrorCode PffGridComputeQuality_Private(PffGrid);
 /* Channel ch of a set-up grid, or an error naming what is wrong. */
 PETSC_INTERN PetscErrorCode PffGridGetChannel_Private(PffGrid, PetscInt, PffChannel **);
+PETSC_INTERN void           PffZeroFloats_Private(float *, PetscInt64);
 /* Lattice offset (0 or 1/2 cell) of component comp of a channel kind along axis d. */
 static inline PetscReal PffChannelOffset_Private(PffChannelKind kind, PetscInt comp, PetscInt d)
 {

@@ -376,7 +376,7 @@ PetscErrorCode PffGridHaloReverseEnd(PffGrid g, PetscInt ch)
   PetscCall(PffGridGetChannel_Private(g, ch, &c));
   PetscCall(PetscLogEventBegin(PFF_HaloRevEnd, 0, 0, 0, 0));
   PetscCall(PetscSFReduceEnd(c->plan->sf, MPI_FLOAT, c->halo, c->data, MPI_SUM));
-  PetscCall(PetscArrayzero(c->halo, c->plan->nhalo));
+  PffZeroFloats_Private(c->halo, c->plan->nhalo);
   PetscCall(PetscLogEventEnd(PFF_HaloRevEnd, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -169,6 +169,26 @@ PetscErrorCode PffGridGetBlockData(PffGrid g, PetscInt ch, PetscInt lb, PetscInt
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Large zeroings of the storage split over the threads, in pieces of whole cache lines. */
+void PffZeroFloats_Private(float *a, PetscInt64 n)
+{
+  const PetscInt64 piece = 1 << 16, npieces = (n + piece - 1) / piece;
+#pragma omp parallel for schedule(static) if (npieces > 1)
+  for (PetscInt64 q = 0; q < npieces; q++)
+    memset(a + q * piece, 0, sizeof(float) * (size_t)PetscMin(piece, n - q * piece));
+}
+
+PetscErrorCode PffGridZeroChannel(PffGrid g, PetscInt ch)
+{
+  PffChannel *c = NULL;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetChannel_Private(g, ch, &c));
+  PffZeroFloats_Private(c->data, c->ncomp * g->ncells);
+  PffZeroFloats_Private(c->halo, c->plan->nghost);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffGridGetBlockViews(PffGrid g, PetscInt ch, PetscInt lb, PetscInt comp, const PffView **views)
 {
   PetscFunctionBeginUser;

@@ -59,35 +59,6 @@ static PetscErrorCode PffCheckFaceChannel(PffGrid grid, PetscInt ch, const char 
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Zeroes the owned values of channel ch and every region view within width of each block: the ghost
-   buffers may hold a forward halo's values, and splatting adds to them. */
-static PetscErrorCode PffZeroWithGhosts(PffGrid grid, PetscInt ch, PetscInt nlocal, const PffBlockInfo *info)
-{
-  PetscInt width;
-
-  PetscFunctionBeginUser;
-  PetscCall(PffGridGetChannelInfo(grid, ch, NULL, NULL, NULL, &width));
-  for (PetscInt lb = 0; lb < nlocal; lb++)
-    for (PetscInt comp = 0; comp < 3; comp++) {
-      float         *data;
-      const PffView *views;
-      const PetscInt n = info[lb].n;
-      PetscCall(PffGridGetBlockData(grid, ch, lb, comp, &data));
-      PetscCall(PetscArrayzero(data, n * n * n));
-      PetscCall(PffGridGetBlockViews(grid, ch, lb, comp, &views));
-      for (PetscInt k = -width; k < n + width; k++)
-        for (PetscInt j = -width; j < n + width; j++) {
-          const PetscBool inner = (PetscBool)(j >= 0 && j < n && k >= 0 && k < n);
-          for (PetscInt i = -width; i < n + width; i++) {
-            if (inner && i == 0) i = n; /* skip the block's own row */
-            if (i >= n + width) break;
-            *PffViewsAt(views, i, j, k, n) = 0;
-          }
-        }
-    }
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
 /* Splats the particles [i0, i1) of one block. A binned particle's 2 x 2 x 2 stencils reach at most one
    cell beyond its block, so every corner lands in a tile of (n + 2)^3 faces from cell -1 per channel
    and component: the inner loop has no branch on where a corner falls, and its weights are float. The
@@ -214,9 +185,10 @@ PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTI
       }
     }
   }
-  PetscCall(PffZeroWithGhosts(p->grid, chMass, nlocal, info));
-  PetscCall(PffZeroWithGhosts(p->grid, chMom, nlocal, info));
-  if (nv) PetscCall(PffZeroWithGhosts(p->grid, chVolume, nlocal, info));
+  /* the ghost boxes may hold a forward halo's values, and splatting adds to them */
+  PetscCall(PffGridZeroChannel(p->grid, chMass));
+  PetscCall(PffGridZeroChannel(p->grid, chMom));
+  if (nv) PetscCall(PffGridZeroChannel(p->grid, chVolume));
 
   /* blocks sorted by colour (counting sort) */
 
