@@ -262,23 +262,35 @@ static PetscErrorCode Distance(PffFlow f)
         }
       }
   /* chamfer sweeps: forward over the 13 neighbours before a cell in raster order, backward over the 13
-     after it; twice, so that distances also come around periodic axes */
+     after it; twice, so that distances also come around periodic axes. Cells off the lattice's faces read
+     their neighbours at fixed offsets; the others go through PffRasterNeighbour (walls, periodic wrap). */
+  PetscInt off[27];
+  float    wt[27];
+  for (PetscInt r = 0; r < 27; r++) {
+    PetscInt o[3];
+    PffRegionDirection(r, o);
+    const PetscInt n1 = (o[0] != 0) + (o[1] != 0) + (o[2] != 0);
+    off[r]            = o[0] + a->C[0] * (o[1] + a->C[1] * o[2]);
+    wt[r]             = n1 == 1 ? 1.0f : (n1 == 2 ? 1.41421356f : 1.73205081f);
+  }
   for (int pass = 0; pass < 4; pass++) {
     const PetscBool fwd = (PetscBool)(pass % 2 == 0);
+    const PetscInt  r0 = fwd ? 0 : 14, r1 = fwd ? 13 : 27;
     for (PetscInt s = 0; s < ntot; s++) {
-      const PetscInt c     = fwd ? s : ntot - 1 - s,
-                     cc[3] = {c % a->C[0], (c / a->C[0]) % a->C[1], c / (a->C[0] * a->C[1])};
-      float best           = d[c];
-      for (PetscInt r = 0; r < 27; r++) {
-        if ((r < 13) != fwd || r == 13) continue;
-        PetscInt o[3];
-        PffRegionDirection(r, o);
-        const PetscInt q = PffRasterNeighbour(a->C, a->periodic, cc, o);
-        if (q < 0) continue;
-        const PetscInt n1 = (o[0] != 0) + (o[1] != 0) + (o[2] != 0);
-        const float    w  = n1 == 1 ? 1.0f : (n1 == 2 ? 1.41421356f : 1.73205081f);
-        best              = PetscMin(best, d[q] + w);
-      }
+      const PetscInt c      = fwd ? s : ntot - 1 - s,
+                     cc[3]  = {c % a->C[0], (c / a->C[0]) % a->C[1], c / (a->C[0] * a->C[1])};
+      const PetscBool inner = (PetscBool)(cc[0] > 0 && cc[0] < a->C[0] - 1 && cc[1] > 0 && cc[1] < a->C[1] - 1 &&
+                                          cc[2] > 0 && cc[2] < a->C[2] - 1);
+      float           best  = d[c];
+      if (inner)
+        for (PetscInt r = r0; r < r1; r++) best = PetscMin(best, d[c + off[r]] + wt[r]);
+      else
+        for (PetscInt r = r0; r < r1; r++) {
+          PetscInt o[3];
+          PffRegionDirection(r, o);
+          const PetscInt q = PffRasterNeighbour(a->C, a->periodic, cc, o);
+          if (q >= 0) best = PetscMin(best, d[q] + wt[r]);
+        }
       d[c] = best;
     }
   }
@@ -341,25 +353,38 @@ static PetscErrorCode TargetsAndMap(PffFlow f, PetscBool counters, PetscInt map[
       continue;
     }
     const float lo[3] = {(float)info.ijk[0] * n0f, (float)info.ijk[1] * n0f, (float)info.ijk[2] * n0f};
-    /* each particle's box x_p +- (2^l + margin) marks the neighbour regions it reaches; most particles
-       reach none but their own block (one comparison pair per axis) */
+    /* each particle's box x_p +- (2^l + margin) reaches the neighbour regions of a 6-bit code (below and above
+       the block along each axis); the loop only marks which (held, level, code) occur, a store without a
+       dependence from one particle to the next, and the few marked codes are spread into the regions after it
+       (most particles reach none but their own block) */
     const float *const x  = pa.x;
     const PetscInt     i0 = pa.start[lb], i1 = pa.start[lb + 1];
     float              rp[PFF_GRID_MAX_LEVELS];
+    uint8_t            seen[2][PFF_GRID_MAX_LEVELS][64];
+    memset(seen, 0, sizeof(seen));
     for (PetscInt l = 0; l <= lmax; l++) rp[l] = (float)((PetscInt)1 << l) + (float)a->margin;
     for (PetscInt i = i0; i < i1; i++) {
-      const PetscInt l  = target[i];
-      PetscInt      *rr = r + (counters && PffParticleWordPending(pa.word[i], a->delay) ? 27 : 0);
-      PetscInt       rlo[3], rhi[3];
-      for (int d = 0; d < 3; d++) {
-        const float u = x[3 * i + d] - lo[d];
-        rlo[d]        = u - rp[l] < 0 ? 0 : 1;
-        rhi[d]        = u + rp[l] >= n0f ? 2 : 1;
-      }
-      for (PetscInt z = rlo[2]; z <= rhi[2]; z++)
-        for (PetscInt y = rlo[1]; y <= rhi[1]; y++)
-          for (PetscInt q = rlo[0]; q <= rhi[0]; q++) rr[q + 3 * (y + 3 * z)] = PetscMin(rr[q + 3 * (y + 3 * z)], l);
+      const PetscInt l    = target[i];
+      const int      held = counters && PffParticleWordPending(pa.word[i], a->delay);
+      const float    ux = x[3 * i] - lo[0], uy = x[3 * i + 1] - lo[1], uz = x[3 * i + 2] - lo[2], rl = rp[l];
+      const int      code = (ux - rl < 0) | (ux + rl >= n0f) << 1 | (uy - rl < 0) << 2 | (uy + rl >= n0f) << 3 |
+                       (uz - rl < 0) << 4 | (uz + rl >= n0f) << 5;
+      seen[held][l][code] = 1;
     }
+    for (int held = 0; held < 2; held++)
+      for (PetscInt l = 0; l <= lmax; l++)
+        for (int code = 0; code < 64; code++) {
+          if (!seen[held][l][code]) continue;
+          PetscInt *rr = r + 27 * held, rlo[3], rhi[3];
+          for (int d = 0; d < 3; d++) {
+            rlo[d] = (code >> (2 * d)) & 1 ? 0 : 1;
+            rhi[d] = (code >> (2 * d + 1)) & 1 ? 2 : 1;
+          }
+          for (PetscInt z = rlo[2]; z <= rhi[2]; z++)
+            for (PetscInt y = rlo[1]; y <= rhi[1]; y++)
+              for (PetscInt q = rlo[0]; q <= rhi[0]; q++)
+                rr[q + 3 * (y + 3 * z)] = PetscMin(rr[q + 3 * (y + 3 * z)], l);
+        }
   }
   PetscCheck(ok, PETSC_COMM_SELF, PETSC_ERR_PLIB, "adapt: bad local block");
   PetscCall(PetscMalloc1(2 * nblocks, &both)); /* the map asked, then the map held */
