@@ -123,13 +123,18 @@ static void ResampleBlock(PffChannelKind kind, PetscInt comp, PffTransferType ty
   }
 }
 
+/* The transfer of the channels of ncomp components: one SF (and leaf layout) serves every such channel,
+   since blocks move alike whatever they hold; built on first use. */
+typedef struct {
+  PetscSF     sf;
+  PetscInt64 *start, nleaf, remote;
+} Transfer;
+
 /* Moves one channel to the new raster: new storage, views and halo buffer; old values resampled. */
 static PetscErrorCode TransferChannel(PffGrid g, PffChannel *c, const OldRaster *old, PetscInt unit,
-                                      MPI_Datatype unitType, float *scratch, PetscInt64 *bytesMoved)
+                                      MPI_Datatype unitType, float *scratch, Transfer *tr, PetscInt64 *bytesMoved)
 {
-  float      *oldAlloc = c->alloc, *oldData = c->data, *recv = NULL;
-  PetscInt64 *start, nleaf = 0, remote = 0;
-  PetscSF     sf;
+  float *oldAlloc = c->alloc, *oldData = c->data, *recv = NULL;
 
   PetscFunctionBeginUser;
   PetscCall(PetscFree(c->halo));
@@ -138,13 +143,15 @@ static PetscErrorCode TransferChannel(PffGrid g, PffChannel *c, const OldRaster 
   c->alloc = c->data = NULL;
   PetscCall(PffGridAllocateChannel_Private(g, c)); /* zeroed */
   if (c->transfer != PFF_TRANSFER_NONE) {
-    PetscCall(PetscMalloc1(g->nlocal, &start));
-    PetscCall(TransferSF(g, old, c->ncomp, unit, &sf, start, &nleaf, &remote));
-    PetscCall(PetscMalloc1(PetscMax(nleaf, 1), &recv));
-    PetscCall(PetscSFBcastBegin(sf, unitType, oldData, recv, MPI_REPLACE));
-    PetscCall(PetscSFBcastEnd(sf, unitType, oldData, recv, MPI_REPLACE));
-    PetscCall(PetscSFDestroy(&sf));
-    *bytesMoved += (PetscInt64)sizeof(float) * remote;
+    if (!tr->sf) {
+      PetscCall(PetscMalloc1(g->nlocal, &tr->start));
+      PetscCall(TransferSF(g, old, c->ncomp, unit, &tr->sf, tr->start, &tr->nleaf, &tr->remote));
+    }
+    const PetscInt64 *start = tr->start;
+    PetscCall(PetscMalloc1(PetscMax(tr->nleaf, 1), &recv));
+    PetscCall(PetscSFBcastBegin(tr->sf, unitType, oldData, recv, MPI_REPLACE));
+    PetscCall(PetscSFBcastEnd(tr->sf, unitType, oldData, recv, MPI_REPLACE));
+    *bytesMoved += (PetscInt64)sizeof(float) * tr->remote;
     const PetscInt n0 = g->n0;
 #pragma omp parallel for schedule(dynamic, 1)
     for (PetscInt lb = 0; lb < g->nlocal; lb++) {
@@ -156,7 +163,6 @@ static PetscErrorCode TransferChannel(PffGrid g, PffChannel *c, const OldRaster 
                       c->data + c->ncomp * g->loff[lb] + comp * nn * nn * nn, t0, t1);
     }
     PetscCall(PetscFree(recv));
-    PetscCall(PetscFree(start));
   }
   PetscCall(PetscFree(oldAlloc));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -223,8 +229,16 @@ PetscErrorCode PffGridAdapt(PffGrid g, const PetscInt level[])
   PetscCallMPI(MPI_Type_contiguous((int)unit, MPI_FLOAT, &unitType));
   PetscCallMPI(MPI_Type_commit(&unitType));
   PetscCall(PetscMalloc1((size_t)2 * g->n0 * g->n0 * g->n0 * (size_t)omp_get_max_threads(), &scratch));
-  for (PetscInt c = 0; c < g->nch; c++)
-    PetscCall(TransferChannel(g, g->ch[c], &old, unit, unitType, scratch, &info.bytesMoved));
+  {
+    Transfer tr[2] = {{NULL, NULL, 0, 0}, {NULL, NULL, 0, 0}}; /* cell channels, face channels */
+    for (PetscInt c = 0; c < g->nch; c++)
+      PetscCall(
+          TransferChannel(g, g->ch[c], &old, unit, unitType, scratch, &tr[g->ch[c]->ncomp == 3], &info.bytesMoved));
+    for (int k = 0; k < 2; k++) {
+      PetscCall(PetscSFDestroy(&tr[k].sf));
+      PetscCall(PetscFree(tr[k].start));
+    }
+  }
   PetscCall(PetscFree(scratch));
   PetscCallMPI(MPI_Type_free(&unitType));
   PetscCall(PetscFree(old.level));

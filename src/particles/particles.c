@@ -299,10 +299,28 @@ PetscErrorCode PffParticlesClear(PffParticles p)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Compacts [i0, i1) to start at m, keeping the order; whole runs of kept particles move at once. */
+static PetscInt CompactRange(PffParticles p, PetscInt i0, PetscInt i1, PetscInt m)
+{
+  const uint32_t rm = PffParticleWordSetFlags(0, PFF_PARTICLE_FLAG_REMOVE, PETSC_TRUE);
+
+  for (PetscInt i = i0; i < i1;) {
+    if (p->s.word[i] & rm) {
+      i++;
+      continue;
+    }
+    PetscInt j = i + 1;
+    while (j < i1 && !(p->s.word[j] & rm)) j++;
+    if (m != i) PffParticlesMoveRange_Private(p, m, i, j - i);
+    m += j - i;
+    i = j;
+  }
+  return m;
+}
+
 PetscErrorCode PffParticlesRemove(PffParticles p)
 {
-  PetscInt       m  = 0;
-  const uint32_t rm = PffParticleWordSetFlags(0, PFF_PARTICLE_FLAG_REMOVE, PETSC_TRUE);
+  PetscInt m = 0;
 
   PetscFunctionBeginUser;
   if (p->binned) {
@@ -310,21 +328,11 @@ PetscErrorCode PffParticlesRemove(PffParticles p)
     for (PetscInt lb = 0; lb < p->nlocal; lb++) {
       const PetscInt i0 = p->start[lb], i1 = p->start[lb + 1];
       p->start[lb] = m;
-      for (PetscInt i = i0; i < i1; i++) {
-        if (p->s.word[i] & rm) continue;
-        if (m != i) PffParticlesMove_Private(p, m, i);
-        m++;
-      }
+      m            = CompactRange(p, i0, i1, m);
     }
     p->start[p->nlocal] = m;
-    p->n                = m;
-    PetscFunctionReturn(PETSC_SUCCESS);
-  }
-  for (PetscInt i = 0; i < p->n; i++) {
-    if (p->s.word[i] & rm) continue;
-    if (m != i) PffParticlesMove_Private(p, m, i);
-    m++;
-  }
+  } else
+    m = CompactRange(p, 0, p->n, 0);
   p->n = m;
   PetscFunctionReturn(PETSC_SUCCESS);
 }

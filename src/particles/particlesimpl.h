@@ -135,6 +135,15 @@ static inline void PffParticlesMove_Private(PffParticles p, PetscInt dst, PetscI
 #undef PFF_PARTICLE_FIELD_MOVE
 }
 
+/* Moves the particles [src, src + count) to [dst, dst + count), dst <= src (runs of a compaction). */
+static inline void PffParticlesMoveRange_Private(PffParticles p, PetscInt dst, PetscInt src, PetscInt count)
+{
+#define PFF_PARTICLE_FIELD_MOVE_RANGE(name, type, k, f)                                                                \
+  memmove(&p->s.name[(k)*dst], &p->s.name[(k)*src], (size_t)(k) * sizeof(type) * (size_t)count);
+  PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_MOVE_RANGE)
+#undef PFF_PARTICLE_FIELD_MOVE_RANGE
+}
+
 /* Packs particle i into (or unpacks it from) a migration record of PFF_PARTICLE_BYTES bytes. */
 static inline void PffParticlesPack_Private(const PffParticleSoA *s, PetscInt i, char *rec)
 {
