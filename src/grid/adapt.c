@@ -141,7 +141,8 @@ static PetscErrorCode TransferChannel(PffGrid g, PffChannel *c, const OldRaster 
   PetscCall(PetscFree(c->views));
   PetscCall(PetscFree(c->faces));
   c->alloc = c->data = NULL;
-  PetscCall(PffGridAllocateChannel_Private(g, c)); /* zeroed */
+  /* zeroed here only where nothing is transferred: blocks that were inactive, or every block */
+  PetscCall(PffGridAllocateChannelData_Private(g, c, (PetscBool)(c->transfer == PFF_TRANSFER_NONE)));
   if (c->transfer != PFF_TRANSFER_NONE) {
     if (!tr->sf) {
       PetscCall(PetscMalloc1(g->nlocal, &tr->start));
@@ -155,7 +156,11 @@ static PetscErrorCode TransferChannel(PffGrid g, PffChannel *c, const OldRaster 
     const PetscInt n0 = g->n0;
 #pragma omp parallel for schedule(dynamic, 1)
     for (PetscInt lb = 0; lb < g->nlocal; lb++) {
-      if (start[lb] < 0) continue;
+      if (start[lb] < 0) {
+        memset(c->data + c->ncomp * g->loff[lb], 0,
+               sizeof(float) * (size_t)(c->ncomp * (g->loff[lb + 1] - g->loff[lb])));
+        continue;
+      }
       const PetscInt gid = g->lgid[lb], no = n0 >> old->level[gid], nn = n0 >> g->level[gid];
       float         *t0 = scratch + (size_t)2 * n0 * n0 * n0 * (size_t)omp_get_thread_num(), *t1 = t0 + n0 * n0 * n0;
       for (PetscInt comp = 0; comp < c->ncomp; comp++)

@@ -29,6 +29,14 @@ PetscErrorCode PffGridAddChannel(PffGrid g, const char name[], PffChannelKind ki
 
 PetscErrorCode PffGridAllocateChannel_Private(PffGrid g, PffChannel *c)
 {
+  PetscFunctionBeginUser;
+  PetscCall(PffGridAllocateChannelData_Private(g, c, PETSC_TRUE));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* zero: the owned values start at 0; otherwise only the pads are (the caller writes every block) */
+PetscErrorCode PffGridAllocateChannelData_Private(PffGrid g, PffChannel *c, PetscBool zero)
+{
   const PetscInt nmin = g->n0 >> (g->nlevels - 1);
 
   PetscFunctionBeginUser;
@@ -38,9 +46,17 @@ PetscErrorCode PffGridAllocateChannel_Private(PffGrid g, PffChannel *c)
              c->name, c->width, nmin);
   PetscCall(PffHaloPlanGet_Private(g, c->kind, c->width, &c->plan));
   /* rows of n >= 16 cells then start on 64-byte boundaries, which streaming stores need */
-  PetscCall(PetscCalloc1(c->ncomp * g->ncells + 3 * PFF_CHANNEL_PAD, &c->alloc));
+  if (zero)
+    PetscCall(PetscCalloc1(c->ncomp * g->ncells + 3 * PFF_CHANNEL_PAD, &c->alloc));
+  else
+    PetscCall(PetscMalloc1(c->ncomp * g->ncells + 3 * PFF_CHANNEL_PAD, &c->alloc));
   c->data = c->alloc + PFF_CHANNEL_PAD;
   while (((uintptr_t)c->data) % 64) c->data++;
+  if (!zero) {
+    PetscCall(PetscArrayzero(c->alloc, c->data - c->alloc));
+    PetscCall(PetscArrayzero(c->data + c->ncomp * g->ncells,
+                             c->alloc + c->ncomp * g->ncells + 3 * PFF_CHANNEL_PAD - (c->data + c->ncomp * g->ncells)));
+  }
   PetscCall(PetscCalloc1(PetscMax(c->plan->nhalo, 1), &c->halo));
   PetscCall(PetscMalloc1(g->nlocal * c->ncomp * 27, &c->views));
   for (PetscInt lb = 0; lb < g->nlocal; lb++) {

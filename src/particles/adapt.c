@@ -121,13 +121,7 @@ PetscErrorCode PffParticlesAdaptCounters(PffParticles p, int8_t wish[], PetscInt
   PetscCheck(delay >= 1 && delay <= 15, p->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "PffParticlesAdaptCounters: the coarsening delay %" PetscInt_FMT " must be in [1, 15]", delay);
 #pragma omp parallel for schedule(static)
-  for (PetscInt i = 0; i < n; i++) {
-    const uint32_t w = p->s.word[i];
-    const PetscInt l = PffParticleWordLevel(w), t = PetscClipInterval((PetscInt)wish[i], 0, lmax);
-    const PetscInt d = t > l ? PetscMin(PffParticleWordCoarsen(w) + 1, 15) : 0;
-    p->s.word[i]     = PffParticleWordSetLevel(w, l, d);
-    wish[i]          = (int8_t)(PffParticleWordPending(p->s.word[i], delay) ? l : t);
-  }
+  for (PetscInt i = 0; i < n; i++) wish[i] = (int8_t)PffParticleWordCountWish(&p->s.word[i], wish[i], lmax, delay);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
