@@ -335,9 +335,14 @@ static PetscErrorCode TargetsAndMap(PffFlow f, PetscBool counters, PetscInt map[
   PetscCall(PetscMalloc1(54 * (size_t)PetscMax(nlocal, 1), &reach));
   const float n0f    = (float)a->n0;
   int8_t     *target = a->target;
-  PetscCheck(pa.start[nlocal] == pa.n, PETSC_COMM_SELF, PETSC_ERR_PLIB, "adapt: particles outside the bins");
-  const PffFlowAdaptCtx ac   = *a;
-  uint32_t *const       word = pa.word;
+  {
+    const PffFlowAdaptCtx ac = *a;
+    const float *const    x  = pa.x;
+#pragma omp parallel for schedule(static)
+    for (PetscInt i = 0; i < pa.n; i++) target[i] = (int8_t)Ask(&ac, &x[3 * i]);
+  }
+  /* a particle whose coarsening is pending holds the grid at its level (the blocks' hysteresis) */
+  if (counters) PetscCall(PffParticlesAdaptCounters(f->part, target, a->delay));
 #pragma omp parallel for schedule(dynamic, 1) reduction(&& : ok)
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo info;
@@ -359,17 +364,10 @@ static PetscErrorCode TargetsAndMap(PffFlow f, PetscBool counters, PetscInt map[
     memset(seen, 0, sizeof(seen));
     for (PetscInt l = 0; l <= lmax; l++) rp[l] = (float)((PetscInt)1 << l) + (float)a->margin;
     for (PetscInt i = i0; i < i1; i++) {
-      /* step 6, and with counters the hold: a particle whose coarsening is pending asks for its own level
-         and holds the grid there (the blocks' hysteresis) */
-      PetscInt l    = Ask(&ac, &x[3 * i]);
-      int      held = 0;
-      if (counters) {
-        l    = PffParticleWordCountWish(&word[i], l, lmax, ac.delay);
-        held = PffParticleWordPending(word[i], ac.delay);
-      }
-      target[i]      = (int8_t)l;
-      const float ux = x[3 * i] - lo[0], uy = x[3 * i + 1] - lo[1], uz = x[3 * i + 2] - lo[2], rl = rp[l];
-      const int   code = (ux - rl < 0) | (ux + rl >= n0f) << 1 | (uy - rl < 0) << 2 | (uy + rl >= n0f) << 3 |
+      const PetscInt l    = target[i];
+      const int      held = counters && PffParticleWordPending(pa.word[i], a->delay);
+      const float    ux = x[3 * i] - lo[0], uy = x[3 * i + 1] - lo[1], uz = x[3 * i + 2] - lo[2], rl = rp[l];
+      const int      code = (ux - rl < 0) | (ux + rl >= n0f) << 1 | (uy - rl < 0) << 2 | (uy + rl >= n0f) << 3 |
                        (uz - rl < 0) << 4 | (uz + rl >= n0f) << 5;
       seen[held][l][code] = 1;
     }
