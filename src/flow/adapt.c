@@ -128,6 +128,8 @@ static void LevelLattice(PffFlowAdaptCtx *a)
       }
 }
 
+#define PFF_ADAPT_CHUNK 256
+
 /* The level particle position g asks for (step 6). */
 static inline PetscInt LevelAt(const PffFlowAdaptCtx *a, const float g[3])
 {
@@ -338,8 +340,29 @@ static PetscErrorCode TargetsAndMap(PffFlow f, PetscBool counters, PetscInt map[
   {
     const PffFlowAdaptCtx ac = *a;
     const float *const    x  = pa.x;
+    if (ac.vlev || ac.nbox + ac.nsphere > 0) {
 #pragma omp parallel for schedule(static)
-    for (PetscInt i = 0; i < pa.n; i++) target[i] = (int8_t)Ask(&ac, &x[3 * i]);
+      for (PetscInt i = 0; i < pa.n; i++) target[i] = (int8_t)Ask(&ac, &x[3 * i]);
+    } else {
+      /* the distance alone (LevelAt), in chunks: the dual cells of a chunk in a loop that vectorises, then their
+         bytes, and the distance interpolated only where a dual cell spans levels */
+      const int32_t  sy = (int32_t)(ac.C[0] + 1), sz = (int32_t)((ac.C[0] + 1) * (ac.C[1] + 1));
+      const float    is  = ac.is;
+      const uint8_t *lev = ac.lev;
+#pragma omp parallel for schedule(static)
+      for (PetscInt c0 = 0; c0 < pa.n; c0 += PFF_ADAPT_CHUNK) {
+        const PetscInt m = PetscMin(PFF_ADAPT_CHUNK, pa.n - c0);
+        int32_t        dual[PFF_ADAPT_CHUNK];
+        for (PetscInt j = 0; j < m; j++) { /* DualIndex of b = floor(g / s - 1/2), as LevelAt */
+          const float *g = &x[3 * (c0 + j)];
+          dual[j] = (int32_t)(g[0] * is + 0.5f) + sy * (int32_t)(g[1] * is + 0.5f) + sz * (int32_t)(g[2] * is + 0.5f);
+        }
+        for (PetscInt j = 0; j < m; j++) {
+          const uint8_t l = lev[dual[j]];
+          target[c0 + j]  = (int8_t)(l != 0xff ? (PetscInt)l : LevelOf(&ac, DistanceAt(&ac, &x[3 * (c0 + j)])));
+        }
+      }
+    }
   }
   /* a particle whose coarsening is pending holds the grid at its level (the blocks' hysteresis) */
   if (counters) PetscCall(PffParticlesAdaptCounters(f->part, target, a->delay));
