@@ -130,12 +130,17 @@ static void LevelLattice(PffFlowAdaptCtx *a)
 
 #define PFF_ADAPT_CHUNK 256
 
-/* The level particle position g asks for (step 6). */
-static inline PetscInt LevelAt(const PffFlowAdaptCtx *a, const float g[3])
+/* DualIndex of the dual cell holding grid position g (g >= 0): its lower centre b = floor(g / s - 1/2) per axis. */
+static inline int32_t DualCellOf(const PffFlowAdaptCtx *a, const float g[3])
 {
-  PetscInt b[3];
-  for (int d = 0; d < 3; d++) b[d] = (PetscInt)(g[d] * a->is + 0.5f) - 1; /* floor(g / s - 1/2) for g >= 0 */
-  const uint8_t l = a->lev[DualIndex(a, b)];
+  const int32_t sy = (int32_t)(a->C[0] + 1), sz = sy * (int32_t)(a->C[1] + 1);
+  return (int32_t)(g[0] * a->is + 0.5f) + sy * (int32_t)(g[1] * a->is + 0.5f) + sz * (int32_t)(g[2] * a->is + 0.5f);
+}
+
+/* The level the distance asks for at grid position g in dual cell dual (step 6). */
+static inline PetscInt LevelAt(const PffFlowAdaptCtx *a, int32_t dual, const float g[3])
+{
+  const uint8_t l = a->lev[dual];
   return l != 0xff ? (PetscInt)l : LevelOf(a, DistanceAt(a, g));
 }
 
@@ -183,13 +188,12 @@ static PetscInt BlockRegionLevel(const PffFlowAdaptCtx *a, const PetscInt ijk[3]
   return l;
 }
 
-/* The level particle position g asks for: a user region's, else the finer of the distance's and the
-   vorticity's (the lattice cell's largest |curl u|, so that no vortex within it is missed). */
-static inline PetscInt Ask(const PffFlowAdaptCtx *a, const float g[3])
+/* The level particle position g asks for, from the distance's level l: a user region's, else the finer of l and
+   the vorticity's (the lattice cell's largest |curl u|, so that no vortex within it is missed). */
+static inline PetscInt Ask(const PffFlowAdaptCtx *a, const float g[3], PetscInt l)
 {
   const PetscInt r = RegionLevel(a, g);
   if (r >= 0) return r;
-  PetscInt l = LevelAt(a, g);
   if (a->vlev) {
     PetscInt c[3];
     for (int d = 0; d < 3; d++) c[d] = PetscMin((PetscInt)(g[d] * a->is), a->C[d] - 1);
@@ -266,10 +270,10 @@ static PetscErrorCode Distance(PffFlow f)
   /* chamfer sweeps: forward over the 13 neighbours before a cell in raster order, backward over the 13
      after it; twice, so that distances also come around periodic axes. Cells off the lattice's faces read
      their neighbours at fixed offsets; the others go through PffRasterNeighbour (walls, periodic wrap). */
-  PetscInt off[27];
+  PetscInt off[27], dir[27][3];
   float    wt[27];
   for (PetscInt r = 0; r < 27; r++) {
-    PetscInt o[3];
+    PetscInt *o = dir[r];
     PffRegionDirection(r, o);
     const PetscInt n1 = (o[0] != 0) + (o[1] != 0) + (o[2] != 0);
     off[r]            = o[0] + a->C[0] * (o[1] + a->C[1] * o[2]);
@@ -288,9 +292,7 @@ static PetscErrorCode Distance(PffFlow f)
         for (PetscInt r = r0; r < r1; r++) best = PetscMin(best, d[c + off[r]] + wt[r]);
       else
         for (PetscInt r = r0; r < r1; r++) {
-          PetscInt o[3];
-          PffRegionDirection(r, o);
-          const PetscInt q = PffRasterNeighbour(a->C, a->periodic, cc, o);
+          const PetscInt q = PffRasterNeighbour(a->C, a->periodic, cc, dir[r]);
           if (q >= 0) best = PetscMin(best, d[q] + wt[r]);
         }
       d[c] = best;
@@ -338,29 +340,20 @@ static PetscErrorCode TargetsAndMap(PffFlow f, PetscBool counters, PetscInt map[
   const float n0f    = (float)a->n0;
   int8_t     *target = a->target;
   {
-    const PffFlowAdaptCtx ac = *a;
-    const float *const    x  = pa.x;
-    if (ac.vlev || ac.nbox + ac.nsphere > 0) {
+    const PffFlowAdaptCtx ac   = *a;
+    const float *const    x    = pa.x;
+    const PetscBool       more = (PetscBool)(ac.vlev || ac.nbox + ac.nsphere > 0); /* regions or vorticity */
+    /* in chunks: the dual cells of a chunk in a loop that vectorises, then their levels (the distance
+       interpolated only where a dual cell spans levels) */
 #pragma omp parallel for schedule(static)
-      for (PetscInt i = 0; i < pa.n; i++) target[i] = (int8_t)Ask(&ac, &x[3 * i]);
-    } else {
-      /* the distance alone (LevelAt), in chunks: the dual cells of a chunk in a loop that vectorises, then their
-         bytes, and the distance interpolated only where a dual cell spans levels */
-      const int32_t  sy = (int32_t)(ac.C[0] + 1), sz = (int32_t)((ac.C[0] + 1) * (ac.C[1] + 1));
-      const float    is  = ac.is;
-      const uint8_t *lev = ac.lev;
-#pragma omp parallel for schedule(static)
-      for (PetscInt c0 = 0; c0 < pa.n; c0 += PFF_ADAPT_CHUNK) {
-        const PetscInt m = PetscMin(PFF_ADAPT_CHUNK, pa.n - c0);
-        int32_t        dual[PFF_ADAPT_CHUNK];
-        for (PetscInt j = 0; j < m; j++) { /* DualIndex of b = floor(g / s - 1/2), as LevelAt */
-          const float *g = &x[3 * (c0 + j)];
-          dual[j] = (int32_t)(g[0] * is + 0.5f) + sy * (int32_t)(g[1] * is + 0.5f) + sz * (int32_t)(g[2] * is + 0.5f);
-        }
-        for (PetscInt j = 0; j < m; j++) {
-          const uint8_t l = lev[dual[j]];
-          target[c0 + j]  = (int8_t)(l != 0xff ? (PetscInt)l : LevelOf(&ac, DistanceAt(&ac, &x[3 * (c0 + j)])));
-        }
+    for (PetscInt c0 = 0; c0 < pa.n; c0 += PFF_ADAPT_CHUNK) {
+      const PetscInt m = PetscMin(PFF_ADAPT_CHUNK, pa.n - c0);
+      int32_t        dual[PFF_ADAPT_CHUNK];
+      for (PetscInt j = 0; j < m; j++) dual[j] = DualCellOf(&ac, &x[3 * (c0 + j)]);
+      for (PetscInt j = 0; j < m; j++) {
+        const float   *g = &x[3 * (c0 + j)];
+        const PetscInt l = LevelAt(&ac, dual[j], g);
+        target[c0 + j]   = (int8_t)(more ? Ask(&ac, g, l) : l);
       }
     }
   }

@@ -142,7 +142,7 @@ static PetscErrorCode TransferChannel(PffGrid g, PffChannel *c, const OldRaster 
   PetscCall(PetscFree(c->faces));
   c->alloc = c->data = NULL;
   /* zeroed here only where nothing is transferred: blocks that were inactive, or every block */
-  PetscCall(PffGridAllocateChannelData_Private(g, c, (PetscBool)(c->transfer == PFF_TRANSFER_NONE)));
+  PetscCall(PffGridAllocateChannel_Private(g, c, (PetscBool)(c->transfer == PFF_TRANSFER_NONE)));
   if (c->transfer != PFF_TRANSFER_NONE) {
     if (!tr->sf) {
       PetscCall(PetscMalloc1(g->nlocal, &tr->start));

@@ -268,7 +268,7 @@ PetscErrorCode PffGridSetUp(PffGrid g)
   PetscCall(PffGridBuildRaster_Private(g));
   PetscCall(PffGridPartition_Private(g));
   g->setupcalled = PETSC_TRUE;
-  for (PetscInt c = 0; c < g->nch; c++) PetscCall(PffGridAllocateChannel_Private(g, g->ch[c]));
+  for (PetscInt c = 0; c < g->nch; c++) PetscCall(PffGridAllocateChannel_Private(g, g->ch[c], PETSC_TRUE));
   PetscCall(PffGridComputeQuality_Private(g));
   PetscCall(PetscLogEventEnd(PFF_GridSetUp, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);

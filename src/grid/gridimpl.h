@@ -127,8 +127,7 @@ static inline PetscInt PffGridActiveNeighbour_Private(PffGrid g, PetscInt gid, P
 
 PETSC_INTERN PetscErrorCode PffGridBuildRaster_Private(PffGrid);
 PETSC_INTERN PetscErrorCode PffGridPartition_Private(PffGrid);
-PETSC_INTERN PetscErrorCode PffGridAllocateChannel_Private(PffGrid, PffChannel *);
-PETSC_INTERN PetscErrorCode PffGridAllocateChannelData_Private(PffGrid, PffChannel *, PetscBool);
+PETSC_INTERN PetscErrorCode PffGridAllocateChannel_Private(PffGrid, PffChannel *, PetscBool);
 PETSC_INTERN PetscErrorCode PffGridDestroyChannel_Private(PffChannel **);
 PETSC_INTERN PetscErrorCode PffHaloPlanGet_Private(PffGrid, PffChannelKind, PetscInt, PffHaloPlan **);
 PETSC_INTERN PetscErrorCode PffHaloPlanDestroy_Private(PffHaloPlan **);

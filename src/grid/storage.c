@@ -21,21 +21,14 @@ PetscErrorCode PffGridAddChannel(PffGrid g, const char name[], PffChannelKind ki
   c->ncomp  = kind == PFF_CHANNEL_FACE ? 3 : 1;
   c->width  = width;
   c->output = PETSC_TRUE;
-  if (g->setupcalled) PetscCall(PffGridAllocateChannel_Private(g, c));
+  if (g->setupcalled) PetscCall(PffGridAllocateChannel_Private(g, c, PETSC_TRUE));
   g->ch[g->nch] = c;
   *ch           = g->nch++;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode PffGridAllocateChannel_Private(PffGrid g, PffChannel *c)
-{
-  PetscFunctionBeginUser;
-  PetscCall(PffGridAllocateChannelData_Private(g, c, PETSC_TRUE));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-/* zero: the owned values start at 0; otherwise only the pads are (the caller writes every block) */
-PetscErrorCode PffGridAllocateChannelData_Private(PffGrid g, PffChannel *c, PetscBool zero)
+/* zero: the owned values start at 0; otherwise only the pads do (the caller writes every block) */
+PetscErrorCode PffGridAllocateChannel_Private(PffGrid g, PffChannel *c, PetscBool zero)
 {
   const PetscInt nmin = g->n0 >> (g->nlevels - 1);
 
