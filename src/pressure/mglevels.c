@@ -464,7 +464,7 @@ PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
   PetscCall(PetscMalloc6(mg->nlocal, &mg->gid, mg->nlocal, &mg->colour, mg->nlocal, &mg->next, mg->nlocal, &mg->r0,
                          mg->Rsize * (size_t)omp_get_max_threads(), &mg->R, mg->Rsize * (size_t)omp_get_max_threads(),
                          &mg->BB));
-  mg->XFsize = 3 * mg->Rsize + 2 * (size_t)n0; /* x with its pads, bb, R */
+  mg->XFsize = 2 * mg->Rsize + 2 * (size_t)n0; /* x with its pads, bb */
   PetscCall(PetscMalloc1(mg->XFsize * (size_t)omp_get_max_threads(), &mg->XF));
   for (PetscInt lb = 0; lb < mg->nlocal; lb++) {
     PffBlockInfo info;

@@ -597,14 +597,15 @@ static inline PetscScalar SideSum(const PffMGStencil *st, PetscInt nr, PetscInt 
    for all the sweeps of the visit, and the sweeps run one uniform loop. The side terms between cells
    of the block itself (fine cells under one coarse face above the block) change within a sweep; they
    are left out here and added row by row (OwnSums); st->own[lb] says whether the block has any (made at build),
-   and is returned. */
+   and is returned. sides = PETSC_FALSE: the cells around are known to be 0 (PffMGZero), bb = b. */
 PetscBool PffMGStencilBlockRhs_Private(const PffMGLevel *lv, PetscInt lb, const PetscScalar *b, const PetscScalar *x,
-                                       const PetscScalar *g, PetscScalar *bb)
+                                       const PetscScalar *g, PetscBool sides, PetscScalar *bb)
 {
   const PffMGStencil *st = lv->st;
   const PetscInt      n = lv->n[lb], r0 = lv->start[lb], nc = n * n * n;
 
   for (PetscInt i = 0; i < nc; i++) bb[i] = b[r0 + i];
+  if (!sides) return st->own[lb];
   for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++) { /* only the rows that have side terms */
     const PetscInt r = st->side[q];
     bb[r - r0] -= SideSum(st, lv->nrows, r, x, g, r0, r0 + nc);
@@ -777,14 +778,16 @@ PetscBool PffMGStencilVisitFloat_Private(const PffMGLevel *lv, PetscInt lb)
 }
 
 /* bs = b - (the side couplings of the cells of local block lb to other blocks), block-local, in float: as
-   PffMGStencilBlockRhs_Private for a block without in-block side terms, rounded once per cell. */
+   PffMGStencilBlockRhs_Private for a block without in-block side terms, rounded once per cell. sides = PETSC_FALSE:
+   every cell the block reads around it is known to be 0 (see PffMGZero), so bs = b. */
 static void BlockRhsFloat(const PffMGLevel *lv, PetscInt lb, const PetscScalar *b, const PetscScalar *x,
-                          const PetscScalar *g, float *restrict bs)
+                          const PetscScalar *g, PetscBool sides, float *restrict bs)
 {
   const PffMGStencil *st = lv->st;
   const PetscInt      r0 = lv->start[lb], nc = lv->n[lb] * lv->n[lb] * lv->n[lb];
 
   for (PetscInt i = 0; i < nc; i++) bs[i] = (float)b[r0 + i];
+  if (!sides) return;
   for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++) {
     const PetscInt r = st->side[q];
     bs[r - r0]       = (float)(b[r] - SideSum(st, lv->nrows, r, x, g, 0, 0));
@@ -798,15 +801,17 @@ static void BlockRhsFloat(const PffMGLevel *lv, PetscInt lb, const PetscScalar *
    buffer and back with whole-vector stores: a masked store into x stalls the next row's loads of it (no store
    forwarding from masked stores). The faces to cells outside the block have weight 0 (their couplings are in
    bs), so the row reads the pads or the block's other rows there, never a value it uses. Returns the largest
-   |omega s| of the sweep, and R (or NULL) receives it per cell. Inlined with n constant for 16, 8 and 4. */
+   |omega s| of the sweep; face (or NULL) receives its largest value on each of the block's six sides (-x, +x,
+   -y, +y, -z, +z), kept as running maxima per lane (the other colour's lanes hold 0), so that adaptive
+   relaxation needs no per-cell record. Inlined with n constant for 16, 8 and 4. */
 static inline PetscReal SweepFloat(const PffMGStencil *st, PetscInt nr, PetscInt r0, const PetscInt n,
-                                   const float *restrict bs, float *xs, float omega, float *restrict R)
+                                   const float *restrict bs, float *xs, float omega, PetscReal *face)
 {
   const float *restrict cx = st->cf + r0, *restrict cy = st->cf + nr + r0, *restrict cz = st->cf + 2 * nr + r0;
   const float *restrict ds = st->dsf + r0, *restrict id = st->idf + r0;
   const PetscInt n2 = n * n;
   float          lo[PFF_GRID_BLOCK_SIZE_MAX], hi[PFF_GRID_BLOCK_SIZE_MAX], mx[PFF_GRID_BLOCK_SIZE_MAX];
-  float          col[2][PFF_GRID_BLOCK_SIZE_MAX];
+  float          col[2][PFF_GRID_BLOCK_SIZE_MAX], fm[4][PFF_GRID_BLOCK_SIZE_MAX]; /* -y, +y, -z, +z */
   PetscReal      rmax = 0;
 
   for (PetscInt i = 0; i < n; i++) {
@@ -815,10 +820,15 @@ static inline PetscReal SweepFloat(const PffMGStencil *st, PetscInt nr, PetscInt
     mx[i]     = 0;
     col[0][i] = (i & 1) == 0;
     col[1][i] = (i & 1) == 1;
+    for (PetscInt f = 0; f < 4; f++) fm[f][i] = 0;
   }
+  /* The rows of a colour read only the other colour's cells, so their order does not change the result; even j
+     before odd j, so that consecutive rows are not neighbours: a row's loads of its -y neighbour would otherwise wait
+     for the store of the row just computed, a chain through every row of the sweep. */
   for (PetscInt c = 0; c < 2; c++)
     for (PetscInt k = 0; k < n; k++)
-      for (PetscInt j = 0; j < n; j++) {
+      for (PetscInt jj = 0; jj < n; jj++) {
+        const PetscInt j = jj < (n + 1) / 2 ? 2 * jj : 2 * (jj - (n + 1) / 2) + 1;
         const PetscInt o = n * (j + n * k), i0 = (j + k + c) & 1;
         const PetscInt sym = j > 0 ? n : 0, syp = j < n - 1 ? n : 0, szm = k > 0 ? n2 : 0, szp = k < n - 1 ? n2 : 0;
         const float    mym = j > 0, myp = j<n - 1, mzm = k> 0, mzp = k < n - 1;
@@ -838,25 +848,38 @@ static inline PetscReal SweepFloat(const PffMGStencil *st, PetscInt nr, PetscInt
         }
         float *restrict xw = xs + o;
         for (PetscInt i = 0; i < n; i++) xw[i] = nx[i];
-        if (R)
-          for (PetscInt i = 0; i < n; i++) R[o + i] = m[i] != 0 ? ev[i] : R[o + i];
+        if (face && (j == 0 || j == n - 1 || k == 0 || k == n - 1)) {
+          const PetscInt f0 = j == 0 ? 0 : j == n - 1 ? 1 : -1, f1 = k == 0 ? 2 : k == n - 1 ? 3 : -1;
+          if (f0 >= 0)
+            for (PetscInt i = 0; i < n; i++) fm[f0][i] = fm[f0][i] > ev[i] ? fm[f0][i] : ev[i];
+          if (f1 >= 0)
+            for (PetscInt i = 0; i < n; i++) fm[f1][i] = fm[f1][i] > ev[i] ? fm[f1][i] : ev[i];
+        }
       }
   for (PetscInt i = 0; i < n; i++) rmax = PetscMax(rmax, (PetscReal)mx[i]);
+  if (face) {
+    face[0] = mx[0]; /* the x sides are lanes 0 and n - 1 of every row */
+    face[1] = mx[n - 1];
+    for (PetscInt f = 0; f < 4; f++) {
+      face[2 + f] = 0;
+      for (PetscInt i = 0; i < n; i++) face[2 + f] = PetscMax(face[2 + f], (PetscReal)fm[f][i]);
+    }
+  }
   return rmax;
 }
 
 static PetscReal SweepFloatN(const PffMGStencil *st, PetscInt nr, PetscInt r0, PetscInt n, const float *bs, float *xs,
-                             float omega, float *R)
+                             float omega, PetscReal *face)
 {
   switch (n) {
   case 16:
-    return SweepFloat(st, nr, r0, 16, bs, xs, omega, R);
+    return SweepFloat(st, nr, r0, 16, bs, xs, omega, face);
   case 8:
-    return SweepFloat(st, nr, r0, 8, bs, xs, omega, R);
+    return SweepFloat(st, nr, r0, 8, bs, xs, omega, face);
   case 4:
-    return SweepFloat(st, nr, r0, 4, bs, xs, omega, R);
+    return SweepFloat(st, nr, r0, 4, bs, xs, omega, face);
   default:
-    return SweepFloat(st, nr, r0, n, bs, xs, omega, R);
+    return SweepFloat(st, nr, r0, n, bs, xs, omega, face);
   }
 }
 
@@ -865,28 +888,31 @@ static PetscReal SweepFloatN(const PffMGStencil *st, PetscInt nr, PetscInt r0, P
    them (one, or in adaptive relaxation until the update falls by 1/3, at most maxSweeps), and x comes back once.
    The visit is the smoother's inner loop: in float a row of 16 cells is one vector and no lane permutes are
    needed, and the block's working set halves. The smoother is a preconditioner's, so the float rounding of x
-   (relative 6e-8 per visit) is far below what it reduces per cycle; the outer FCG works in double. first
-   receives the first sweep's largest |omega s|, the return value the last one's, k the sweeps. */
+   (relative 6e-8 per visit) is far below what it reduces per cycle; the outer FCG works in double. zero says which
+   values are known to be 0 and are not read (the first visits from a zero guess). first receives the first
+   sweep's largest |omega s|, the return value the last one's, face (or NULL) the last one's per block side, k the
+   sweeps. */
 PetscReal PffMGStencilVisitBlock_Private(const PffMGLevel *lv, PetscInt lb, const PetscScalar *b, PetscScalar *x,
-                                         const PetscScalar *g, PetscReal omega, PetscReal *R, float *scratch,
-                                         PetscInt maxSweeps, PetscBool adaptive, PetscReal *first, PetscInt *k)
+                                         const PetscScalar *g, PetscReal omega, PffMGZero zero, PetscReal *face,
+                                         float *scratch, PetscInt maxSweeps, PetscBool adaptive, PetscReal *first,
+                                         PetscInt *k)
 {
   const PetscInt n = lv->n[lb], r0 = lv->start[lb], nc = n * n * n;
   float *restrict xs = scratch + n, *restrict bs = scratch + nc + 2 * n; /* pads of n floats around xs */
-  float *restrict Rf = R ? bs + nc : NULL;
-  PetscReal r        = 0;
+  PetscReal r = 0;
 
-  BlockRhsFloat(lv, lb, b, x, g, bs);
+  BlockRhsFloat(lv, lb, b, x, g, (PetscBool)(zero != PFF_MG_ZERO_AROUND), bs);
   for (PetscInt i = 0; i < n; i++) xs[i - n] = xs[nc + i] = 0;
-  for (PetscInt i = 0; i < nc; i++) xs[i] = (float)x[r0 + i];
+  if (zero == PFF_MG_ZERO_NONE)
+    for (PetscInt i = 0; i < nc; i++) xs[i] = (float)x[r0 + i];
+  else
+    for (PetscInt i = 0; i < nc; i++) xs[i] = 0;
   for (*k = 0; *k < maxSweeps;) {
-    r = SweepFloatN(lv->st, lv->nrows, r0, n, bs, xs, (float)omega, Rf);
+    r = SweepFloatN(lv->st, lv->nrows, r0, n, bs, xs, (float)omega, face);
     if ((*k)++ == 0) *first = r;
     if (!adaptive || !(*first > 0) || r < *first / 3) break;
   }
   for (PetscInt i = 0; i < nc; i++) x[r0 + i] = xs[i];
-  if (R) /* per sweep in float, whole rows; the border maxima read it in double */
-    for (PetscInt i = 0; i < nc; i++) R[i] = Rf[i];
   return r;
 }
 
