@@ -33,7 +33,7 @@ typedef struct {
   PffMGReal *dx;       /* [nrows] diagonal-only terms: Dirichlet walls, the unit of a cell with no open face */
   PetscReal *ds;       /* [nrows] the diagonal but for the faces inside the block: side faces, dx (double, so that the
                           rows sum to dx exactly) */
-  float    *dsf, *idf; /* [nrows] ds in float (the float block visits), and 1 / a_ii (0: an empty row), its only copy */
+  float    *adf, *idf; /* [nrows] a_ii in float (the float block visits), and 1 / a_ii (0: an empty row), its only copy */
   PetscInt *rowptr;    /* [nrows + 1] side couplings of each row to other cells */
   PetscInt *side;      /* the rows that have any, in order (the block's sides: about a third of the cells for n = 16) */
   PetscInt *bside;     /* [nblk + 1] the rows of block lb are side[bside[lb] .. bside[lb + 1] - 1] */
@@ -140,8 +140,8 @@ typedef struct {
   PetscReal     *R;                 /* [Rsize * threads] effective residual per cell of the block each thread relaxes */
   size_t         Rsize;             /* n0^3 */
   PetscScalar   *BB;     /* [Rsize * threads] right-hand side of the block each thread relaxes (stencil levels) */
-  float         *XF;     /* [XFsize * threads] float copies of x, bb and R of the block each thread relaxes */
-  size_t         XFsize; /* 3 n0^3 + 2 n0 */
+  float         *XF;     /* [XFsize * threads] float copies of x and bb of the block each thread relaxes */
+  size_t         XFsize; /* 2 n0^3 + 2 n0 */
   unsigned char *colour; /* [nlocal] block colour (x_b + y_b + z_b) mod 2 */
   PffMGStats     stats;
 } PffMG;

@@ -361,7 +361,7 @@ PetscErrorCode PffMGStencilBuild_Private(PffMG *mg, PetscInt L)
   PetscCall(NumberingDestroy(&t));
 
   PetscCall(PetscMalloc4(3 * lv->nrows, &st->cf, lv->nrows, &st->dx, lv->nrows, &st->ds, st->nslot, &st->cghost));
-  PetscCall(PetscMalloc2(lv->nrows, &st->dsf, lv->nrows, &st->idf));
+  PetscCall(PetscMalloc2(lv->nrows, &st->adf, lv->nrows, &st->idf));
   /* a matrix-free level keeps 1 / a_ii in float only (idf); the last block level, assembled, in double too */
   if (lv->idiag == NULL && !lv->mf) PetscCall(PetscMalloc1(lv->nrows, &lv->idiag));
   if (lv->mf) {
@@ -390,7 +390,7 @@ PetscErrorCode PffMGStencilDestroy_Private(PffMGLevel *lv)
   PetscCall(PetscFree3(st->drow, st->dref, st->dfac));
   PetscCall(PetscFree(st->ghostRow));
   PetscCall(PetscFree4(st->cf, st->dx, st->ds, st->cghost));
-  PetscCall(PetscFree2(st->dsf, st->idf));
+  PetscCall(PetscFree2(st->adf, st->idf));
   PetscCall(PetscSFDestroy(&st->sfSlot));
   PetscCall(MatDestroy(&st->Aview));
   PetscCall(PetscFree(lv->st));
@@ -554,7 +554,7 @@ PetscErrorCode PffMGStencilUpdate_Private(PffMG *mg, PetscInt L)
              face is closed (on the last level, a closed box of one block); it is not relaxed, as on the
              AIJ levels, and the pinned coarsest operator takes care of it */
           const PetscReal d = Diagonal(st, nr, r, i, j, k, n);
-          st->dsf[r]        = (float)st->ds[r];
+          st->adf[r]        = (float)d;
           st->idf[r]        = (float)(d > 0 ? 1.0 / d : 0.0);
           if (lv->idiag) lv->idiag[r] = d > 0 ? 1.0 / d : 0.0;
         }
@@ -587,6 +587,24 @@ static inline PetscScalar SideSum(const PffMGStencil *st, PetscInt nr, PetscInt 
   for (PetscInt e = st->rowptr[r]; e < st->rowptr[r + 1]; e++) {
     const PetscInt c = st->col[e];
     if (c < lo || c >= hi) s += st->val[e] * (c < nr ? x[c] : g[c - nr]);
+  }
+  return s;
+}
+
+/* SideSum over all columns for a row of block lb, whose side entries end at e1 (the block's rows with side terms
+   are one run of the CSR: rows without any have none). The neighbours' x across the block's x sides lie a row
+   apart, a cache line each and mostly out of cache: they are prefetched a fixed distance ahead (10 % off a float
+   visit, docs/pressure.md). */
+#define PFF_MG_SIDE_PREFETCH 24 /* side entries ahead */
+static inline PetscScalar SideSumAhead(const PffMGStencil *st, PetscInt nr, PetscInt r, const PetscScalar *x,
+                                       const PetscScalar *g, PetscInt e1)
+{
+  PetscScalar s = 0;
+  for (PetscInt e = st->rowptr[r]; e < st->rowptr[r + 1]; e++) {
+    if (e + PFF_MG_SIDE_PREFETCH < e1 && st->col[e + PFF_MG_SIDE_PREFETCH] < nr)
+      __builtin_prefetch(x + st->col[e + PFF_MG_SIDE_PREFETCH]);
+    const PetscInt c = st->col[e];
+    s += st->val[e] * (c < nr ? x[c] : g[c - nr]);
   }
   return s;
 }
@@ -790,79 +808,116 @@ static void BlockRhsFloat(const PffMGLevel *lv, PetscInt lb, const PetscScalar *
   if (!sides) return;
   for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++) {
     const PetscInt r = st->side[q];
-    bs[r - r0]       = (float)(b[r] - SideSum(st, lv->nrows, r, x, g, 0, 0));
+    bs[r - r0]       = (float)(b[r] - SideSumAhead(st, lv->nrows, r, x, g, st->rowptr[r0 + nc]));
   }
 }
 
+/* One row group of SweepFloat: the candidate values nx and |omega s| ev of its w cells, the colour's only (mo: omega
+   on the colour's lanes, 0 on the others); mx keeps the running maximum per lane. lo, hi, ym, yp weigh the faces to
+   the cells around in x and y per lane, mzm, mzp those in z (0 at the block's sides, where the coupling is in bs);
+   szm, szp are the z offsets (0 at the z sides, so that nothing outside the block and its pads is read). */
+static inline __attribute__((always_inline)) void
+RowFloat(PetscInt w, PetscInt n, const float *restrict cx, const float *restrict cy, const float *restrict cz,
+         const float *restrict ad, const float *restrict id, const float *restrict bs, const float *restrict xr,
+         const float *restrict lo, const float *restrict hi, const float *restrict ym, const float *restrict yp,
+         const float *restrict mo, float mzm, float mzp, PetscInt szm, PetscInt szp, float *restrict nx,
+         float *restrict ev, float *restrict mx)
+{
+  for (PetscInt i = 0; i < w; i++) {
+    const float c0 = lo[i] * cx[i], c1 = hi[i] * cx[i + 1], c2 = ym[i] * cy[i], c3 = yp[i] * cy[i + n];
+    const float c4 = mzm * cz[i], c5 = mzp * cz[i + szp];
+    const float s = bs[i] - ad[i] * xr[i] + c0 * xr[i - 1] + c1 * xr[i + 1] + c2 * xr[i - n] + c3 * xr[i + n] +
+                    c4 * xr[i - szm] + c5 * xr[i + szp];
+    const float os = mo[i] * s;
+    ev[i]          = os < 0 ? -os : os;
+    nx[i]          = xr[i] + os * id[i]; /* id = 0: a zero row is not relaxed */
+    mx[i]          = mx[i] > ev[i] ? mx[i] : ev[i];
+  }
+}
+
+/* The order of 0 .. m-1 that takes the odd ones first: no two consecutive entries are neighbours, and entry m/2
+   follows m/2 - 1 only where m = 2. */
+static inline PetscInt OddFirst(PetscInt q, PetscInt m)
+{
+  return q < m / 2 ? 2 * q + 1 : 2 * (q - m / 2);
+}
+
 /* One red-black sweep of a block in float: xs holds the block's x (x fastest) with a pad of n before and after,
-   bs its right-hand side with the side couplings folded in. Each row computes all its cells from the values
-   before the colour's update and adds the update to the cells of the colour only (the others add 0, so they
-   keep their value bit for bit), as RelaxRow does, in one float vector for n = 16. The row goes through a
-   buffer and back with whole-vector stores: a masked store into x stalls the next row's loads of it (no store
-   forwarding from masked stores). The faces to cells outside the block have weight 0 (their couplings are in
-   bs), so the row reads the pads or the block's other rows there, never a value it uses. Returns the largest
-   |omega s| of the sweep; face (or NULL) receives its largest value on each of the block's six sides (-x, +x,
-   -y, +y, -z, +z), kept as running maxima per lane (the other colour's lanes hold 0), so that adaptive
-   relaxation needs no per-cell record. Inlined with n constant for 16, 8 and 4. */
-static inline PetscReal SweepFloat(const PffMGStencil *st, PetscInt nr, PetscInt r0, const PetscInt n,
-                                   const float *restrict bs, float *xs, float omega, PetscReal *face)
+   bs its right-hand side with the side couplings folded in. The cells go in groups of G whole rows, G = 16 / n for
+   n = 4 and 8 (a plane of 4^3 block, two rows of an 8^3 one) and 1 for n >= 16, so that a group is one 16-float
+   vector. Each group computes all its cells from the values before the colour's update and adds the update to the
+   cells of the colour only (the others add 0, so they keep their value bit for bit), as RelaxRow does. The group
+   goes through a buffer and back with whole-vector stores: a masked store into x stalls the next loads of it (no
+   store forwarding from masked stores). The faces to cells outside the block have weight 0 (their couplings are in
+   bs), so a group reads the pads or its block's other cells there, never a value it uses; the groups inside the
+   block's y and z sides need no weights but the x ones (RowFloat with constant weights). The cells of a colour
+   read only the other colour's, so the order of the groups does not change the result: the odd groups (and
+   planes) go first, so that consecutive groups are not neighbours (in plain order a group's loads of its -y
+   neighbour wait for the store of the group just computed, a chain through the whole sweep at the latency of its
+   arithmetic). Returns the largest |omega s| of the sweep; face (or NULL) receives its largest value on each of the
+   block's six sides (-x, +x, -y, +y, -z, +z), kept as running maxima per lane (the other colour's lanes hold 0), so
+   that adaptive relaxation needs no per-cell record. Inlined with n constant for 16, 8 and 4. */
+static inline __attribute__((always_inline)) PetscReal SweepFloat(const PffMGStencil *st, PetscInt nr, PetscInt r0,
+                                                                  const PetscInt n, const float *restrict bs, float *xs,
+                                                                  float omega, PetscReal *face)
 {
   const float *restrict cx = st->cf + r0, *restrict cy = st->cf + nr + r0, *restrict cz = st->cf + 2 * nr + r0;
-  const float *restrict ds = st->dsf + r0, *restrict id = st->idf + r0;
-  const PetscInt n2 = n * n;
-  float          lo[PFF_GRID_BLOCK_SIZE_MAX], hi[PFF_GRID_BLOCK_SIZE_MAX], mx[PFF_GRID_BLOCK_SIZE_MAX];
-  float          col[2][PFF_GRID_BLOCK_SIZE_MAX], fm[4][PFF_GRID_BLOCK_SIZE_MAX]; /* -y, +y, -z, +z */
+  const float *restrict ad = st->adf + r0, *restrict id = st->idf + r0;
+  const PetscInt G = n < 16 && 16 % n == 0 ? 16 / n : 1, w = G * n, ng = n / G, n2 = n * n;
+  float          lo[PFF_GRID_BLOCK_SIZE_MAX], hi[PFF_GRID_BLOCK_SIZE_MAX], one[PFF_GRID_BLOCK_SIZE_MAX];
+  float          ym0[PFF_GRID_BLOCK_SIZE_MAX], yp1[PFF_GRID_BLOCK_SIZE_MAX], mx[PFF_GRID_BLOCK_SIZE_MAX];
+  float          mo[2][PFF_GRID_BLOCK_SIZE_MAX], fm[4][PFF_GRID_BLOCK_SIZE_MAX]; /* -y, +y, -z, +z */
   PetscReal      rmax = 0;
 
-  for (PetscInt i = 0; i < n; i++) {
-    lo[i]     = i > 0;
-    hi[i]     = i < n - 1;
-    mx[i]     = 0;
-    col[0][i] = (i & 1) == 0;
-    col[1][i] = (i & 1) == 1;
-    for (PetscInt f = 0; f < 4; f++) fm[f][i] = 0;
+  for (PetscInt l = 0; l < w; l++) {
+    const PetscInt i = l % n, j = l / n; /* the lane's cell in the group: row j of G */
+    lo[l]    = i > 0;
+    hi[l]    = i < n - 1;
+    one[l]   = 1;
+    ym0[l]   = j > 0; /* the -y weights of the first group, and the +y ones of the last */
+    yp1[l]   = j < G - 1;
+    mx[l]    = 0;
+    mo[0][l] = ((i + j) & 1) == 0 ? omega : 0;
+    mo[1][l] = ((i + j) & 1) == 1 ? omega : 0;
+    for (PetscInt f = 0; f < 4; f++) fm[f][l] = 0;
   }
-  /* The rows of a colour read only the other colour's cells, so their order does not change the result; even j
-     before odd j, so that consecutive rows are not neighbours: a row's loads of its -y neighbour would otherwise wait
-     for the store of the row just computed, a chain through every row of the sweep. */
   for (PetscInt c = 0; c < 2; c++)
-    for (PetscInt k = 0; k < n; k++)
-      for (PetscInt jj = 0; jj < n; jj++) {
-        const PetscInt j = jj < (n + 1) / 2 ? 2 * jj : 2 * (jj - (n + 1) / 2) + 1;
-        const PetscInt o = n * (j + n * k), i0 = (j + k + c) & 1;
-        const PetscInt sym = j > 0 ? n : 0, syp = j < n - 1 ? n : 0, szm = k > 0 ? n2 : 0, szp = k < n - 1 ? n2 : 0;
-        const float    mym = j > 0, myp = j<n - 1, mzm = k> 0, mzp = k < n - 1;
-        const float *restrict xr = xs + o, *restrict m = col[i0];
+    for (PetscInt kk = 0; kk < n; kk++) {
+      const PetscInt k = ng > 1 ? kk : OddFirst(kk, n); /* planes in order but for a group per plane */
+      for (PetscInt gg = 0; gg < ng; gg++) {
+        const PetscInt g = OddFirst(gg, ng), o = n * (G * g + n * k);
+        const float *restrict m = mo[(G * g + k + c) & 1];
         float nx[PFF_GRID_BLOCK_SIZE_MAX], ev[PFF_GRID_BLOCK_SIZE_MAX];
-        for (PetscInt i = 0; i < n; i++) {
-          const float c0 = lo[i] * cx[o + i], c1 = hi[i] * cx[o + i + 1], c2 = mym * cy[o + i],
-                      c3 = myp * cy[o + i + syp];
-          const float c4 = mzm * cz[o + i], c5 = mzp * cz[o + i + szp];
-          const float d = c0 + c1 + c2 + c3 + c4 + c5 + ds[o + i];
-          const float s = bs[o + i] - d * xr[i] + c0 * xr[i - 1] + c1 * xr[i + 1] + c2 * xr[i - sym] +
-                          c3 * xr[i + syp] + c4 * xr[i - szm] + c5 * xr[i + szp];
-          const float os = m[i] * (omega * s);
-          ev[i]          = os < 0 ? -os : os;
-          nx[i]          = xr[i] + os * id[o + i]; /* id = 0: a zero row is not relaxed */
-          mx[i]          = mx[i] > ev[i] ? mx[i] : ev[i];
-        }
+        if (g > 0 && g < ng - 1 && k > 0 && k < n - 1)
+          RowFloat(w, n, cx + o, cy + o, cz + o, ad + o, id + o, bs + o, xs + o, lo, hi, one, one, m, 1, 1, n2, n2, nx,
+                   ev, mx);
+        else
+          RowFloat(w, n, cx + o, cy + o, cz + o, ad + o, id + o, bs + o, xs + o, lo, hi, g > 0 ? one : ym0,
+                   g < ng - 1 ? one : yp1, m, k > 0, k<n - 1, k> 0 ? n2 : 0, k < n - 1 ? n2 : 0, nx, ev, mx);
         float *restrict xw = xs + o;
-        for (PetscInt i = 0; i < n; i++) xw[i] = nx[i];
-        if (face && (j == 0 || j == n - 1 || k == 0 || k == n - 1)) {
-          const PetscInt f0 = j == 0 ? 0 : j == n - 1 ? 1 : -1, f1 = k == 0 ? 2 : k == n - 1 ? 3 : -1;
-          if (f0 >= 0)
-            for (PetscInt i = 0; i < n; i++) fm[f0][i] = fm[f0][i] > ev[i] ? fm[f0][i] : ev[i];
-          if (f1 >= 0)
-            for (PetscInt i = 0; i < n; i++) fm[f1][i] = fm[f1][i] > ev[i] ? fm[f1][i] : ev[i];
-        }
+        for (PetscInt l = 0; l < w; l++) xw[l] = nx[l];
+        if (!face) continue;
+        if (g == 0)
+          for (PetscInt l = 0; l < w; l++) fm[0][l] = fm[0][l] > ev[l] ? fm[0][l] : ev[l];
+        if (g == ng - 1)
+          for (PetscInt l = 0; l < w; l++) fm[1][l] = fm[1][l] > ev[l] ? fm[1][l] : ev[l];
+        if (k == 0)
+          for (PetscInt l = 0; l < w; l++) fm[2][l] = fm[2][l] > ev[l] ? fm[2][l] : ev[l];
+        if (k == n - 1)
+          for (PetscInt l = 0; l < w; l++) fm[3][l] = fm[3][l] > ev[l] ? fm[3][l] : ev[l];
       }
-  for (PetscInt i = 0; i < n; i++) rmax = PetscMax(rmax, (PetscReal)mx[i]);
+    }
+  for (PetscInt l = 0; l < w; l++) rmax = PetscMax(rmax, (PetscReal)mx[l]);
   if (face) {
-    face[0] = mx[0]; /* the x sides are lanes 0 and n - 1 of every row */
-    face[1] = mx[n - 1];
-    for (PetscInt f = 0; f < 4; f++) {
-      face[2 + f] = 0;
-      for (PetscInt i = 0; i < n; i++) face[2 + f] = PetscMax(face[2 + f], (PetscReal)fm[f][i]);
+    for (PetscInt f = 0; f < 6; f++) face[f] = 0;
+    for (PetscInt l = 0; l < w; l++) {
+      const PetscInt i = l % n, j = l / n;
+      if (i == 0) face[0] = PetscMax(face[0], (PetscReal)mx[l]); /* the x sides: every row's ends */
+      if (i == n - 1) face[1] = PetscMax(face[1], (PetscReal)mx[l]);
+      if (j == 0) face[2] = PetscMax(face[2], (PetscReal)fm[0][l]); /* the first group's first row */
+      if (j == G - 1) face[3] = PetscMax(face[3], (PetscReal)fm[1][l]);
+      face[4] = PetscMax(face[4], (PetscReal)fm[2][l]);
+      face[5] = PetscMax(face[5], (PetscReal)fm[3][l]);
     }
   }
   return rmax;
@@ -971,7 +1026,7 @@ static inline void BlockProduct(const PffMGLevel *lv, PetscInt lb, const PetscSc
   /* the side couplings first, from the block's rows that have any; the rows add their in-block part */
   for (PetscInt i = 0; i < n * n * n; i++) yb[i] = 0;
   for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++)
-    yb[st->side[q] - r0] = SideSum(st, nr, st->side[q], x, g, 0, 0);
+    yb[st->side[q] - r0] = SideSumAhead(st, nr, st->side[q], x, g, st->rowptr[r0 + n * n * n]);
   for (PetscInt k = 0; k < n; k++)
     for (PetscInt j = 0; j < n; j++) {
       const PetscInt     base  = r0 + n * (j + n * k);
