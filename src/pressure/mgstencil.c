@@ -1115,9 +1115,15 @@ PetscErrorCode PffMGStencilResidualRestrict_Private(PffMG *mg, PetscInt L, Vec b
     const PetscInt s         = nf > nc;
     BlockProduct(lv, lb, x, g, yb);
     for (PetscInt i = 0; i < nc * nc * nc; i++) cr[i] = 0;
+    /* the pairs of a fine row summed first: one add per coarse cell and fine row, so that the adds into a coarse
+       cell do not follow each other through its store */
     for (PetscInt q = 0; q < nf * nf; q++) {
-      const PetscInt o = PffMGCoarseRow_Private(q, nf, nc, s);
-      for (PetscInt i = 0; i < nf; i++) cr[o + (i >> s)] += b[r0 + q * nf + i] - yb[q * nf + i];
+      const PetscInt o               = PffMGCoarseRow_Private(q, nf, nc, s);
+      const PetscScalar *restrict br = b + r0 + q * nf, *restrict yr = yb + q * nf;
+      if (s)
+        for (PetscInt u = 0; u < nc; u++) cr[o + u] += (br[2 * u] - yr[2 * u]) + (br[2 * u + 1] - yr[2 * u + 1]);
+      else
+        for (PetscInt u = 0; u < nc; u++) cr[o + u] += br[u] - yr[u];
     }
   }
   PetscCall(VecRestoreArrayWrite(cbv, &cb));
