@@ -29,20 +29,20 @@ typedef enum { PFF_MG_ZERO_NONE, PFF_MG_ZERO_BLOCK, PFF_MG_ZERO_AROUND } PffMGZe
    per-row list whose values are refreshed from cf at every set-up. The diagonal is the sum of the
    row's face terms, computed where it is used, so every row sums to dx exactly. */
 typedef struct {
-  PffMGReal *cf;       /* [3 nrows] c of the lower d-face of each cell at cf[d nrows + row] (0: closed) */
-  PffMGReal *dx;       /* [nrows] diagonal-only terms: Dirichlet walls, the unit of a cell with no open face */
-  PetscReal *ds;       /* [nrows] the diagonal but for the faces inside the block: side faces, dx (double, so that the
-                          rows sum to dx exactly) */
-  float    *adf, *idf; /* [nrows] a_ii in float (the float block visits), and 1 / a_ii (0: an empty row), its only copy */
-  PetscInt *rowptr;    /* [nrows + 1] side couplings of each row to other cells */
-  PetscInt *side;      /* the rows that have any, in order (the block's sides: about a third of the cells for n = 16) */
-  PetscInt *bside;     /* [nblk + 1] the rows of block lb are side[bside[lb] .. bside[lb + 1] - 1] */
-  PetscBool *own;      /* [nblk] the block has side terms between its own cells (PffMGStencilBlockRhs_Private) */
-  PetscInt  *col;      /* local row, or nrows + ghost index */
-  PffMGReal *val;      /* matrix entry: fac * c of the face */
-  PetscInt  *ref;      /* the face: slot d nrows + row of cf, or 3 nrows + ghost slot */
-  PffMGReal *fac;      /* g_f[row] g_f[col] */
-  PetscInt   ndiag;    /* side-face terms of the diagonal */
+  PffMGReal *cf;     /* [3 nrows] c of the lower d-face of each cell at cf[d nrows + row] (0: closed) */
+  PffMGReal *dx;     /* [nrows] diagonal-only terms: Dirichlet walls, the unit of a cell with no open face */
+  PetscReal *ds;     /* [nrows] the diagonal but for the faces inside the block: side faces, dx (double, so that the
+                        rows sum to dx exactly) */
+  float *adf, *idf;  /* [nrows] a_ii in float (the float block visits), and 1 / a_ii (0: an empty row), its only copy */
+  PetscInt  *rowptr; /* [nrows + 1] side couplings of each row to other cells */
+  PetscInt  *side;   /* the rows that have any, in order (the block's sides: about a third of the cells for n = 16) */
+  PetscInt  *bside;  /* [nblk + 1] the rows of block lb are side[bside[lb] .. bside[lb + 1] - 1] */
+  PetscBool *own;    /* [nblk] the block has side terms between its own cells (PffMGStencilBlockRhs_Private) */
+  PetscInt  *col;    /* local row, or nrows + ghost index */
+  PffMGReal *val;    /* matrix entry: fac * c of the face */
+  PetscInt  *ref;    /* the face: slot d nrows + row of cf, or 3 nrows + ghost slot */
+  PffMGReal *fac;    /* g_f[row] g_f[col] */
+  PetscInt   ndiag;  /* side-face terms of the diagonal */
   PetscInt  *drow, *dref;       /* their row and face */
   PffMGReal *dfac;              /* g_f[row]^2 */
   PetscInt   nghost, *ghostRow; /* ghost cells: global rows, increasing */

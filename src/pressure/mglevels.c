@@ -531,6 +531,13 @@ PetscErrorCode PffMGBuildLevels_Private(PffMG *mg)
       lv->remote[q] = lv->uniform; /* coarse cells of uniform levels: no neighbour list, always after the exchange */
       for (PetscInt f = 0; f < 6 && !lv->uniform; f++)
         if (mg->nbr[6 * q + f] <= -2) lv->remote[q] = 1;
+      /* the stencil's side sums read a block without an off-rank neighbour from owned rows only, unchecked */
+      if (lv->st && !lv->remote[q] && q < mg->nlocal)
+        for (PetscInt e = lv->st->rowptr[lv->start[q]]; e < lv->st->rowptr[lv->start[q + 1]]; e++)
+          PetscCheck(lv->st->col[e] < lv->nrows, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+                     "pffmg: block %" PetscInt_FMT " of level %" PetscInt_FMT
+                     " couples to another rank's cell but has no off-rank neighbour",
+                     q, L);
     }
   }
   mg->built = PETSC_TRUE;

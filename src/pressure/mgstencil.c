@@ -593,19 +593,21 @@ static inline PetscScalar SideSum(const PffMGStencil *st, PetscInt nr, PetscInt 
 }
 
 /* SideSum over all columns for a row of block lb, whose side entries end at e1 (the block's rows with side terms
-   are one run of the CSR: rows without any have none). The neighbours' x across the block's x sides lie a row
-   apart, a cache line each and mostly out of cache: they are prefetched a fixed distance ahead (10 % off a float
+   are one run of the CSR: rows without any have none); local: the block has no neighbour on another rank, so every
+   column is an owned row (lv->remote), and the loop has no branch. The neighbours' x across the block's x sides lie a
+   row apart, a cache line each and mostly out of cache: they are prefetched a fixed distance ahead (10 % off a float
    visit, docs/pressure.md). */
 #define PFF_MG_SIDE_PREFETCH 24 /* side entries ahead */
-static inline PetscScalar SideSumAhead(const PffMGStencil *st, PetscInt nr, PetscInt r, const PetscScalar *x,
-                                       const PetscScalar *g, PetscInt e1)
+static inline __attribute__((always_inline)) PetscScalar SideSumAhead(const PffMGStencil *st, PetscInt nr, PetscInt r,
+                                                                      const PetscScalar *x, const PetscScalar *g,
+                                                                      PetscInt e1, const PetscBool local)
 {
   PetscScalar s = 0;
   for (PetscInt e = st->rowptr[r]; e < st->rowptr[r + 1]; e++) {
-    if (e + PFF_MG_SIDE_PREFETCH < e1 && st->col[e + PFF_MG_SIDE_PREFETCH] < nr)
+    if (e + PFF_MG_SIDE_PREFETCH < e1 && (local || st->col[e + PFF_MG_SIDE_PREFETCH] < nr))
       __builtin_prefetch(x + st->col[e + PFF_MG_SIDE_PREFETCH]);
     const PetscInt c = st->col[e];
-    s += st->val[e] * (c < nr ? x[c] : g[c - nr]);
+    s += st->val[e] * (local || c < nr ? x[c] : g[c - nr]);
   }
   return s;
 }
@@ -817,10 +819,17 @@ static void BlockRhsFloat(const PffMGLevel *lv, PetscInt lb, const PetscScalar *
     for (PetscInt i = i0; i < PetscMin(i0 + line, nc); i++) bs[i] = (float)b[r0 + i];
   }
   if (!sides) return;
-  for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++) {
-    const PetscInt r = st->side[q];
-    bs[r - r0]       = (float)(b[r] - SideSumAhead(st, nr, r, x, g, st->rowptr[r0 + nc]));
-  }
+  const PetscInt e1 = st->rowptr[r0 + nc];
+  if (!lv->remote[lb])
+    for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++) {
+      const PetscInt r = st->side[q];
+      bs[r - r0]       = (float)(b[r] - SideSumAhead(st, nr, r, x, g, e1, PETSC_TRUE));
+    }
+  else
+    for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++) {
+      const PetscInt r = st->side[q];
+      bs[r - r0]       = (float)(b[r] - SideSumAhead(st, nr, r, x, g, e1, PETSC_FALSE));
+    }
 }
 
 /* One row group of SweepFloat: the candidate values nx and |omega s| ev of its w cells, the colour's only (mo: omega
@@ -1037,8 +1046,13 @@ static inline void BlockProduct(const PffMGLevel *lv, PetscInt lb, const PetscSc
   RowEnds(n, &e);
   /* the side couplings first, from the block's rows that have any; the rows add their in-block part */
   for (PetscInt i = 0; i < n * n * n; i++) yb[i] = 0;
-  for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++)
-    yb[st->side[q] - r0] = SideSumAhead(st, nr, st->side[q], x, g, st->rowptr[r0 + n * n * n]);
+  const PetscInt e1 = st->rowptr[r0 + n * n * n];
+  if (!lv->remote[lb])
+    for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++)
+      yb[st->side[q] - r0] = SideSumAhead(st, nr, st->side[q], x, g, e1, PETSC_TRUE);
+  else
+    for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++)
+      yb[st->side[q] - r0] = SideSumAhead(st, nr, st->side[q], x, g, e1, PETSC_FALSE);
   for (PetscInt k = 0; k < n; k++)
     for (PetscInt j = 0; j < n; j++) {
       const PetscInt     base  = r0 + n * (j + n * k);
