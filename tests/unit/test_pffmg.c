@@ -586,6 +586,88 @@ static PetscErrorCode TestAdaptive(void)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Adds v to b at cell c of the level-0 block at raster position blk (rows: owned blocks in local order, cells x
+   fastest), on the rank that owns it. */
+static PetscErrorCode AddAtCell(PffGrid grid, Vec b, const PetscInt blk[3], const PetscInt c[3], PetscScalar v)
+{
+  PetscInt nlocal, off, rstart;
+
+  PetscFunctionBeginUser;
+  PetscCall(VecGetOwnershipRange(b, &rstart, NULL));
+  PetscCall(PffGridGetLocalBlocks(grid, &nlocal));
+  off = rstart;
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo info;
+    PetscCall(PffGridGetBlockInfo(grid, lb, &info));
+    if (info.ijk[0] == blk[0] && info.ijk[1] == blk[1] && info.ijk[2] == blk[2])
+      PetscCall(VecSetValue(b, off + c[0] + info.n * (c[1] + info.n * c[2]), v, ADD_VALUES));
+    off += info.n * info.n * info.n;
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Adaptive relaxation's activation through each side of a block: a dipole on the inner side of one face of block
+   (1, 1, 1) of a uniform closed box, with a small uniform background so that the threshold lies far below the
+   dipole's residual. The three runs with the dipole at the -x, -y and -z faces (its cells permuted cyclically with
+   the axes) are the same problem turned: the box, the coefficients and the red-black colours of cells and blocks
+   are invariant under a cyclic permutation of the axes, and the block red-black order gives the same updates in
+   any order. So they relax the same number of blocks, and so do the three runs at the + faces; a side whose border
+   maximum is lost (not computed, or filed under another side) leaves its neighbour inactive in one run only. (A
+   mirror image would not do: it swaps the colours.) Activation must also happen at all. */
+static PetscErrorCode TestActivationTurned(void)
+{
+  PffTestCtx  t;
+  Bubbly      c;
+  PffPressure ps;
+  Mat         A;
+  Vec         x, b;
+  PetscInt64  relax[2][3];
+
+  PetscFunctionBeginUser;
+  PetscCall(CreateCase(PETSC_COMM_WORLD, 32, 8, PETSC_FALSE, 0, &t, &c));
+  PetscCall(CreatePressure(&t, &c, 1e-8, &ps));
+  PetscCall(PffPressureMGGetLevel(ps, 0, &A, NULL));
+  PetscCall(MatCreateVecs(A, &x, &b));
+  for (PetscInt side = 0; side < 2; side++)
+    for (PetscInt a = 0; a < 3; a++) {
+      const PetscInt blk[3] = {1, 1, 1}, base[2][3] = {{side ? 7 : 0, 3, 5}, {side ? 6 : 1, 3, 5}};
+      PetscInt       in[3], out[3];
+      PffMGStats     st;
+      for (PetscInt d = 0; d < 3; d++) { /* axis d of the turned run is axis d - a of the first */
+        in[d]  = base[0][(d - a + 3) % 3];
+        out[d] = base[1][(d - a + 3) % 3];
+      }
+      PetscCall(VecSet(b, 1e-6));
+      PetscCall(AddAtCell(t.grid, b, blk, in, 1.0));
+      PetscCall(AddAtCell(t.grid, b, blk, out, -1.0));
+      PetscCall(VecAssemblyBegin(b));
+      PetscCall(VecAssemblyEnd(b));
+      PetscCall(VecSet(x, 0.0));
+      PetscCall(PffPressureMGResetStats(ps));
+      PetscCall(PffPressureMGSmooth(ps, 0, b, x, 0));
+      PetscCall(PffPressureMGGetStats(ps, &st));
+      relax[side][a] = st.blockRelaxations;
+    }
+  for (PetscInt side = 0; side < 2; side++) {
+    PetscCall(PetscPrintf(PETSC_COMM_WORLD,
+                          "activation through the %s faces: %" PetscInt64_FMT ", %" PetscInt64_FMT ", %" PetscInt64_FMT
+                          " block relaxations (x, y, z; %" PetscInt_FMT " blocks)\n",
+                          side ? "+" : "-", relax[side][0], relax[side][1], relax[side][2], t.nblocks));
+    PetscCheck(relax[side][0] == relax[side][1] && relax[side][1] == relax[side][2], PETSC_COMM_WORLD, PETSC_ERR_PLIB,
+               "activation through the %s faces differs by axis: %" PetscInt64_FMT ", %" PetscInt64_FMT
+               ", %" PetscInt64_FMT " block relaxations",
+               side ? "+" : "-", relax[side][0], relax[side][1], relax[side][2]);
+    PetscCheck(relax[side][0] > t.nblocks + 1, PETSC_COMM_WORLD, PETSC_ERR_PLIB,
+               "activation through the %s faces: no block was activated (%" PetscInt64_FMT " relaxations)",
+               side ? "+" : "-", relax[side][0]);
+  }
+  PetscCall(VecDestroy(&x));
+  PetscCall(VecDestroy(&b));
+  PetscCall(PffPressureDestroy(&ps));
+  PetscCall(PffGridDestroy(&t.grid));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 int main(int argc, char **argv)
 {
   PetscCall(PetscInitialize(&argc, &argv, NULL, NULL));
@@ -606,6 +688,7 @@ int main(int argc, char **argv)
   PetscCall(TestSolve(PETSC_TRUE, PETSC_TRUE));
   PetscCall(TestKCycle());
   PetscCall(TestAdaptive());
+  PetscCall(TestActivationTurned());
   PetscCall(TestNewCoefficients());
   PetscCall(PetscFinalize());
   return 0;
