@@ -85,7 +85,7 @@ static PetscErrorCode VCycle(PffMG *mg, PetscInt L, Vec b, Vec x)
   }
   PffMGLevel *c = &mg->lev[L + 1];
   PetscCall(VecSet(x, 0.0));
-  PetscCall(PffMGSmooth_Private(mg, L, b, x, PETSC_TRUE));
+  PetscCall(PffMGSmooth_Private(mg, L, b, x));
   if (lv->mf)
     PetscCall(PffMGStencilResidualRestrict_Private(mg, L, b, x, c->b));
   else {
@@ -102,7 +102,7 @@ static PetscErrorCode VCycle(PffMG *mg, PetscInt L, Vec b, Vec x)
     PetscCall(PffMGStencilProlongAdd_Private(mg, L, c->x, x));
   else
     PetscCall(MatMultAdd(lv->P, c->x, x, x));
-  PetscCall(PffMGSmooth_Private(mg, L, b, x, PETSC_FALSE));
+  PetscCall(PffMGSmooth_Private(mg, L, b, x));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -453,8 +453,8 @@ PetscErrorCode PffPressureMGSmooth(PffPressure ps, PetscInt L, Vec b, Vec x, Pet
   PetscCheck(L >= 0 && L + 1 < mg->nlevels, ps->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "pffmg: level %" PetscInt_FMT " has no smoother (%" PetscInt_FMT " levels)", L, mg->nlevels);
   if (sweeps > 0)
-    PetscCall(PffMGSmoothFixed_Private(mg, L, b, x, sweeps, PETSC_FALSE));
+    PetscCall(PffMGSmoothFixed_Private(mg, L, b, x, sweeps));
   else
-    PetscCall(PffMGSmooth_Private(mg, L, b, x, PETSC_FALSE));
+    PetscCall(PffMGSmooth_Private(mg, L, b, x));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

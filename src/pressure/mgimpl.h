@@ -17,10 +17,6 @@ PETSC_INTERN const char *const PffMGOperatorTypes[];
 /* Storage precision of the matrix-free coefficients (the solve vectors stay double). */
 typedef float PffMGReal;
 
-/* What a block visit may take as 0 without reading it: the first visits of a smoothing that starts from x = 0
-   (pre-smoothing in a cycle). In the first half-sweep every value a block reads is still 0 (its own x and the
-   other colour's); in the second its own x is. */
-typedef enum { PFF_MG_ZERO_NONE, PFF_MG_ZERO_BLOCK, PFF_MG_ZERO_AROUND } PffMGZero;
 #define MPIU_PFFMGREAL MPI_FLOAT
 
 /* The matrix-free operator of one block level (mgstencil.c), A = sum_f c_f g_f g_f^T + diag(dx):
@@ -158,8 +154,8 @@ static inline PetscInt PffMGCoarseRow_Private(PetscInt q, PetscInt nf, PetscInt 
 PETSC_INTERN PetscErrorCode PffMGBuildLevels_Private(PffMG *);
 PETSC_INTERN PetscErrorCode PffMGUpdateOperators_Private(PffMG *, Mat);
 PETSC_INTERN PetscErrorCode PffMGDestroyLevels_Private(PffMG *);
-PETSC_INTERN PetscErrorCode PffMGSmooth_Private(PffMG *, PetscInt, Vec, Vec, PetscBool);
-PETSC_INTERN PetscErrorCode PffMGSmoothFixed_Private(PffMG *, PetscInt, Vec, Vec, PetscInt, PetscBool);
+PETSC_INTERN PetscErrorCode PffMGSmooth_Private(PffMG *, PetscInt, Vec, Vec);
+PETSC_INTERN PetscErrorCode PffMGSmoothFixed_Private(PffMG *, PetscInt, Vec, Vec, PetscInt);
 PETSC_INTERN PetscErrorCode PffMGStencilBuild_Private(PffMG *, PetscInt);
 PETSC_INTERN PetscErrorCode PffMGStencilUpdate_Private(PffMG *, PetscInt);
 PETSC_INTERN PetscErrorCode PffMGStencilAssemble_Private(PffMG *, PetscInt, Mat *);
@@ -169,10 +165,10 @@ PETSC_INTERN PetscErrorCode PffMGStencilResidualRestrict_Private(PffMG *, PetscI
 PETSC_INTERN PetscErrorCode PffMGStencilProlongAdd_Private(PffMG *, PetscInt, Vec, Vec);
 PETSC_INTERN PetscErrorCode PffMGBuildProlongation_Private(PffMG *, PetscInt);
 PETSC_INTERN PetscBool      PffMGStencilBlockRhs_Private(const PffMGLevel *, PetscInt, const PetscScalar *,
-                                                         const PetscScalar *, const PetscScalar *, PetscBool, PetscScalar *);
+                                                         const PetscScalar *, const PetscScalar *, PetscScalar *);
 PETSC_INTERN PetscBool      PffMGStencilVisitFloat_Private(const PffMGLevel *, PetscInt);
 PETSC_INTERN PetscReal PffMGStencilVisitBlock_Private(const PffMGLevel *, PetscInt, const PetscScalar *, PetscScalar *,
-                                                      const PetscScalar *, PetscReal, PffMGZero, PetscReal *, float *,
-                                                      PetscInt, PetscBool, PetscReal *, PetscInt *);
+                                                      const PetscScalar *, PetscReal, PetscReal *, float *, PetscInt,
+                                                      PetscBool, PetscReal *, PetscInt *);
 PETSC_INTERN PetscReal PffMGStencilRelaxBlock_Private(const PffMGLevel *, PetscInt, const PetscScalar *, PetscBool,
                                                       PetscScalar *, PetscReal, PetscReal *);

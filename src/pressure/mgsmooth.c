@@ -81,23 +81,20 @@ static PetscReal FaceMax(const PetscReal *R, PetscInt n, PetscInt f)
    right-hand side bb once for the visit
    (PffMGStencilBlockRhs_Private); an AIJ level relaxes its permuted rows. first receives the first
    sweep's largest |delta| a_jj, the return value the last one's; k the number of sweeps; face (or NULL) the last
-   sweep's largest |delta| a_jj on each side of the block (R: scratch of the block's size). zero: the values known
-   to be 0 (PffMGZero); off the float visits only the side couplings are skipped (AIJ rows skip the ghosts when g
-   is NULL, and read the zero x). */
+   sweep's largest |delta| a_jj on each side of the block (R: scratch of the block's size). */
 static inline PetscReal VisitBlock(const PffMG *mg, const PffMGLevel *lv, PetscInt lb, const PetscScalar *b,
-                                   PetscScalar *x, const PetscScalar *g, PffMGZero zero, PetscScalar *bb, PetscReal *R,
-                                   PetscReal *face, PetscInt maxSweeps, PetscBool adaptive, PetscReal *first,
-                                   PetscInt *k)
+                                   PetscScalar *x, const PetscScalar *g, PetscScalar *bb, PetscReal *R, PetscReal *face,
+                                   PetscInt maxSweeps, PetscBool adaptive, PetscReal *first, PetscInt *k)
 {
   const PetscReal omega = mg->opt.omega;
   PetscReal       r     = 0;
   PetscBool       own   = PETSC_FALSE;
 
   if (lv->mf && PffMGStencilVisitFloat_Private(lv, lb))
-    return PffMGStencilVisitBlock_Private(lv, lb, b, x, g, omega, zero, face,
+    return PffMGStencilVisitBlock_Private(lv, lb, b, x, g, omega, face,
                                           mg->XF + mg->XFsize * (size_t)omp_get_thread_num(), maxSweeps, adaptive,
                                           first, k);
-  if (lv->mf) own = PffMGStencilBlockRhs_Private(lv, lb, b, x, g, (PetscBool)(zero != PFF_MG_ZERO_AROUND), bb);
+  if (lv->mf) own = PffMGStencilBlockRhs_Private(lv, lb, b, x, g, bb);
   if (!face) R = NULL;
   for (*k = 0; *k < maxSweeps;) {
     if (lv->mf)
@@ -139,9 +136,8 @@ static PetscErrorCode SmoothJacobi(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, Pets
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* sweeps full hybrid red-black sweeps over the relevant blocks of level L; zero: x = 0 on entry (its first
-   half-sweep reads nothing around its blocks and exchanges no ghosts, its second reads no block's own x). */
-PetscErrorCode PffMGSmoothFixed_Private(PffMG *mg, PetscInt L, Vec b, Vec x, PetscInt sweeps, PetscBool zero)
+/* sweeps full hybrid red-black sweeps over the relevant blocks of level L. */
+PetscErrorCode PffMGSmoothFixed_Private(PffMG *mg, PetscInt L, Vec b, Vec x, PetscInt sweeps)
 {
   PffMGLevel *lv = &mg->lev[L];
 
@@ -154,23 +150,22 @@ PetscErrorCode PffMGSmoothFixed_Private(PffMG *mg, PetscInt L, Vec b, Vec x, Pet
   }
   for (PetscInt s = 0; s < sweeps; s++)
     for (PetscInt c = 0; c < 2; c++) {
-      const PetscInt  q0 = c == 0 ? 0 : lv->ncolour[0], q1 = c == 0 ? lv->ncolour[0] : lv->ncolour[0] + lv->ncolour[1];
-      const PffMGZero z = zero && s == 0 ? (c == 0 ? PFF_MG_ZERO_AROUND : PFF_MG_ZERO_BLOCK) : PFF_MG_ZERO_NONE;
-      PetscScalar    *xa;
+      const PetscInt q0 = c == 0 ? 0 : lv->ncolour[0], q1 = c == 0 ? lv->ncolour[0] : lv->ncolour[0] + lv->ncolour[1];
+      PetscScalar   *xa;
       const PetscScalar *ba, *ga = NULL;
       PetscInt64         cells = 0;
-      if (z != PFF_MG_ZERO_AROUND) PetscCall(GhostsBegin(lv, x));
+      PetscCall(GhostsBegin(lv, x));
       PetscCall(VecGetArray(x, &xa));
       PetscCall(VecGetArrayRead(b, &ba));
       for (PetscInt pass = 0; pass < 2; pass++) {
-        if (pass == 1 && z != PFF_MG_ZERO_AROUND) PetscCall(GhostsEnd(lv, x, &ga));
+        if (pass == 1) PetscCall(GhostsEnd(lv, x, &ga));
 #pragma omp parallel for reduction(+ : cells) schedule(dynamic, 1) if (q1 - q0 >= 8 && lv->omp)
         for (PetscInt q = q0; q < q1; q++) {
           const PetscInt lb = lv->colourList[q];
           PetscReal      first;
           PetscInt       k;
           if (lv->remote[lb] != pass) continue;
-          (void)VisitBlock(mg, lv, lb, ba, xa, ga, z, mg->BB + mg->Rsize * (size_t)omp_get_thread_num(), NULL, NULL, 1,
+          (void)VisitBlock(mg, lv, lb, ba, xa, ga, mg->BB + mg->Rsize * (size_t)omp_get_thread_num(), NULL, NULL, 1,
                            PETSC_FALSE, &first, &k);
           cells += lv->start[lb + 1] - lv->start[lb];
         }
@@ -212,22 +207,19 @@ static PetscErrorCode Threshold(PffMG *mg, const PetscReal *r0, PetscInt n, Pets
 /* One adaptive step over the active list, one block colour at a time: relax each block (repeated
    block-local sweeps), keep its final effective residual in bres and its border maxima in face;
    r0 (or NULL) receives the first sweep's maximum per list entry. The blocks of one colour share no
-   face, so they are relaxed in parallel, each thread with its own scratch R (n0^3 per thread). zero: x = 0 on entry
-   and the list holds each block once (PffMGSmoothFixed_Private). */
-static PetscErrorCode RelaxActive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, PetscInt nactive, PetscReal *r0,
-                                  PetscBool zero)
+   face, so they are relaxed in parallel, each thread with its own scratch R (n0^3 per thread). */
+static PetscErrorCode RelaxActive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, PetscInt nactive, PetscReal *r0)
 {
   PetscFunctionBeginUser;
   for (PetscInt c = 0; c < 2; c++) {
-    const PffMGZero    z = zero ? (c == 0 ? PFF_MG_ZERO_AROUND : PFF_MG_ZERO_BLOCK) : PFF_MG_ZERO_NONE;
     PetscScalar       *xa;
     const PetscScalar *ba, *ga = NULL;
-    if (z != PFF_MG_ZERO_AROUND) PetscCall(GhostsBegin(lv, x));
+    PetscCall(GhostsBegin(lv, x));
     PetscCall(VecGetArray(x, &xa));
     PetscCall(VecGetArrayRead(b, &ba));
     for (PetscInt pass = 0; pass < 2; pass++) {
       PetscInt64 relax = 0, cells = 0;
-      if (pass == 1 && z != PFF_MG_ZERO_AROUND) PetscCall(GhostsEnd(lv, x, &ga));
+      if (pass == 1) PetscCall(GhostsEnd(lv, x, &ga));
 #pragma omp parallel for schedule(dynamic, 1) reduction(+ : relax, cells) if (nactive >= 8 && lv->omp)
       for (PetscInt q = 0; q < nactive; q++) {
         const PetscInt lb = mg->list[q];
@@ -236,7 +228,7 @@ static PetscErrorCode RelaxActive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, Petsc
         PetscReal      *R = mg->R + t, first = 0;
         PetscInt        k;
         const PetscReal r =
-            VisitBlock(mg, lv, lb, ba, xa, ga, z, mg->BB + t, R, mg->face + 6 * lb,
+            VisitBlock(mg, lv, lb, ba, xa, ga, mg->BB + t, R, mg->face + 6 * lb,
                        mg->opt.blockSweeps ? mg->opt.blockSweepsMax : 1, mg->opt.blockSweeps, &first, &k);
         if (r0) r0[q] = first;
         mg->bres[lb] = r;
@@ -253,7 +245,7 @@ static PetscErrorCode RelaxActive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, Petsc
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-static PetscErrorCode SmoothAdaptive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, PetscBool zero)
+static PetscErrorCode SmoothAdaptive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x)
 {
   PetscReal      theta = 0, *r0 = mg->r0;
   PetscMPIInt    size;
@@ -271,7 +263,7 @@ static PetscErrorCode SmoothAdaptive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, Pe
     PetscCall(PetscArrayzero(next, mg->nlocal));
     PetscCallMPI(MPI_Allreduce(&nactive, &nglobal, 1, MPIU_INT, MPI_SUM, mg->comm));
     if (nglobal == 0) break;
-    PetscCall(RelaxActive(mg, lv, b, x, nactive, it == 0 ? r0 : NULL, (PetscBool)(zero && it == 0)));
+    PetscCall(RelaxActive(mg, lv, b, x, nactive, it == 0 ? r0 : NULL));
     if (it == 0) PetscCall(Threshold(mg, r0, nactive, &theta));
     for (PetscInt q = 0; q < nactive; q++) {
       const PetscInt lb = mg->list[q];
@@ -299,18 +291,18 @@ static PetscErrorCode SmoothAdaptive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, Pe
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Pre- or post-smoothing of level L as configured (adaptive or fixed sweeps); zero: x = 0 on entry. */
-PetscErrorCode PffMGSmooth_Private(PffMG *mg, PetscInt L, Vec b, Vec x, PetscBool zero)
+/* Pre- or post-smoothing of level L as configured (adaptive or fixed sweeps). */
+PetscErrorCode PffMGSmooth_Private(PffMG *mg, PetscInt L, Vec b, Vec x)
 {
   PffMGLevel *lv = &mg->lev[L];
 
   PetscFunctionBeginUser;
   if (!mg->opt.adaptive || mg->opt.smoother == PFF_MG_SMOOTHER_JACOBI || lv->uniform) {
-    PetscCall(PffMGSmoothFixed_Private(mg, L, b, x, mg->opt.sweeps, zero));
+    PetscCall(PffMGSmoothFixed_Private(mg, L, b, x, mg->opt.sweeps));
     PetscFunctionReturn(PETSC_SUCCESS);
   }
   PetscCall(PetscLogEventBegin(PFF_MGSmooth, 0, 0, 0, 0));
-  PetscCall(SmoothAdaptive(mg, lv, b, x, zero));
+  PetscCall(SmoothAdaptive(mg, lv, b, x));
   PetscCall(PetscLogEventEnd(PFF_MGSmooth, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -580,34 +580,22 @@ static inline PetscScalar RowInBlock(const PffMGStencil *st, PetscInt nr, PetscI
   return Diagonal(st, nr, r, i, j, k, n) * x[r] + off;
 }
 
-/* Sum of the side couplings of row r, val x_col, over the columns outside [lo, hi) (an empty range: all). */
-static inline PetscScalar SideSum(const PffMGStencil *st, PetscInt nr, PetscInt r, const PetscScalar *x,
-                                  const PetscScalar *g, PetscInt lo, PetscInt hi)
-{
-  PetscScalar s = 0;
-  for (PetscInt e = st->rowptr[r]; e < st->rowptr[r + 1]; e++) {
-    const PetscInt c = st->col[e];
-    if (c < lo || c >= hi) s += st->val[e] * (c < nr ? x[c] : g[c - nr]);
-  }
-  return s;
-}
-
-/* SideSum over all columns for a row of block lb, whose side entries end at e1 (the block's rows with side terms
-   are one run of the CSR: rows without any have none); local: the block has no neighbour on another rank, so every
-   column is an owned row (lv->remote), and the loop has no branch. The neighbours' x across the block's x sides lie a
-   row apart, a cache line each and mostly out of cache: they are prefetched a fixed distance ahead (10 % off a float
-   visit, docs/pressure.md). */
+/* Sum of the side couplings of row r of block lb, val x_col, over the columns outside [lo, hi) (an empty range: all);
+   e1 ends the block's side entries (its rows with side terms are one run of the CSR: rows without any have none).
+   local: the block has no neighbour on another rank (lv->remote), so every column is an owned row; the callers' loops
+   are unswitched on it. The neighbours' x across the block's x sides lie a row apart, a cache line each and mostly
+   out of cache: they are prefetched a fixed distance ahead (10 % off a float visit, docs/pressure.md). */
 #define PFF_MG_SIDE_PREFETCH 24 /* side entries ahead */
-static inline __attribute__((always_inline)) PetscScalar SideSumAhead(const PffMGStencil *st, PetscInt nr, PetscInt r,
-                                                                      const PetscScalar *x, const PetscScalar *g,
-                                                                      PetscInt e1, const PetscBool local)
+static inline __attribute__((always_inline)) PetscScalar SideSum(const PffMGStencil *st, PetscInt nr, PetscInt r,
+                                                                 const PetscScalar *x, const PetscScalar *g,
+                                                                 PetscInt lo, PetscInt hi, PetscInt e1, PetscBool local)
 {
   PetscScalar s = 0;
   for (PetscInt e = st->rowptr[r]; e < st->rowptr[r + 1]; e++) {
     if (e + PFF_MG_SIDE_PREFETCH < e1 && (local || st->col[e + PFF_MG_SIDE_PREFETCH] < nr))
       __builtin_prefetch(x + st->col[e + PFF_MG_SIDE_PREFETCH]);
     const PetscInt c = st->col[e];
-    s += st->val[e] * (local || c < nr ? x[c] : g[c - nr]);
+    if (c < lo || c >= hi) s += st->val[e] * (local || c < nr ? x[c] : g[c - nr]);
   }
   return s;
 }
@@ -618,18 +606,20 @@ static inline __attribute__((always_inline)) PetscScalar SideSumAhead(const PffM
    for all the sweeps of the visit, and the sweeps run one uniform loop. The side terms between cells
    of the block itself (fine cells under one coarse face above the block) change within a sweep; they
    are left out here and added row by row (OwnSums); st->own[lb] says whether the block has any (made at build),
-   and is returned. sides = PETSC_FALSE: the cells around are known to be 0 (PffMGZero), bb = b. */
+   and is returned. */
 PetscBool PffMGStencilBlockRhs_Private(const PffMGLevel *lv, PetscInt lb, const PetscScalar *b, const PetscScalar *x,
-                                       const PetscScalar *g, PetscBool sides, PetscScalar *bb)
+                                       const PetscScalar *g, PetscScalar *bb)
 {
   const PffMGStencil *st = lv->st;
   const PetscInt      n = lv->n[lb], r0 = lv->start[lb], nc = n * n * n;
 
+  const PetscInt  e1    = st->rowptr[r0 + nc];
+  const PetscBool local = (PetscBool)!lv->remote[lb];
+
   for (PetscInt i = 0; i < nc; i++) bb[i] = b[r0 + i];
-  if (!sides) return st->own[lb];
   for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++) { /* only the rows that have side terms */
     const PetscInt r = st->side[q];
-    bb[r - r0] -= SideSum(st, lv->nrows, r, x, g, r0, r0 + nc);
+    bb[r - r0] -= SideSum(st, lv->nrows, r, x, g, r0, r0 + nc, e1, local);
   }
   return st->own[lb];
 }
@@ -799,10 +789,9 @@ PetscBool PffMGStencilVisitFloat_Private(const PffMGLevel *lv, PetscInt lb)
 }
 
 /* bs = b - (the side couplings of the cells of local block lb to other blocks), block-local, in float: as
-   PffMGStencilBlockRhs_Private for a block without in-block side terms, rounded once per cell. sides = PETSC_FALSE:
-   every cell the block reads around it is known to be 0 (see PffMGZero), so bs = b. */
+   PffMGStencilBlockRhs_Private for a block without in-block side terms, rounded once per cell. */
 static void BlockRhsFloat(const PffMGLevel *lv, PetscInt lb, const PetscScalar *b, const PetscScalar *x,
-                          const PetscScalar *g, PetscBool sides, float *restrict bs)
+                          const PetscScalar *g, float *restrict bs)
 {
   const PffMGStencil *st = lv->st;
   const PetscInt      r0 = lv->start[lb], nc = lv->n[lb] * lv->n[lb] * lv->n[lb];
@@ -818,18 +807,12 @@ static void BlockRhsFloat(const PffMGLevel *lv, PetscInt lb, const PetscScalar *
     __builtin_prefetch(st->idf + r0 + i0, 0, 2);
     for (PetscInt i = i0; i < PetscMin(i0 + line, nc); i++) bs[i] = (float)b[r0 + i];
   }
-  if (!sides) return;
-  const PetscInt e1 = st->rowptr[r0 + nc];
-  if (!lv->remote[lb])
-    for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++) {
-      const PetscInt r = st->side[q];
-      bs[r - r0]       = (float)(b[r] - SideSumAhead(st, nr, r, x, g, e1, PETSC_TRUE));
-    }
-  else
-    for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++) {
-      const PetscInt r = st->side[q];
-      bs[r - r0]       = (float)(b[r] - SideSumAhead(st, nr, r, x, g, e1, PETSC_FALSE));
-    }
+  const PetscInt  e1    = st->rowptr[r0 + nc];
+  const PetscBool local = (PetscBool)!lv->remote[lb];
+  for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++) {
+    const PetscInt r = st->side[q];
+    bs[r - r0]       = (float)(b[r] - SideSum(st, nr, r, x, g, 0, 0, e1, local));
+  }
 }
 
 /* One row group of SweepFloat: the candidate values nx and |omega s| ev of its w cells, the colour's only (mo: omega
@@ -869,8 +852,7 @@ static inline PetscInt OddFirst(PetscInt q, PetscInt m)
    cells of the colour only (the others add 0, so they keep their value bit for bit), as RelaxRow does. The group
    goes through a buffer and back with whole-vector stores: a masked store into x stalls the next loads of it (no
    store forwarding from masked stores). The faces to cells outside the block have weight 0 (their couplings are in
-   bs), so a group reads the pads or its block's other cells there, never a value it uses; the groups inside the
-   block's y and z sides need no weights but the x ones (RowFloat with constant weights). The cells of a colour
+   bs), so a group reads the pads or its block's other cells there, never a value it uses. The cells of a colour
    read only the other colour's, so the order of the groups does not change the result: the odd groups (and
    planes) go first, so that consecutive groups are not neighbours (in plain order a group's loads of its -y
    neighbour wait for the store of the group just computed, a chain through the whole sweep at the latency of its
@@ -908,12 +890,8 @@ static inline __attribute__((always_inline)) PetscReal SweepFloat(const PffMGSte
         const PetscInt g = OddFirst(gg, ng), o = n * (G * g + n * k);
         const float *restrict m = mo[(G * g + k + c) & 1];
         float nx[PFF_GRID_BLOCK_SIZE_MAX], ev[PFF_GRID_BLOCK_SIZE_MAX];
-        if (g > 0 && g < ng - 1 && k > 0 && k < n - 1)
-          RowFloat(w, n, cx + o, cy + o, cz + o, ad + o, id + o, bs + o, xs + o, lo, hi, one, one, m, 1, 1, n2, n2, nx,
-                   ev, mx);
-        else
-          RowFloat(w, n, cx + o, cy + o, cz + o, ad + o, id + o, bs + o, xs + o, lo, hi, g > 0 ? one : ym0,
-                   g < ng - 1 ? one : yp1, m, k > 0, k<n - 1, k> 0 ? n2 : 0, k < n - 1 ? n2 : 0, nx, ev, mx);
+        RowFloat(w, n, cx + o, cy + o, cz + o, ad + o, id + o, bs + o, xs + o, lo, hi, g > 0 ? one : ym0,
+                 g < ng - 1 ? one : yp1, m, k > 0, k<n - 1, k> 0 ? n2 : 0, k < n - 1 ? n2 : 0, nx, ev, mx);
         /* one whole-vector copy: a loop here was peeled for the alignment of xs, and its narrow loads of nx right
            after nx's vector store could not be forwarded (a third of the sweep's time stalled there) */
         memcpy(xs + o, nx, (size_t)w * sizeof(float));
@@ -964,25 +942,20 @@ static PetscReal SweepFloatN(const PffMGStencil *st, PetscInt nr, PetscInt r0, P
    them (one, or in adaptive relaxation until the update falls by 1/3, at most maxSweeps), and x comes back once.
    The visit is the smoother's inner loop: in float a row of 16 cells is one vector and no lane permutes are
    needed, and the block's working set halves. The smoother is a preconditioner's, so the float rounding of x
-   (relative 6e-8 per visit) is far below what it reduces per cycle; the outer FCG works in double. zero says which
-   values are known to be 0 and are not read (the first visits from a zero guess). first receives the first
-   sweep's largest |omega s|, the return value the last one's, face (or NULL) the last one's per block side, k the
-   sweeps. */
+   (relative 6e-8 per visit) is far below what it reduces per cycle; the outer FCG works in double. first receives
+   the first sweep's largest |omega s|, the return value the last one's, face (or NULL) the last one's per block
+   side, k the sweeps. */
 PetscReal PffMGStencilVisitBlock_Private(const PffMGLevel *lv, PetscInt lb, const PetscScalar *b, PetscScalar *x,
-                                         const PetscScalar *g, PetscReal omega, PffMGZero zero, PetscReal *face,
-                                         float *scratch, PetscInt maxSweeps, PetscBool adaptive, PetscReal *first,
-                                         PetscInt *k)
+                                         const PetscScalar *g, PetscReal omega, PetscReal *face, float *scratch,
+                                         PetscInt maxSweeps, PetscBool adaptive, PetscReal *first, PetscInt *k)
 {
   const PetscInt n = lv->n[lb], r0 = lv->start[lb], nc = n * n * n;
   float *restrict xs = scratch + n, *restrict bs = scratch + nc + 2 * n; /* pads of n floats around xs */
   PetscReal r = 0;
 
-  BlockRhsFloat(lv, lb, b, x, g, (PetscBool)(zero != PFF_MG_ZERO_AROUND), bs);
+  BlockRhsFloat(lv, lb, b, x, g, bs);
   for (PetscInt i = 0; i < n; i++) xs[i - n] = xs[nc + i] = 0;
-  if (zero == PFF_MG_ZERO_NONE)
-    for (PetscInt i = 0; i < nc; i++) xs[i] = (float)x[r0 + i];
-  else
-    for (PetscInt i = 0; i < nc; i++) xs[i] = 0;
+  for (PetscInt i = 0; i < nc; i++) xs[i] = (float)x[r0 + i];
   for (*k = 0; *k < maxSweeps;) {
     r = SweepFloatN(lv->st, lv->nrows, r0, n, bs, xs, (float)omega, face);
     if ((*k)++ == 0) *first = r;
@@ -1046,13 +1019,10 @@ static inline void BlockProduct(const PffMGLevel *lv, PetscInt lb, const PetscSc
   RowEnds(n, &e);
   /* the side couplings first, from the block's rows that have any; the rows add their in-block part */
   for (PetscInt i = 0; i < n * n * n; i++) yb[i] = 0;
-  const PetscInt e1 = st->rowptr[r0 + n * n * n];
-  if (!lv->remote[lb])
-    for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++)
-      yb[st->side[q] - r0] = SideSumAhead(st, nr, st->side[q], x, g, e1, PETSC_TRUE);
-  else
-    for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++)
-      yb[st->side[q] - r0] = SideSumAhead(st, nr, st->side[q], x, g, e1, PETSC_FALSE);
+  const PetscInt  e1    = st->rowptr[r0 + n * n * n];
+  const PetscBool local = (PetscBool)!lv->remote[lb];
+  for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++)
+    yb[st->side[q] - r0] = SideSum(st, nr, st->side[q], x, g, 0, 0, e1, local);
   for (PetscInt k = 0; k < n; k++)
     for (PetscInt j = 0; j < n; j++) {
       const PetscInt     base  = r0 + n * (j + n * k);

@@ -77,7 +77,8 @@ static PetscErrorCode PffShellDestroy(void *ctx)
 /* y = the sum over the faces inside the blocks, cell by cell: each cell gathers c_f (x_c - x_nb) from its up to six
    in-block faces (every interior face is computed twice, once from each side), so that the rows vectorise. The face
    by face form (flux added to the upper cell, subtracted from the lower one) chained every cell of a row to the store
-   of the one before and ran at the latency of that chain, about three times slower. A face to a cell outside the
+   of the one before and ran at the latency of that chain (the product 15 % faster gathered, test_pressure_shell
+   -bench in docs/benchmarks.md). A face to a cell outside the
    block takes offset 0 in y and z (x_c - x_c = 0) and weight 0 in x; the first and last rows of the rank's cells,
    whose ends must not read past x, take the branching path. */
 static inline void PffShellInterior(const PffShell *s, const PetscScalar *restrict x, PetscScalar *restrict y)
