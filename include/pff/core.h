@@ -17,6 +17,10 @@ PETSC_EXTERN PetscLogEvent PFF_GridSetUp, PFF_GridAdapt, PFF_GridRefine, PFF_Gri
     PFF_G2P, PFF_Advect, PFF_PressSetUp, PFF_PressAssemble, PFF_PressSolve, PFF_PhaseField, PFF_Forces, PFF_FlowExtrap,
     PFF_CkptWrite, PFF_CkptRead, PFF_MGSetUp, PFF_MGApply, PFF_MGSmooth, PFF_MGCoarse, PFF_FlowRefBodies, PFF_TallBuild,
     PFF_TallSizing, PFF_FlowBandAdvect, PFF_FlowBandSeed, PFF_FlowBandDist;
+/* pffmg's work on each multigrid level (smoothing and the transfers to and from the next level, not the levels
+   below): MGLevel0 .. MGLevel6, and MGLevel7+ for all deeper levels together. */
+#define PFF_MG_LOG_LEVELS 8
+PETSC_EXTERN PetscLogEvent PFF_MGLevel[PFF_MG_LOG_LEVELS];
 
 /* Registers the class id and every log event. Not collective; idempotent. */
 PETSC_EXTERN PetscErrorCode PffInitializePackage(void);

@@ -9,6 +9,7 @@ PetscLogEvent PFF_GridSetUp, PFF_GridAdapt, PFF_GridRefine, PFF_GridPartition, P
     PFF_Advect, PFF_PressSetUp, PFF_PressAssemble, PFF_PressSolve, PFF_PhaseField, PFF_Forces, PFF_FlowExtrap,
     PFF_CkptWrite, PFF_CkptRead, PFF_MGSetUp, PFF_MGApply, PFF_MGSmooth, PFF_MGCoarse, PFF_FlowRefBodies, PFF_TallBuild,
     PFF_TallSizing, PFF_FlowBandAdvect, PFF_FlowBandSeed, PFF_FlowBandDist;
+PetscLogEvent PFF_MGLevel[PFF_MG_LOG_LEVELS];
 
 static PetscBool PffPackageInitialized = PETSC_FALSE;
 
@@ -58,5 +59,10 @@ PetscErrorCode PffInitializePackage(void)
   PetscCall(PetscLogEventRegister("MGApply", PFF_CLASSID, &PFF_MGApply));
   PetscCall(PetscLogEventRegister("MGSmooth", PFF_CLASSID, &PFF_MGSmooth));
   PetscCall(PetscLogEventRegister("MGCoarse", PFF_CLASSID, &PFF_MGCoarse));
+  for (int L = 0; L < PFF_MG_LOG_LEVELS; L++) {
+    char name[16];
+    PetscCall(PetscSNPrintf(name, sizeof(name), "MGLevel%d%s", L, L == PFF_MG_LOG_LEVELS - 1 ? "+" : ""));
+    PetscCall(PetscLogEventRegister(name, PFF_CLASSID, &PFF_MGLevel[L]));
+  }
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -83,7 +83,10 @@ static PetscErrorCode VCycle(PffMG *mg, PetscInt L, Vec b, Vec x)
     PetscCall(PetscLogEventEnd(PFF_MGCoarse, 0, 0, 0, 0));
     PetscFunctionReturn(PETSC_SUCCESS);
   }
-  PffMGLevel *c = &mg->lev[L + 1];
+  PffMGLevel         *c  = &mg->lev[L + 1];
+  const PetscLogEvent ev = PFF_MGLevel[PetscMin(L, PFF_MG_LOG_LEVELS - 1)];
+  /* the level's event leaves out the coarse correction, so that each level's own time shows */
+  PetscCall(PetscLogEventBegin(ev, 0, 0, 0, 0));
   PetscCall(VecSet(x, 0.0));
   PetscCall(PffMGSmooth_Private(mg, L, b, x));
   if (lv->mf)
@@ -93,16 +96,19 @@ static PetscErrorCode VCycle(PffMG *mg, PetscInt L, Vec b, Vec x)
     PetscCall(VecAYPX(lv->r, -1.0, b));
     PetscCall(MatMultTranspose(lv->P, lv->r, c->b));
   }
+  PetscCall(PetscLogEventEnd(ev, 0, 0, 0, 0));
   if (c->kcycle)
     PetscCall(KSPSolve(c->kcycle, c->b, c->x));
   else
     PetscCall(VCycle(mg, L + 1, c->b, c->x));
+  PetscCall(PetscLogEventBegin(ev, 0, 0, 0, 0));
   if (mg->opt.correction != 1.0) PetscCall(VecScale(c->x, mg->opt.correction));
   if (lv->mf)
     PetscCall(PffMGStencilProlongAdd_Private(mg, L, c->x, x));
   else
     PetscCall(MatMultAdd(lv->P, c->x, x, x));
   PetscCall(PffMGSmooth_Private(mg, L, b, x));
+  PetscCall(PetscLogEventEnd(ev, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -119,6 +119,45 @@ static PetscErrorCode TermsAdd(PffMGTerms *T, PetscInt row, PetscInt64 col, Pets
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* The sides of each block whose couplings a float visit adds face by face (st->fnb: an owned neighbour of the same
+   size, one coupling -c x per cell), and the list of the remaining side entries (coarse-fine, another rank's
+   neighbour), which go entry by entry. */
+static PetscErrorCode SplitSides(const PffMG *mg, const PffMGLevel *lv, PffMGStencil *st)
+{
+  PetscInt ns = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc2(6 * lv->nblk, &st->fnb, lv->nblk + 1, &st->sb));
+  for (PetscInt lb = 0; lb < lv->nblk; lb++)
+    for (PetscInt s = 0; s < 6; s++) {
+      const PetscInt nb   = mg->nbr[6 * lb + s];
+      st->fnb[6 * lb + s] = nb >= 0 && nb != lb && lv->n[nb] == lv->n[lb] ? nb : -1;
+    }
+  for (PetscInt pass = 0; pass < 2; pass++) {
+    ns = 0;
+    for (PetscInt lb = 0; lb < lv->nblk; lb++) {
+      st->sb[lb] = ns;
+      for (PetscInt r = lv->start[lb]; r < lv->start[lb + 1]; r++)
+        for (PetscInt e = st->rowptr[r]; e < st->rowptr[r + 1]; e++) {
+          PetscBool fast = PETSC_FALSE;
+          for (PetscInt s = 0; s < 6; s++) {
+            const PetscInt nb = st->fnb[6 * lb + s];
+            if (nb >= 0 && st->col[e] >= lv->start[nb] && st->col[e] < lv->start[nb + 1]) fast = PETSC_TRUE;
+          }
+          if (fast) continue;
+          if (pass) {
+            st->srow[ns] = r;
+            st->sent[ns] = e;
+          }
+          ns++;
+        }
+    }
+    st->sb[lv->nblk] = ns;
+    if (!pass) PetscCall(PetscMalloc2(ns, &st->srow, ns, &st->sent));
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /* Handle of cell p of raster block gid (local block lb, or -1) with n cells per axis. */
 static inline PetscInt64 CellHandle(const PffMGLevel *lv, const PffMGNumbering *t, PetscInt gid, PetscInt lb,
                                     const PetscInt p[3], PetscInt n)
@@ -357,6 +396,7 @@ PetscErrorCode PffMGStencilBuild_Private(PffMG *mg, PetscInt L)
     }
     st->bside[lv->nblk] = nside;
   }
+  PetscCall(SplitSides(mg, lv, st));
   PetscCall(PetscFree(gcell));
   PetscCall(PetscFree(gface));
   PetscCall(NumberingDestroy(&t));
@@ -387,6 +427,8 @@ PetscErrorCode PffMGStencilDestroy_Private(PffMGLevel *lv)
   if (!st) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PetscFree(st->rowptr));
   PetscCall(PetscFree3(st->side, st->bside, st->own));
+  PetscCall(PetscFree2(st->fnb, st->sb));
+  PetscCall(PetscFree2(st->srow, st->sent));
   PetscCall(PetscFree4(st->col, st->val, st->ref, st->fac));
   PetscCall(PetscFree3(st->drow, st->dref, st->dfac));
   PetscCall(PetscFree(st->ghostRow));
@@ -582,9 +624,10 @@ static inline PetscScalar RowInBlock(const PffMGStencil *st, PetscInt nr, PetscI
 
 /* Sum of the side couplings of row r of block lb, val x_col, over the columns outside [lo, hi) (an empty range: all);
    e1 ends the block's side entries (its rows with side terms are one run of the CSR: rows without any have none).
-   local: the block has no neighbour on another rank (lv->remote), so every column is an owned row; the callers' loops
-   are unswitched on it. The neighbours' x across the block's x sides lie a row apart, a cache line each and mostly
-   out of cache: they are prefetched a fixed distance ahead (10 % off a float visit, docs/pressure.md). */
+   local: the block has no neighbour on another rank (lv->remote), so every column is an owned row; the caller's loop
+   is unswitched on it. The neighbours' x across the block's x sides lie a row apart, a cache line each and mostly
+   out of cache: they are prefetched a fixed distance ahead (10 % off a float visit when the float visits summed
+   their sides here; they now add the faces to neighbours of their own size a plane at a time, FaceSums). */
 #define PFF_MG_SIDE_PREFETCH 24 /* side entries ahead */
 static inline __attribute__((always_inline)) PetscScalar SideSum(const PffMGStencil *st, PetscInt nr, PetscInt r,
                                                                  const PetscScalar *x, const PetscScalar *g,
@@ -788,8 +831,34 @@ PetscBool PffMGStencilVisitFloat_Private(const PffMGLevel *lv, PetscInt lb)
   return (PetscBool)(!lv->st->own[lb] && lv->n[lb] >= 4);
 }
 
+/* The couplings -c x_nb of the cells of local block lb through side s to the owned neighbour of the same size
+   st->fnb (the entries -c of the side list, a plane at a time instead of entry by entry), subtracted from the
+   float right-hand side bs of a visit, or else added to the double product yd: the face's c is the lower cell's,
+   this block's on a lower side and the neighbour's on an upper one. */
+static void FaceSums(const PffMGLevel *lv, PetscInt lb, PetscInt s, const PetscScalar *x, float *restrict bs,
+                     PetscScalar *restrict yd)
+{
+  const PffMGStencil *st = lv->st;
+  const PetscInt      n = lv->n[lb], d = s / 2, upper = s % 2, nb = st->fnb[6 * lb + s];
+  const PetscInt      stride[3] = {1, n, n * n};
+  const PetscInt      si = d == 0 ? n : 1, so = d == 2 ? n : n * n; /* inner and outer strides in the plane */
+  const PetscInt      own = upper ? (n - 1) * stride[d] : 0, far = upper ? 0 : (n - 1) * stride[d];
+  const PetscScalar *restrict xn = x + lv->start[nb] + far;
+  const float *restrict c        = st->cf + d * lv->nrows + (upper ? lv->start[nb] + far : lv->start[lb] + own);
+
+  if (bs) {
+    float *restrict o = bs + own;
+    for (PetscInt v = 0; v < n; v++)
+      for (PetscInt u = 0; u < n; u++) o[si * u + so * v] += c[si * u + so * v] * (float)xn[si * u + so * v];
+  } else {
+    PetscScalar *restrict o = yd + own;
+    for (PetscInt v = 0; v < n; v++)
+      for (PetscInt u = 0; u < n; u++) o[si * u + so * v] -= c[si * u + so * v] * xn[si * u + so * v];
+  }
+}
+
 /* bs = b - (the side couplings of the cells of local block lb to other blocks), block-local, in float: as
-   PffMGStencilBlockRhs_Private for a block without in-block side terms, rounded once per cell. */
+   PffMGStencilBlockRhs_Private for a block without in-block side terms (b rounded once, then each side term added). */
 static void BlockRhsFloat(const PffMGLevel *lv, PetscInt lb, const PetscScalar *b, const PetscScalar *x,
                           const PetscScalar *g, float *restrict bs)
 {
@@ -807,11 +876,11 @@ static void BlockRhsFloat(const PffMGLevel *lv, PetscInt lb, const PetscScalar *
     __builtin_prefetch(st->idf + r0 + i0, 0, 2);
     for (PetscInt i = i0; i < PetscMin(i0 + line, nc); i++) bs[i] = (float)b[r0 + i];
   }
-  const PetscInt  e1    = st->rowptr[r0 + nc];
-  const PetscBool local = (PetscBool)!lv->remote[lb];
-  for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++) {
-    const PetscInt r = st->side[q];
-    bs[r - r0]       = (float)(b[r] - SideSum(st, nr, r, x, g, 0, 0, e1, local));
+  for (PetscInt s = 0; s < 6; s++)
+    if (st->fnb[6 * lb + s] >= 0) FaceSums(lv, lb, s, x, bs, NULL);
+  for (PetscInt q = st->sb[lb]; q < st->sb[lb + 1]; q++) {
+    const PetscInt e = st->sent[q], c = st->col[e];
+    bs[st->srow[q] - r0] -= (float)(st->val[e] * (c < nr ? x[c] : g[c - nr]));
   }
 }
 
@@ -1017,12 +1086,15 @@ static inline void BlockProduct(const PffMGLevel *lv, PetscInt lb, const PetscSc
   PffMGRowEnds e;
 
   RowEnds(n, &e);
-  /* the side couplings first, from the block's rows that have any; the rows add their in-block part */
+  /* the side couplings first, face by face to the neighbours of the same size and entry by entry to the others;
+     the rows add their in-block part */
   for (PetscInt i = 0; i < n * n * n; i++) yb[i] = 0;
-  const PetscInt  e1    = st->rowptr[r0 + n * n * n];
-  const PetscBool local = (PetscBool)!lv->remote[lb];
-  for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++)
-    yb[st->side[q] - r0] = SideSum(st, nr, st->side[q], x, g, 0, 0, e1, local);
+  for (PetscInt s = 0; s < 6; s++)
+    if (st->fnb[6 * lb + s] >= 0) FaceSums(lv, lb, s, x, NULL, yb);
+  for (PetscInt q = st->sb[lb]; q < st->sb[lb + 1]; q++) {
+    const PetscInt e = st->sent[q], c = st->col[e];
+    yb[st->srow[q] - r0] += st->val[e] * (c < nr ? x[c] : g[c - nr]);
+  }
   for (PetscInt k = 0; k < n; k++)
     for (PetscInt j = 0; j < n; j++) {
       const PetscInt     base  = r0 + n * (j + n * k);
