@@ -11,7 +11,8 @@
    lower cell is the cell minus the raster stride 1, n or n^2, and their coefficients sit in one
    contiguous array per axis; so a product reads 3 coefficients per cell against the 7 values and 7
    column indices per row of the AIJ matrix. The faces on block sides (same level, coarser, finer) go
-   through an explicit list of upper and lower cells, and take their coefficient from the same arrays.
+   through an explicit list of upper and lower cells, and take their coefficient from the same arrays; the product
+   takes the sides between two owned blocks of the same size a plane at a time instead (PffShellPlanes).
 
    The shell owns the coefficient arrays c_f of every owned face (cf[d * ncells + c], the lower d-face
    of cell c, 0 when closed): the pressure module writes them once per step (operator.c), pffmg reads
@@ -40,7 +41,10 @@ typedef struct {
   /* per list, over its faces i: the face's index into cf (d * ncells + upper cell), the local upper
      cell, lower cells lo[off[i] .. off[i+1]-1] (1 or 4 of them, weight 1/count) as local cell numbers,
      ghosts as ncells + ghost index */
-  PetscInt  *row[PFF_SHELL_NLISTS], *up[PFF_SHELL_NLISTS], *off[PFF_SHELL_NLISTS], *lo[PFF_SHELL_NLISTS];
+  PetscInt *row[PFF_SHELL_NLISTS], *up[PFF_SHELL_NLISTS], *off[PFF_SHELL_NLISTS], *lo[PFF_SHELL_NLISTS];
+  PetscInt *pnb; /* [3 nblocks] the owned block of the same size below each block's lower d-side whose n^2 faces
+                    the product takes a plane at a time (ShellPlanes), or -1 */
+  PetscInt   nmult, *mult;     /* the other faces of the local list, the ones the product takes face by face */
   PetscInt   ndiag, *diagCell; /* cells with a diagonal-only term: Dirichlet walls, or the unit */
   PetscReal *diagVal;          /* diagonal of a cell with every face closed */
   PetscInt   nghost;
@@ -64,6 +68,8 @@ static PetscErrorCode PffShellDestroy(void *ctx)
     PetscCall(PetscFree(s->off[l]));
     PetscCall(PetscFree(s->lo[l]));
   }
+  PetscCall(PetscFree(s->pnb));
+  PetscCall(PetscFree(s->mult));
   PetscCall(PetscFree(s->diagCell));
   PetscCall(PetscFree(s->diagVal));
   PetscCall(VecDestroy(&s->xg));
@@ -118,7 +124,31 @@ static inline void PffShellInterior(const PffShell *s, const PetscScalar *restri
   }
 }
 
-/* y += A_list x for the faces of one list; xg, yg may be NULL for the local list. */
+/* y += A x for the faces between each block and the owned block of its size below a lower side (s->pnb), a plane at a
+   time: the flux c (x_upper - x_lower) of n^2 faces in one strided loop, instead of one list entry (an index, a
+   coefficient and two scattered cells) per face. */
+static inline void PffShellPlanes(const PffShell *s, const PetscScalar *restrict x, PetscScalar *y)
+{
+  for (PetscInt b = 0; b < s->nblocks; b++)
+    for (PetscInt d = 0; d < 3; d++) {
+      const PetscInt nb = s->pnb[3 * b + d];
+      if (nb < 0) continue;
+      const PetscInt n = s->bn[b], stride[3] = {1, n, n * n}, si = d == 0 ? n : 1, so = d == 2 ? n : n * n;
+      const PetscInt up = s->bstart[b], lo = s->bstart[nb] + (n - 1) * stride[d];
+      const PetscReal *restrict c = s->cf + d * s->ncells + up;
+      PetscScalar *restrict yu = y + up, *restrict yl = y + lo; /* two blocks: disjoint */
+      for (PetscInt v = 0; v < n; v++)
+        for (PetscInt u = 0; u < n; u++) {
+          const PetscInt    q    = si * u + so * v;
+          const PetscScalar flux = c[q] * (x[up + q] - x[lo + q]);
+          yu[q] += flux;
+          yl[q] -= flux;
+        }
+    }
+}
+
+/* y += A_list x for the faces of one list (of the local one, those not in a plane); xg, yg may be NULL for the local
+   list. */
 static inline void PffShellFaces(const PffShell *s, PetscInt l, const PetscScalar *x, const PetscScalar *xg,
                                  PetscScalar *y, PetscScalar *yg)
 {
@@ -126,7 +156,8 @@ static inline void PffShellFaces(const PffShell *s, PetscInt l, const PetscScala
   const PetscReal *cf = s->cf;
 
   if (l == PFF_SHELL_LOCAL) {
-    for (PetscInt i = 0; i < s->nface[l]; i++) {
+    for (PetscInt q = 0; q < s->nmult; q++) {
+      const PetscInt  i  = s->mult[q];
       const PetscInt  k0 = off[i], k1 = off[i + 1];
       const PetscReal w = k1 - k0 == 1 ? 1.0 : 0.25, c = cf[row[i]];
       PetscScalar     xl = 0;
@@ -168,7 +199,8 @@ static PetscErrorCode MatMult_PffShell(Mat S, Vec x, Vec y)
   PetscCall(VecScatterBegin(s->scatter, x, s->xg, INSERT_VALUES, SCATTER_FORWARD));
   PetscCall(VecGetArrayRead(x, &xa));
   PetscCall(VecGetArrayWrite(y, &ya));
-  PffShellInterior(s, xa, ya); /* these three overlap the gather */
+  PffShellInterior(s, xa, ya); /* these four overlap the gather */
+  PffShellPlanes(s, xa, ya);
   for (PetscInt q = 0; q < s->ndiag; q++) ya[s->diagCell[q]] += s->diagVal[q] * xa[s->diagCell[q]];
   PffShellFaces(s, PFF_SHELL_LOCAL, xa, NULL, ya, NULL);
   PetscCall(VecScatterEnd(s->scatter, x, s->xg, INSERT_VALUES, SCATTER_FORWARD));
@@ -249,6 +281,56 @@ static PetscErrorCode PffShellLocalCell(PffPressure ps, const PetscInt *ghosts, 
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* The block of local cell c, searched from b on (the lists run in cell order). */
+static inline PetscInt PffShellBlockOf(const PffShell *s, PetscInt c, PetscInt b)
+{
+  while (c >= s->bstart[b + 1]) b++;
+  return b;
+}
+
+/* The lower side d of block b goes a plane at a time (s->pnb) when every one of its n^2 faces is in the local list
+   with one lower cell, in one owned block nb != b of the same size, across from it (the same cell with coordinate d
+   at n - 1); s->mult lists the other faces of the local list. */
+static PetscErrorCode PffShellFindPlanes(PffShell *s)
+{
+  const PetscInt l = PFF_SHELL_LOCAL, *up = s->up[l], *off = s->off[l], *lo = s->lo[l];
+  PetscInt      *count, *side;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc1(3 * s->nblocks, &s->pnb));
+  PetscCall(PetscCalloc1(3 * s->nblocks, &count));
+  PetscCall(PetscMalloc1(s->nface[l], &side));
+  for (PetscInt q = 0; q < 3 * s->nblocks; q++) s->pnb[q] = -1;
+  for (PetscInt i = 0, b = 0; i < s->nface[l]; i++) {
+    const PetscInt d = s->row[l][i] / s->ncells, n = s->bn[b = PffShellBlockOf(s, up[i], b)];
+    const PetscInt stride[3] = {1, n, n * n};
+    PetscInt       nb        = -1;
+    side[i]                  = 3 * b + d;
+    if (off[i + 1] - off[i] == 1 && lo[off[i]] < s->ncells) { /* one owned lower cell */
+      PetscInt k;
+      PetscCall(PetscFindInt(lo[off[i]], s->nblocks + 1, s->bstart, &k));
+      nb = k >= 0 ? k : -(k + 1) - 1; /* the block whose start is the last one at or below the cell */
+      if (nb == b || s->bn[nb] != n || lo[off[i]] - s->bstart[nb] != up[i] - s->bstart[b] + (n - 1) * stride[d])
+        nb = -1;
+    }
+    if (count[3 * b + d] == 0) s->pnb[3 * b + d] = nb;
+    if (nb < 0 || nb != s->pnb[3 * b + d]) s->pnb[3 * b + d] = -2; /* not one neighbour across the whole side */
+    count[3 * b + d]++;
+  }
+  for (PetscInt b = 0; b < s->nblocks; b++)
+    for (PetscInt d = 0; d < 3; d++)
+      if (count[3 * b + d] != s->bn[b] * s->bn[b] || s->pnb[3 * b + d] < 0) s->pnb[3 * b + d] = -1;
+  s->nmult = 0;
+  for (PetscInt i = 0; i < s->nface[l]; i++) s->nmult += s->pnb[side[i]] < 0;
+  PetscCall(PetscMalloc1(s->nmult, &s->mult));
+  s->nmult = 0;
+  for (PetscInt i = 0; i < s->nface[l]; i++)
+    if (s->pnb[side[i]] < 0) s->mult[s->nmult++] = i;
+  PetscCall(PetscFree(count));
+  PetscCall(PetscFree(side));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffPressureShellCreate_Private(PffPressure ps, Mat *S)
 {
   const PetscInt nrows = 3 * ps->ncells, rend = ps->rstart + ps->ncells;
@@ -310,6 +392,8 @@ PetscErrorCode PffPressureShellCreate_Private(PffPressure ps, Mat *S)
     for (PetscInt q = 1; q < m; q++)
       PetscCall(PffShellLocalCell(ps, ghosts, nremote, cols[q], &s->lo[l][s->off[l][i] + q - 1]));
   }
+
+  PetscCall(PffShellFindPlanes(s));
 
   /* the plan, once: owned x -> ghost x; the same plan reversed carries the ghost contributions home */
   PetscCall(VecCreateSeq(PETSC_COMM_SELF, nremote, &s->xg));
