@@ -166,6 +166,8 @@ PETSC_INTERN PetscErrorCode PffMGStencilAssemble_Private(PffMG *, PetscInt, Mat 
 PETSC_INTERN PetscErrorCode PffMGStencilCreateShell_Private(PffMG *, PetscInt);
 PETSC_INTERN PetscErrorCode PffMGStencilDestroy_Private(PffMGLevel *);
 PETSC_INTERN PetscErrorCode PffMGStencilResidualRestrict_Private(PffMG *, PetscInt, Vec, Vec, Vec);
+PETSC_INTERN PetscErrorCode PffMGGhostsBegin_Private(PffMGLevel *, Vec);
+PETSC_INTERN PetscErrorCode PffMGGhostsEnd_Private(PffMGLevel *, Vec, const PetscScalar **);
 PETSC_INTERN PetscErrorCode PffMGStencilProlongAdd_Private(PffMG *, PetscInt, Vec, Vec);
 PETSC_INTERN PetscErrorCode PffMGBuildProlongation_Private(PffMG *, PetscInt);
 PETSC_INTERN PetscBool      PffMGStencilBlockRhs_Private(const PffMGLevel *, PetscInt, const PetscScalar *,

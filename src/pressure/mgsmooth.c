@@ -25,24 +25,6 @@ const char *const PffMGSmootherTypes[] = {"rbgs", "jacobi", "PffMGSmootherType",
 /* The ghost exchange of one half-sweep is split: blocks without an off-rank neighbour are relaxed
    between Begin and End. In a half-sweep of colour c the values other ranks need from us for their
    colour-c blocks are our colour 1-c cells, which this half-sweep does not change. */
-static PetscErrorCode GhostsBegin(PffMGLevel *lv, Vec x)
-{
-  PetscFunctionBeginUser;
-  if (lv->scatter) PetscCall(VecScatterBegin(lv->scatter, x, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-static PetscErrorCode GhostsEnd(PffMGLevel *lv, Vec x, const PetscScalar **ga)
-{
-  PetscFunctionBeginUser;
-  *ga = NULL;
-  if (lv->scatter) {
-    PetscCall(VecScatterEnd(lv->scatter, x, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
-    PetscCall(VecGetArrayRead(lv->ghost, ga));
-  }
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
 /* Relaxes rows order[q0..q1) in place; R (or NULL) receives |delta| a_jj per row, indexed from the
    block's first row. Returns the largest |delta| a_jj. */
 static inline PetscReal RelaxRows(const PffMGLevel *lv, PetscInt q0, PetscInt q1, PetscInt row0, const PetscScalar *b,
@@ -154,11 +136,11 @@ PetscErrorCode PffMGSmoothFixed_Private(PffMG *mg, PetscInt L, Vec b, Vec x, Pet
       PetscScalar   *xa;
       const PetscScalar *ba, *ga = NULL;
       PetscInt64         cells = 0;
-      PetscCall(GhostsBegin(lv, x));
+      PetscCall(PffMGGhostsBegin_Private(lv, x));
       PetscCall(VecGetArray(x, &xa));
       PetscCall(VecGetArrayRead(b, &ba));
       for (PetscInt pass = 0; pass < 2; pass++) {
-        if (pass == 1) PetscCall(GhostsEnd(lv, x, &ga));
+        if (pass == 1) PetscCall(PffMGGhostsEnd_Private(lv, x, &ga));
 #pragma omp parallel for reduction(+ : cells) schedule(dynamic, 1) if (q1 - q0 >= 8 && lv->omp)
         for (PetscInt q = q0; q < q1; q++) {
           const PetscInt lb = lv->colourList[q];
@@ -214,12 +196,12 @@ static PetscErrorCode RelaxActive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, Petsc
   for (PetscInt c = 0; c < 2; c++) {
     PetscScalar       *xa;
     const PetscScalar *ba, *ga = NULL;
-    PetscCall(GhostsBegin(lv, x));
+    PetscCall(PffMGGhostsBegin_Private(lv, x));
     PetscCall(VecGetArray(x, &xa));
     PetscCall(VecGetArrayRead(b, &ba));
     for (PetscInt pass = 0; pass < 2; pass++) {
       PetscInt64 relax = 0, cells = 0;
-      if (pass == 1) PetscCall(GhostsEnd(lv, x, &ga));
+      if (pass == 1) PetscCall(PffMGGhostsEnd_Private(lv, x, &ga));
 #pragma omp parallel for schedule(dynamic, 1) reduction(+ : relax, cells) if (nactive >= 8 && lv->omp)
       for (PetscInt q = 0; q < nactive; q++) {
         const PetscInt lb = mg->list[q];

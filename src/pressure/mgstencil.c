@@ -1115,14 +1115,22 @@ static inline void BlockProduct(const PffMGLevel *lv, PetscInt lb, const PetscSc
     }
 }
 
-static PetscErrorCode GhostsGet(PffMGLevel *lv, Vec xv, const PetscScalar **g)
+/* The ghost values of level L's x: started, then finished (ga: their array, or NULL on one rank). Between the two,
+   the callers work on the blocks without a neighbour on another rank (lv->remote). */
+PetscErrorCode PffMGGhostsBegin_Private(PffMGLevel *lv, Vec x)
 {
   PetscFunctionBeginUser;
-  *g = NULL;
+  if (lv->scatter) PetscCall(VecScatterBegin(lv->scatter, x, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffMGGhostsEnd_Private(PffMGLevel *lv, Vec x, const PetscScalar **ga)
+{
+  PetscFunctionBeginUser;
+  *ga = NULL;
   if (lv->scatter) {
-    PetscCall(VecScatterBegin(lv->scatter, xv, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
-    PetscCall(VecScatterEnd(lv->scatter, xv, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
-    PetscCall(VecGetArrayRead(lv->ghost, g));
+    PetscCall(VecScatterEnd(lv->scatter, x, lv->ghost, INSERT_VALUES, SCATTER_FORWARD));
+    PetscCall(VecGetArrayRead(lv->ghost, ga));
   }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -1131,16 +1139,20 @@ static PetscErrorCode GhostsGet(PffMGLevel *lv, Vec xv, const PetscScalar **g)
 static PetscErrorCode StencilMult(Mat A, Vec xv, Vec yv)
 {
   PffMGLevel        *lv;
-  const PetscScalar *x, *g;
+  const PetscScalar *x, *g = NULL;
   PetscScalar       *y;
 
   PetscFunctionBeginUser;
   PetscCall(MatShellGetContext(A, &lv));
-  PetscCall(GhostsGet(lv, xv, &g));
+  PetscCall(PffMGGhostsBegin_Private(lv, xv));
   PetscCall(VecGetArrayRead(xv, &x));
   PetscCall(VecGetArrayWrite(yv, &y));
+  for (PetscInt pass = 0; pass < 2; pass++) { /* the blocks that need no ghost while the ghosts come */
+    if (pass == 1) PetscCall(PffMGGhostsEnd_Private(lv, xv, &g));
 #pragma omp parallel for schedule(static) if (lv->nblk >= 8 && lv->omp)
-  for (PetscInt lb = 0; lb < lv->nblk; lb++) BlockProduct(lv, lb, x, g, y + lv->start[lb]);
+    for (PetscInt lb = 0; lb < lv->nblk; lb++)
+      if (lv->remote[lb] == pass) BlockProduct(lv, lb, x, g, y + lv->start[lb]);
+  }
   PetscCall(VecRestoreArrayWrite(yv, &y));
   PetscCall(VecRestoreArrayRead(xv, &x));
   if (g) PetscCall(VecRestoreArrayRead(lv->ghost, &g));
@@ -1155,31 +1167,35 @@ PetscErrorCode PffMGStencilResidualRestrict_Private(PffMG *mg, PetscInt L, Vec b
 {
   PffMGLevel        *lv = &mg->lev[L];
   const PffMGLevel  *c  = &mg->lev[L + 1];
-  const PetscScalar *x, *b, *g;
+  const PetscScalar *x, *b, *g = NULL;
   PetscScalar       *cb;
 
   PetscFunctionBeginUser;
-  PetscCall(GhostsGet(lv, xv, &g));
+  PetscCall(PffMGGhostsBegin_Private(lv, xv));
   PetscCall(VecGetArrayRead(xv, &x));
   PetscCall(VecGetArrayRead(bv, &b));
   PetscCall(VecGetArrayWrite(cbv, &cb));
+  for (PetscInt pass = 0; pass < 2; pass++) { /* the blocks that need no ghost while the ghosts come */
+    if (pass == 1) PetscCall(PffMGGhostsEnd_Private(lv, xv, &g));
 #pragma omp parallel for schedule(static) if (lv->nblk >= 8 && lv->omp)
-  for (PetscInt lb = 0; lb < lv->nblk; lb++) {
-    PetscScalar *restrict yb = mg->BB + mg->Rsize * (size_t)omp_get_thread_num();
-    const PetscInt nf = lv->n[lb], nc = c->n[lb], r0 = lv->start[lb];
-    PetscScalar *restrict cr = cb + c->start[lb];
-    const PetscInt s         = nf > nc;
-    BlockProduct(lv, lb, x, g, yb);
-    for (PetscInt i = 0; i < nc * nc * nc; i++) cr[i] = 0;
-    /* the pairs of a fine row summed first: one add per coarse cell and fine row, so that the adds into a coarse
-       cell do not follow each other through its store */
-    for (PetscInt q = 0; q < nf * nf; q++) {
-      const PetscInt o               = PffMGCoarseRow_Private(q, nf, nc, s);
-      const PetscScalar *restrict br = b + r0 + q * nf, *restrict yr = yb + q * nf;
-      if (s)
-        for (PetscInt u = 0; u < nc; u++) cr[o + u] += (br[2 * u] - yr[2 * u]) + (br[2 * u + 1] - yr[2 * u + 1]);
-      else
-        for (PetscInt u = 0; u < nc; u++) cr[o + u] += br[u] - yr[u];
+    for (PetscInt lb = 0; lb < lv->nblk; lb++) {
+      if (lv->remote[lb] != pass) continue;
+      PetscScalar *restrict yb = mg->BB + mg->Rsize * (size_t)omp_get_thread_num();
+      const PetscInt nf = lv->n[lb], nc = c->n[lb], r0 = lv->start[lb];
+      PetscScalar *restrict cr = cb + c->start[lb];
+      const PetscInt s         = nf > nc;
+      BlockProduct(lv, lb, x, g, yb);
+      for (PetscInt i = 0; i < nc * nc * nc; i++) cr[i] = 0;
+      /* the pairs of a fine row summed first: one add per coarse cell and fine row, so that the adds into a coarse
+         cell do not follow each other through its store */
+      for (PetscInt q = 0; q < nf * nf; q++) {
+        const PetscInt o               = PffMGCoarseRow_Private(q, nf, nc, s);
+        const PetscScalar *restrict br = b + r0 + q * nf, *restrict yr = yb + q * nf;
+        if (s)
+          for (PetscInt u = 0; u < nc; u++) cr[o + u] += (br[2 * u] - yr[2 * u]) + (br[2 * u + 1] - yr[2 * u + 1]);
+        else
+          for (PetscInt u = 0; u < nc; u++) cr[o + u] += br[u] - yr[u];
+      }
     }
   }
   PetscCall(VecRestoreArrayWrite(cbv, &cb));
