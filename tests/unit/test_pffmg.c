@@ -542,6 +542,53 @@ static PetscErrorCode TestKCycle(void)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* The per-level log events (-log_view's MGLevel0 ... MGLevel7+): level 0's is entered twice per V-cycle (before and
+   after the coarse correction); each level above the coarsest at least as often as the one above it (the K-cycle
+   visits a coarser level once or more per visit of the finer one); the coarsest never (MGCoarse times it); and
+   the levels' times add up to at most MGApply's, which holds them all. */
+static PetscErrorCode TestLevelEvents(void)
+{
+  PetscEventPerfInfo before[PFF_MG_LOG_LEVELS + 1], after[PFF_MG_LOG_LEVELS + 1];
+  PffMGStats         mst;
+  PetscInt           its;
+  PetscReal          rn, tl = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscLogDefaultBegin());
+  for (PetscInt L = 0; L <= PFF_MG_LOG_LEVELS; L++)
+    PetscCall(PetscLogEventGetPerfInfo(0, L < PFF_MG_LOG_LEVELS ? PFF_MGLevel[L] : PFF_MGApply, &before[L]));
+  PetscCall(Solve(PETSC_COMM_WORLD, PETSC_FALSE, 1e3, &its, &rn, &mst));
+  for (PetscInt L = 0; L <= PFF_MG_LOG_LEVELS; L++)
+    PetscCall(PetscLogEventGetPerfInfo(0, L < PFF_MG_LOG_LEVELS ? PFF_MGLevel[L] : PFF_MGApply, &after[L]));
+  const PetscInt last = PetscMin(mst.levels - 1, PFF_MG_LOG_LEVELS - 1); /* the levels with their own event */
+  PetscCheck(mst.levels >= 3, PETSC_COMM_SELF, PETSC_ERR_PLIB, "level events: only %" PetscInt_FMT " levels",
+             mst.levels);
+  for (PetscInt L = 0; L <= last; L++) {
+    const PetscInt count = after[L].count - before[L].count;
+    if (L == 0)
+      PetscCheck(count == 2 * mst.applications, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+                 "level events: MGLevel0 entered %" PetscInt_FMT " times in %" PetscInt64_FMT " V-cycles", count,
+                 mst.applications);
+    else if (L == mst.levels - 1)
+      PetscCheck(count == 0, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+                 "level events: the coarsest level %" PetscInt_FMT " entered %" PetscInt_FMT " times", L, count);
+    else
+      PetscCheck(count >= after[L - 1].count - before[L - 1].count, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+                 "level events: level %" PetscInt_FMT " entered %" PetscInt_FMT " times, fewer than the level above", L,
+                 count);
+    tl += after[L].time - before[L].time;
+  }
+  PetscCheck(tl <= 1.001 * (after[PFF_MG_LOG_LEVELS].time - before[PFF_MG_LOG_LEVELS].time), PETSC_COMM_SELF,
+             PETSC_ERR_PLIB, "level events: %g s in the levels, %g s in MGApply", (double)tl,
+             (double)(after[PFF_MG_LOG_LEVELS].time - before[PFF_MG_LOG_LEVELS].time));
+  PetscCall(PetscPrintf(PETSC_COMM_WORLD,
+                        "level events uniform bubbly 32^3: %" PetscInt_FMT
+                        " levels, MGLevel0 entered %d times in %" PetscInt64_FMT " V-cycles, level 1 %d times\n",
+                        mst.levels, after[0].count - before[0].count, mst.applications,
+                        after[1].count - before[1].count));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /* b nonzero in one block: adaptive relaxation relaxes fewer blocks than two fixed sweeps. */
 static PetscErrorCode TestAdaptive(void)
 {
@@ -690,6 +737,7 @@ int main(int argc, char **argv)
   PetscCall(TestAdaptive());
   PetscCall(TestActivationTurned());
   PetscCall(TestNewCoefficients());
+  PetscCall(TestLevelEvents()); /* last: it turns logging on */
   PetscCall(PetscFinalize());
   return 0;
 }
