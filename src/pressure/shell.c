@@ -502,6 +502,62 @@ PetscErrorCode PffPressureShellGetCoefficients_Private(Mat S, PetscReal **cf)
 /* y = G^T diag(M) (mask u) = sum_f h_upper^2 u_f g_f over the face rows r = 3 c + d of the face Vec u,
    with mask the open faces (c_f != 0) if openOnly, else every face that has a lower cell (walls and
    inactive neighbours have no row in G). -y is V D u, the volume-weighted divergence. */
+/* ya = the divergence's part from the faces inside the blocks (the faces with both cells in one block,
+   PFF_FACE_INTERIOR: the lower faces of the cells not on a block's lower sides), gathered cell by cell as in
+   PffShellInterior: a cell takes h^2 u of its own lower faces and minus that of its upper neighbours' lower faces
+   inside the block (only the open ones if openOnly). The face-by-face scatter it replaced chained each cell to the
+   store of the one before. The first and last rows of the rank's cells, whose ends must not read past u, take the
+   branching path. */
+static void PffShellInteriorDivergence(PffPressure ps, const PffShell *s, const PetscScalar *restrict u,
+                                       PetscBool openOnly, PetscScalar *restrict ya)
+{
+  const PetscReal *restrict cf = s->cf;
+  const PetscInt nc            = s->ncells;
+  PetscReal      lo[PFF_GRID_BLOCK_SIZE_MAX], hi[PFF_GRID_BLOCK_SIZE_MAX];
+
+  for (PetscInt b = 0; b < s->nblocks; b++) {
+    const PetscInt  n = s->bn[b], n2 = n * n;
+    const PetscReal h2 = ps->hblock[b] * ps->hblock[b];
+    for (PetscInt i = 0; i < n; i++) {
+      lo[i] = i > 0;
+      hi[i] = i < n - 1;
+    }
+    for (PetscInt k = 0; k < n; k++)
+      for (PetscInt j = 0; j < n; j++) {
+        const PetscInt  row = s->bstart[b] + n * (j + n * k);
+        const PetscReal ym = j > 0, zm = k > 0;
+        const PetscInt  syp = j < n - 1 ? n : 0, szp = k < n - 1 ? n2 : 0; /* 0: the cell's own face, weight 0 */
+        const PetscReal yp = syp != 0, zp = szp != 0;
+        if (row == 0 || row + n == nc) {
+          for (PetscInt i = 0; i < n; i++) {
+            const PetscInt c = row + i;
+            PetscScalar    v = 0;
+            for (PetscInt e = 0; e < 3; e++) {
+              const PetscInt up  = e == 0   ? (i < n - 1 ? c + 1 : -1)
+                                   : e == 1 ? (j < n - 1 ? c + n : -1)
+                                            : (k < n - 1 ? c + n2 : -1);
+              const PetscInt own = e == 0 ? i : e == 1 ? j : k;
+              if (own > 0 && (!openOnly || cf[e * nc + c] != 0)) v += u[3 * c + e];
+              if (up >= 0 && (!openOnly || cf[e * nc + up] != 0)) v -= u[3 * up + e];
+            }
+            ya[c] = h2 * v;
+          }
+          continue;
+        }
+        const PetscReal *restrict cx = cf + row, *restrict cy = cf + nc + row, *restrict cz = cf + 2 * nc + row;
+        const PetscScalar *restrict ur = u + 3 * row;
+        for (PetscInt i = 0; i < n; i++) {
+          const PetscReal ox0 = openOnly ? (cx[i] != 0) : 1, ox1 = openOnly ? (cx[i + 1] != 0) : 1;
+          const PetscReal oy0 = openOnly ? (cy[i] != 0) : 1, oy1 = openOnly ? (cy[i + syp] != 0) : 1;
+          const PetscReal oz0 = openOnly ? (cz[i] != 0) : 1, oz1 = openOnly ? (cz[i + szp] != 0) : 1;
+          ya[row + i] =
+              h2 * (lo[i] * ox0 * ur[3 * i] - hi[i] * ox1 * ur[3 * (i + 1)] + ym * oy0 * ur[3 * i + 1] -
+                    yp * oy1 * ur[3 * (i + syp) + 1] + zm * oz0 * ur[3 * i + 2] - zp * oz1 * ur[3 * (i + szp) + 2]);
+        }
+      }
+  }
+}
+
 PetscErrorCode PffPressureShellDivergence_Private(PffPressure ps, Mat S, Vec u, PetscBool openOnly, Vec y)
 {
   PffShell          *s;
@@ -513,19 +569,8 @@ PetscErrorCode PffPressureShellDivergence_Private(PffPressure ps, Mat S, Vec u, 
   PetscCall(VecGetArrayRead(u, &ua));
   PetscCall(VecGetArrayWrite(y, &ya));
   PetscCall(VecGetArrayWrite(s->yg, &yg));
-  PetscCall(PetscArrayzero(ya, s->ncells));
   PetscCall(PetscArrayzero(yg, s->nghost));
-  for (PetscInt b = 0; b < s->nblocks; b++) {
-    const PetscInt  n = s->bn[b], stride[3] = {1, n, n * n};
-    const PetscReal h2 = ps->hblock[b] * ps->hblock[b];
-    for (PetscInt c = s->bstart[b]; c < s->bstart[b + 1]; c++)
-      for (PetscInt e = 0; e < 3; e++) {
-        if (ps->kind[3 * c + e] != PFF_FACE_INTERIOR || (openOnly && s->cf[e * s->ncells + c] == 0)) continue;
-        const PetscScalar f = h2 * ua[3 * c + e];
-        ya[c] += f;
-        ya[c - stride[e]] -= f;
-      }
-  }
+  PffShellInteriorDivergence(ps, s, ua, openOnly, ya);
   for (PetscInt l = 0; l < PFF_SHELL_NLISTS; l++)
     for (PetscInt i = 0, b = 0; i < s->nface[l]; i++) {
       const PetscInt  k0 = s->off[l][i], k1 = s->off[l][i + 1], c = s->up[l][i], e = s->row[l][i] / s->ncells;
