@@ -124,6 +124,21 @@ static inline void PffShellInterior(const PffShell *s, const PetscScalar *restri
   }
 }
 
+/* Whether the lower side d of block b goes a plane at a time (s->pnb); then its faces' upper cells are up + q and
+   their lower cells lo + q, q = si u + so v for u, v in [0, n). */
+static inline PetscBool PffShellPlane(const PffShell *s, PetscInt b, PetscInt d, PetscInt *up, PetscInt *lo,
+                                      PetscInt *si, PetscInt *so)
+{
+  const PetscInt nb = s->pnb[3 * b + d], n = s->bn[b], stride[3] = {1, n, n * n};
+
+  if (nb < 0) return PETSC_FALSE;
+  *up = s->bstart[b];
+  *lo = s->bstart[nb] + (n - 1) * stride[d];
+  *si = d == 0 ? n : 1;
+  *so = d == 2 ? n : n * n;
+  return PETSC_TRUE;
+}
+
 /* y += A x for the faces between each block and the owned block of its size below a lower side (s->pnb), a plane at a
    time: the flux c (x_upper - x_lower) of n^2 faces in one strided loop, instead of one list entry (an index, a
    coefficient and two scattered cells) per face. */
@@ -131,10 +146,9 @@ static inline void PffShellPlanes(const PffShell *s, const PetscScalar *restrict
 {
   for (PetscInt b = 0; b < s->nblocks; b++)
     for (PetscInt d = 0; d < 3; d++) {
-      const PetscInt nb = s->pnb[3 * b + d];
-      if (nb < 0) continue;
-      const PetscInt n = s->bn[b], stride[3] = {1, n, n * n}, si = d == 0 ? n : 1, so = d == 2 ? n : n * n;
-      const PetscInt up = s->bstart[b], lo = s->bstart[nb] + (n - 1) * stride[d];
+      PetscInt up, lo, si, so;
+      if (!PffShellPlane(s, b, d, &up, &lo, &si, &so)) continue;
+      const PetscInt n            = s->bn[b];
       const PetscReal *restrict c = s->cf + d * s->ncells + up;
       PetscScalar *restrict yu = y + up, *restrict yl = y + lo; /* two blocks: disjoint */
       for (PetscInt v = 0; v < n; v++)
@@ -571,8 +585,23 @@ PetscErrorCode PffPressureShellDivergence_Private(PffPressure ps, Mat S, Vec u, 
   PetscCall(VecGetArrayWrite(s->yg, &yg));
   PetscCall(PetscArrayzero(yg, s->nghost));
   PffShellInteriorDivergence(ps, s, ua, openOnly, ya);
+  for (PetscInt b = 0; b < s->nblocks; b++) /* the block sides that go a plane at a time (PffShellPlanes) */
+    for (PetscInt d = 0; d < 3; d++) {
+      PetscInt up, lo, si, so;
+      if (!PffShellPlane(s, b, d, &up, &lo, &si, &so)) continue;
+      const PetscReal h2          = ps->hblock[b] * ps->hblock[b];
+      const PetscReal *restrict c = s->cf + d * s->ncells + up;
+      for (PetscInt v = 0; v < s->bn[b]; v++)
+        for (PetscInt w = 0; w < s->bn[b]; w++) {
+          const PetscInt    q = si * w + so * v;
+          const PetscScalar f = openOnly && c[q] == 0 ? 0 : h2 * ua[3 * (up + q) + d];
+          ya[up + q] += f;
+          ya[lo + q] -= f;
+        }
+    }
   for (PetscInt l = 0; l < PFF_SHELL_NLISTS; l++)
-    for (PetscInt i = 0, b = 0; i < s->nface[l]; i++) {
+    for (PetscInt q = 0, b = 0; q < (l == PFF_SHELL_LOCAL ? s->nmult : s->nface[l]); q++) {
+      const PetscInt  i  = l == PFF_SHELL_LOCAL ? s->mult[q] : q;
       const PetscInt  k0 = s->off[l][i], k1 = s->off[l][i + 1], c = s->up[l][i], e = s->row[l][i] / s->ncells;
       const PetscReal w = k1 - k0 == 1 ? 1.0 : 0.25;
       if (openOnly && s->cf[s->row[l][i]] == 0) continue;
@@ -622,8 +651,21 @@ PetscErrorCode PffPressureShellProjectVelocity_Private(PffPressure ps, Mat S, Ve
   }
   PetscCall(VecScatterEnd(s->scatter, p, s->xg, INSERT_VALUES, SCATTER_FORWARD));
   PetscCall(VecGetArrayRead(s->xg, &pg));
+  for (PetscInt b = 0; b < s->nblocks; b++) /* the block sides that go a plane at a time (PffShellPlanes) */
+    for (PetscInt d = 0; d < 3; d++) {
+      PetscInt up, lo, si, so;
+      if (!PffShellPlane(s, b, d, &up, &lo, &si, &so)) continue;
+      const PetscReal ih2         = dt / (ps->hblock[b] * ps->hblock[b]);
+      const PetscReal *restrict c = s->cf + d * s->ncells + up;
+      for (PetscInt v = 0; v < s->bn[b]; v++)
+        for (PetscInt w = 0; w < s->bn[b]; w++) {
+          const PetscInt q = si * w + so * v;
+          ua[3 * (up + q) + d] -= ih2 * c[q] * (pa[up + q] - pa[lo + q]); /* closed (c = 0): already 0 */
+        }
+    }
   for (PetscInt l = 0; l < PFF_SHELL_NLISTS; l++)
-    for (PetscInt i = 0, b = 0; i < s->nface[l]; i++) {
+    for (PetscInt q = 0, b = 0; q < (l == PFF_SHELL_LOCAL ? s->nmult : s->nface[l]); q++) {
+      const PetscInt  i  = l == PFF_SHELL_LOCAL ? s->mult[q] : q;
       const PetscInt  k0 = s->off[l][i], k1 = s->off[l][i + 1], c = s->up[l][i], e = s->row[l][i] / s->ncells;
       const PetscReal w = k1 - k0 == 1 ? 1.0 : 0.25, cf = s->cf[s->row[l][i]];
       PetscScalar     pl = 0;
