@@ -80,6 +80,16 @@ static PetscErrorCode PffShellDestroy(void *ctx)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Weights of a row's x-faces inside the block: lo (the cell's own lower face) 0 at i = 0, hi (the next cell's) 0 at
+   i = n - 1, so that a row runs one loop. */
+static inline void PffShellRowEnds(PetscInt n, PetscReal *lo, PetscReal *hi)
+{
+  for (PetscInt i = 0; i < n; i++) {
+    lo[i] = i > 0;
+    hi[i] = i < n - 1;
+  }
+}
+
 /* y = the sum over the faces inside the blocks, cell by cell: each cell gathers c_f (x_c - x_nb) from its up to six
    in-block faces (every interior face is computed twice, once from each side), so that the rows vectorise. The face
    by face form (flux added to the upper cell, subtracted from the lower one) chained every cell of a row to the store
@@ -94,10 +104,7 @@ static inline void PffShellInterior(const PffShell *s, const PetscScalar *restri
 
   for (PetscInt b = 0; b < s->nblocks; b++) {
     const PetscInt n = s->bn[b], n2 = n * n;
-    for (PetscInt i = 0; i < n; i++) {
-      lo[i] = i > 0;
-      hi[i] = i < n - 1;
-    }
+    PffShellRowEnds(n, lo, hi);
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt j = 0; j < n; j++) {
         const PetscInt row = s->bstart[b] + n * (j + n * k);
@@ -532,10 +539,7 @@ static void PffShellInteriorDivergence(PffPressure ps, const PffShell *s, const 
   for (PetscInt b = 0; b < s->nblocks; b++) {
     const PetscInt  n = s->bn[b], n2 = n * n;
     const PetscReal h2 = ps->hblock[b] * ps->hblock[b];
-    for (PetscInt i = 0; i < n; i++) {
-      lo[i] = i > 0;
-      hi[i] = i < n - 1;
-    }
+    PffShellRowEnds(n, lo, hi);
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt j = 0; j < n; j++) {
         const PetscInt  row = s->bstart[b] + n * (j + n * k);
