@@ -20,7 +20,8 @@ def pairs(line):
     return dict(kv.split("=", 1) for kv in line.split()[1:] if "=" in kv)
 
 
-def main(path):
+def rows_of(path):
+    """The rows of the log at path, one dict of FIELDS (strings) per RESULT line."""
     rows, cur, commit, load, options = [], None, "", "", ""
     with open(path) as f:
         for line in f:
@@ -52,9 +53,13 @@ def main(path):
                 p = pairs(line)
                 cur.update(it_cell_updates=p.get("cell_updates", ""), it_updates_per_finest_cell=p.get("per_finest_cell", ""),
                            it_bound_s=p.get("bound_s", ""), it_ratio=p.get("ratio", ""))
+    return rows
+
+
+def main(path):
     w = csv.DictWriter(sys.stdout, fieldnames=FIELDS)
     w.writeheader()
-    w.writerows(rows)
+    w.writerows(rows_of(path))
 
 
 if __name__ == "__main__":

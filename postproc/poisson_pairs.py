@@ -17,15 +17,6 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import poisson_csv  # noqa: E402
 
 
-def rows_of(path):
-    import io
-    import contextlib
-    buf = io.StringIO()
-    with contextlib.redirect_stdout(buf):
-        poisson_csv.main(path)
-    return list(csv.DictReader(io.StringIO(buf.getvalue())))
-
-
 def total(r):
     return float(r["setup_s"]) + float(r["solve_s"])
 
@@ -36,7 +27,7 @@ def main():
     ap.add_argument("-o", "--csv", help="also write the rows as CSV")
     a = ap.parse_args()
     try:
-        rows = rows_of(a.log)
+        rows = poisson_csv.rows_of(a.log)
     except OSError as e:
         sys.exit(f"poisson_pairs: cannot read {a.log}: {e.strerror}")
     new = {r["commit"] for r in rows if r["pc"] == "gamg"}

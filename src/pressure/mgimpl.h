@@ -31,20 +31,18 @@ typedef struct {
                         rows sum to dx exactly) */
   float *adf, *idf;  /* [nrows] a_ii in float (the float block visits), and 1 / a_ii (0: an empty row), its only copy */
   PetscInt  *rowptr; /* [nrows + 1] side couplings of each row to other cells */
-  PetscInt  *side;   /* the rows that have any, in order (the block's sides: about a third of the cells for n = 16) */
-  PetscInt  *bside;  /* [nblk + 1] the rows of block lb are side[bside[lb] .. bside[lb + 1] - 1] */
   PetscBool *own;    /* [nblk] the block has side terms between its own cells (PffMGStencilBlockRhs_Private) */
-  PetscInt  *fnb;    /* [6 nblk] per side, the owned neighbour block of the same size whose couplings a float visit
-                        adds face by face (FaceSums), or -1 */
-  PetscInt *sb, *srow,
-      *sent;              /* the other side entries, for the float visits: sent[sb[lb] .. sb[lb+1]) and their rows */
-  PetscInt  *col;         /* local row, or nrows + ghost index */
-  PffMGReal *val;         /* matrix entry: fac * c of the face */
-  PetscInt  *ref;         /* the face: slot d nrows + row of cf, or 3 nrows + ghost slot */
-  PffMGReal *fac;         /* g_f[row] g_f[col] */
-  PetscInt   ndiag;       /* side-face terms of the diagonal */
-  PetscInt  *drow, *dref; /* their row and face */
-  PffMGReal *dfac;        /* g_f[row]^2 */
+  PetscInt  *fnb;    /* [6 nblk] per side, the owned neighbour block of the same size whose couplings go face by face
+                        (FaceSums), or -1 */
+  PetscInt  *sb;     /* [nblk + 1] the other side entries of block lb: sent[sb[lb] .. sb[lb + 1]), rows srow */
+  PetscInt  *srow, *sent;
+  PetscInt  *col;               /* local row, or nrows + ghost index */
+  PffMGReal *val;               /* matrix entry: fac * c of the face */
+  PetscInt  *ref;               /* the face: slot d nrows + row of cf, or 3 nrows + ghost slot */
+  PffMGReal *fac;               /* g_f[row] g_f[col] */
+  PetscInt   ndiag;             /* side-face terms of the diagonal */
+  PetscInt  *drow, *dref;       /* their row and face */
+  PffMGReal *dfac;              /* g_f[row]^2 */
   PetscInt   nghost, *ghostRow; /* ghost cells: global rows, increasing */
   PetscInt   nslot;             /* ghost face coefficients (faces owned by another rank's cells) */
   PffMGReal *cghost;            /* [nslot] */

@@ -22,9 +22,10 @@
 
 const char *const PffMGSmootherTypes[] = {"rbgs", "jacobi", "PffMGSmootherType", "PFF_MG_SMOOTHER_", NULL};
 
-/* The ghost exchange of one half-sweep is split: blocks without an off-rank neighbour are relaxed
-   between Begin and End. In a half-sweep of colour c the values other ranks need from us for their
-   colour-c blocks are our colour 1-c cells, which this half-sweep does not change. */
+/* Both smoothers split the ghost exchange of a half-sweep (PffMGGhostsBegin_Private, PffMGGhostsEnd_Private): blocks
+   without an off-rank neighbour are relaxed between Begin and End. In a half-sweep of colour c the values other ranks
+   need from us for their colour-c blocks are our colour 1-c cells, which this half-sweep does not change. */
+
 /* Relaxes rows order[q0..q1) in place; R (or NULL) receives |delta| a_jj per row, indexed from the
    block's first row. Returns the largest |delta| a_jj. */
 static inline PetscReal RelaxRows(const PffMGLevel *lv, PetscInt q0, PetscInt q1, PetscInt row0, const PetscScalar *b,

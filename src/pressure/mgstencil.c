@@ -119,9 +119,9 @@ static PetscErrorCode TermsAdd(PffMGTerms *T, PetscInt row, PetscInt64 col, Pets
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* The sides of each block whose couplings a float visit adds face by face (st->fnb: an owned neighbour of the same
-   size, one coupling -c x per cell), and the list of the remaining side entries (coarse-fine, another rank's
-   neighbour), which go entry by entry. */
+/* The sides of each block whose couplings go face by face (st->fnb: an owned neighbour of the same size, one
+   coupling -c x per cell; FaceSums), and the list of the remaining side entries (coarse-fine, another rank's
+   neighbour, the block's own cells), which go entry by entry (SideCouplings). */
 static PetscErrorCode SplitSides(const PffMG *mg, const PffMGLevel *lv, PffMGStencil *st)
 {
   PetscInt ns = 0;
@@ -380,21 +380,11 @@ PetscErrorCode PffMGStencilBuild_Private(PffMG *mg, PetscInt L)
   }
   PetscCall(PetscFree(cursor));
   PetscCall(PetscFree(T.t));
-  {
-    PetscInt nside = 0;
-    for (PetscInt r = 0; r < lv->nrows; r++) nside += st->rowptr[r + 1] > st->rowptr[r];
-    PetscCall(PetscMalloc3(nside, &st->side, lv->nblk + 1, &st->bside, lv->nblk, &st->own));
-    nside = 0;
-    for (PetscInt lb = 0; lb < lv->nblk; lb++) {
-      st->bside[lb] = nside;
-      st->own[lb]   = PETSC_FALSE;
-      for (PetscInt r = lv->start[lb]; r < lv->start[lb + 1]; r++) {
-        if (st->rowptr[r + 1] > st->rowptr[r]) st->side[nside++] = r;
-        for (PetscInt e = st->rowptr[r]; e < st->rowptr[r + 1]; e++)
-          if (st->col[e] >= lv->start[lb] && st->col[e] < lv->start[lb + 1]) st->own[lb] = PETSC_TRUE;
-      }
-    }
-    st->bside[lv->nblk] = nside;
+  PetscCall(PetscMalloc1(lv->nblk, &st->own));
+  for (PetscInt lb = 0; lb < lv->nblk; lb++) {
+    st->own[lb] = PETSC_FALSE;
+    for (PetscInt e = st->rowptr[lv->start[lb]]; e < st->rowptr[lv->start[lb + 1]]; e++)
+      if (st->col[e] >= lv->start[lb] && st->col[e] < lv->start[lb + 1]) st->own[lb] = PETSC_TRUE;
   }
   PetscCall(SplitSides(mg, lv, st));
   PetscCall(PetscFree(gcell));
@@ -426,7 +416,7 @@ PetscErrorCode PffMGStencilDestroy_Private(PffMGLevel *lv)
   PetscFunctionBeginUser;
   if (!st) PetscFunctionReturn(PETSC_SUCCESS);
   PetscCall(PetscFree(st->rowptr));
-  PetscCall(PetscFree3(st->side, st->bside, st->own));
+  PetscCall(PetscFree(st->own));
   PetscCall(PetscFree2(st->fnb, st->sb));
   PetscCall(PetscFree2(st->srow, st->sent));
   PetscCall(PetscFree4(st->col, st->val, st->ref, st->fac));
@@ -622,30 +612,59 @@ static inline PetscScalar RowInBlock(const PffMGStencil *st, PetscInt nr, PetscI
   return Diagonal(st, nr, r, i, j, k, n) * x[r] + off;
 }
 
-/* Sum of the side couplings of row r of block lb, val x_col, over the columns outside [lo, hi) (an empty range: all);
-   e1 ends the block's side entries (its rows with side terms are one run of the CSR: rows without any have none).
-   local: the block has no neighbour on another rank (lv->remote), so every column is an owned row; the caller's loop
-   is unswitched on it. The neighbours' x across the block's x sides lie a row apart, a cache line each and mostly
-   out of cache: they are prefetched a fixed distance ahead (10 % off a float visit when the float visits summed
-   their sides here; they now add the faces to neighbours of their own size a plane at a time, FaceSums). */
-#define PFF_MG_SIDE_PREFETCH 24 /* side entries ahead */
-static inline __attribute__((always_inline)) PetscScalar SideSum(const PffMGStencil *st, PetscInt nr, PetscInt r,
-                                                                 const PetscScalar *x, const PetscScalar *g,
-                                                                 PetscInt lo, PetscInt hi, PetscInt e1, PetscBool local)
+/* The couplings -c x_nb of the cells of local block lb through side s to the owned neighbour of the same size
+   st->fnb (the side list's entries -c, a plane at a time instead of entry by entry): subtracted from the float
+   right-hand side bs of a visit, or else added to yd times add. The face's c is the lower cell's, this block's on a
+   lower side and the neighbour's on an upper one. */
+static void FaceSums(const PffMGLevel *lv, PetscInt lb, PetscInt s, const PetscScalar *x, PetscReal add,
+                     float *restrict bs, PetscScalar *restrict yd)
 {
-  PetscScalar s = 0;
-  for (PetscInt e = st->rowptr[r]; e < st->rowptr[r + 1]; e++) {
-    if (e + PFF_MG_SIDE_PREFETCH < e1 && (local || st->col[e + PFF_MG_SIDE_PREFETCH] < nr))
-      __builtin_prefetch(x + st->col[e + PFF_MG_SIDE_PREFETCH]);
-    const PetscInt c = st->col[e];
-    if (c < lo || c >= hi) s += st->val[e] * (local || c < nr ? x[c] : g[c - nr]);
+  const PffMGStencil *st = lv->st;
+  const PetscInt      n = lv->n[lb], d = s / 2, upper = s % 2, nb = st->fnb[6 * lb + s];
+  const PetscInt      stride[3] = {1, n, n * n};
+  const PetscInt      si = d == 0 ? n : 1, so = d == 2 ? n : n * n; /* inner and outer strides in the plane */
+  const PetscInt      own = upper ? (n - 1) * stride[d] : 0, far = upper ? 0 : (n - 1) * stride[d];
+  const PetscScalar *restrict xn = x + lv->start[nb] + far;
+  const float *restrict c        = st->cf + d * lv->nrows + (upper ? lv->start[nb] + far : lv->start[lb] + own);
+
+  if (bs) {
+    float *restrict o = bs + own;
+    for (PetscInt v = 0; v < n; v++)
+      for (PetscInt u = 0; u < n; u++) o[si * u + so * v] += c[si * u + so * v] * (float)xn[si * u + so * v];
+  } else {
+    PetscScalar *restrict o = yd + own;
+    for (PetscInt v = 0; v < n; v++)
+      for (PetscInt u = 0; u < n; u++) o[si * u + so * v] -= add * c[si * u + so * v] * xn[si * u + so * v];
   }
-  return s;
+}
+
+/* The couplings val x_col of the cells of local block lb to other cells through the block's sides, block-local:
+   face by face to the owned neighbours of the same size (FaceSums), entry by entry to the others (coarse-fine,
+   another rank's: st->sent). Subtracted from the float right-hand side bs, or else added to yd times add (1: a
+   product, -1: a right-hand side). inBlock: also the side terms between the block's own cells (a coarse level's
+   cells under one coarse face above the block), which a right-hand side leaves to OwnSums. */
+static void SideCouplings(const PffMGLevel *lv, PetscInt lb, const PetscScalar *x, const PetscScalar *g, PetscReal add,
+                          PetscBool inBlock, float *restrict bs, PetscScalar *restrict yd)
+{
+  const PffMGStencil *st = lv->st;
+  const PetscInt      nr = lv->nrows, r0 = lv->start[lb], r1 = lv->start[lb + 1];
+
+  for (PetscInt s = 0; s < 6; s++)
+    if (st->fnb[6 * lb + s] >= 0) FaceSums(lv, lb, s, x, add, bs, yd);
+  for (PetscInt q = st->sb[lb]; q < st->sb[lb + 1]; q++) {
+    const PetscInt e = st->sent[q], c = st->col[e];
+    if (!inBlock && c >= r0 && c < r1) continue;
+    const PetscScalar t = st->val[e] * (c < nr ? x[c] : g[c - nr]);
+    if (bs)
+      bs[st->srow[q] - r0] -= (float)t;
+    else
+      yd[st->srow[q] - r0] += add * t;
+  }
 }
 
 /* bb = b - (the side couplings of the cells of local block lb to other blocks), block-local. The blocks
    around are frozen while a block is relaxed (the other block colour, or ghosts), so their part of each
-   row is a constant of the block's visit: it is gathered once, in one pass over the block's side list,
+   row is a constant of the block's visit: it is gathered once (SideCouplings),
    for all the sweeps of the visit, and the sweeps run one uniform loop. The side terms between cells
    of the block itself (fine cells under one coarse face above the block) change within a sweep; they
    are left out here and added row by row (OwnSums); st->own[lb] says whether the block has any (made at build),
@@ -656,14 +675,8 @@ PetscBool PffMGStencilBlockRhs_Private(const PffMGLevel *lv, PetscInt lb, const 
   const PffMGStencil *st = lv->st;
   const PetscInt      n = lv->n[lb], r0 = lv->start[lb], nc = n * n * n;
 
-  const PetscInt  e1    = st->rowptr[r0 + nc];
-  const PetscBool local = (PetscBool)!lv->remote[lb];
-
   for (PetscInt i = 0; i < nc; i++) bb[i] = b[r0 + i];
-  for (PetscInt q = st->bside[lb]; q < st->bside[lb + 1]; q++) { /* only the rows that have side terms */
-    const PetscInt r = st->side[q];
-    bb[r - r0] -= SideSum(st, lv->nrows, r, x, g, r0, r0 + nc, e1, local);
-  }
+  SideCouplings(lv, lb, x, g, -1, PETSC_FALSE, NULL, bb);
   return st->own[lb];
 }
 
@@ -831,32 +844,6 @@ PetscBool PffMGStencilVisitFloat_Private(const PffMGLevel *lv, PetscInt lb)
   return (PetscBool)(!lv->st->own[lb] && lv->n[lb] >= 4);
 }
 
-/* The couplings -c x_nb of the cells of local block lb through side s to the owned neighbour of the same size
-   st->fnb (the entries -c of the side list, a plane at a time instead of entry by entry), subtracted from the
-   float right-hand side bs of a visit, or else added to the double product yd: the face's c is the lower cell's,
-   this block's on a lower side and the neighbour's on an upper one. */
-static void FaceSums(const PffMGLevel *lv, PetscInt lb, PetscInt s, const PetscScalar *x, float *restrict bs,
-                     PetscScalar *restrict yd)
-{
-  const PffMGStencil *st = lv->st;
-  const PetscInt      n = lv->n[lb], d = s / 2, upper = s % 2, nb = st->fnb[6 * lb + s];
-  const PetscInt      stride[3] = {1, n, n * n};
-  const PetscInt      si = d == 0 ? n : 1, so = d == 2 ? n : n * n; /* inner and outer strides in the plane */
-  const PetscInt      own = upper ? (n - 1) * stride[d] : 0, far = upper ? 0 : (n - 1) * stride[d];
-  const PetscScalar *restrict xn = x + lv->start[nb] + far;
-  const float *restrict c        = st->cf + d * lv->nrows + (upper ? lv->start[nb] + far : lv->start[lb] + own);
-
-  if (bs) {
-    float *restrict o = bs + own;
-    for (PetscInt v = 0; v < n; v++)
-      for (PetscInt u = 0; u < n; u++) o[si * u + so * v] += c[si * u + so * v] * (float)xn[si * u + so * v];
-  } else {
-    PetscScalar *restrict o = yd + own;
-    for (PetscInt v = 0; v < n; v++)
-      for (PetscInt u = 0; u < n; u++) o[si * u + so * v] -= c[si * u + so * v] * xn[si * u + so * v];
-  }
-}
-
 /* bs = b - (the side couplings of the cells of local block lb to other blocks), block-local, in float: as
    PffMGStencilBlockRhs_Private for a block without in-block side terms (b rounded once, then each side term added). */
 static void BlockRhsFloat(const PffMGLevel *lv, PetscInt lb, const PetscScalar *b, const PetscScalar *x,
@@ -876,12 +863,7 @@ static void BlockRhsFloat(const PffMGLevel *lv, PetscInt lb, const PetscScalar *
     __builtin_prefetch(st->idf + r0 + i0, 0, 2);
     for (PetscInt i = i0; i < PetscMin(i0 + line, nc); i++) bs[i] = (float)b[r0 + i];
   }
-  for (PetscInt s = 0; s < 6; s++)
-    if (st->fnb[6 * lb + s] >= 0) FaceSums(lv, lb, s, x, bs, NULL);
-  for (PetscInt q = st->sb[lb]; q < st->sb[lb + 1]; q++) {
-    const PetscInt e = st->sent[q], c = st->col[e];
-    bs[st->srow[q] - r0] -= (float)(st->val[e] * (c < nr ? x[c] : g[c - nr]));
-  }
+  SideCouplings(lv, lb, x, g, -1, PETSC_FALSE, bs, NULL);
 }
 
 /* One row group of SweepFloat: the candidate values nx and |omega s| ev of its w cells, the colour's only (mo: omega
@@ -1089,12 +1071,7 @@ static inline void BlockProduct(const PffMGLevel *lv, PetscInt lb, const PetscSc
   /* the side couplings first, face by face to the neighbours of the same size and entry by entry to the others;
      the rows add their in-block part */
   for (PetscInt i = 0; i < n * n * n; i++) yb[i] = 0;
-  for (PetscInt s = 0; s < 6; s++)
-    if (st->fnb[6 * lb + s] >= 0) FaceSums(lv, lb, s, x, NULL, yb);
-  for (PetscInt q = st->sb[lb]; q < st->sb[lb + 1]; q++) {
-    const PetscInt e = st->sent[q], c = st->col[e];
-    yb[st->srow[q] - r0] += st->val[e] * (c < nr ? x[c] : g[c - nr]);
-  }
+  SideCouplings(lv, lb, x, g, 1, PETSC_TRUE, NULL, yb);
   for (PetscInt k = 0; k < n; k++)
     for (PetscInt j = 0; j < n; j++) {
       const PetscInt     base  = r0 + n * (j + n * k);

@@ -527,8 +527,8 @@ PetscErrorCode PffPressureShellGetCoefficients_Private(Mat S, PetscReal **cf)
    PFF_FACE_INTERIOR: the lower faces of the cells not on a block's lower sides), gathered cell by cell as in
    PffShellInterior: a cell takes h^2 u of its own lower faces and minus that of its upper neighbours' lower faces
    inside the block (only the open ones if openOnly). The face-by-face scatter it replaced chained each cell to the
-   store of the one before. The first and last rows of the rank's cells, whose ends must not read past u, take the
-   branching path. */
+   store of the one before. The last row of the rank's cells, whose end must not read past u, takes the branching
+   path (a cell reads only its own and its upper neighbours' faces, so the first row needs none). */
 static void PffShellInteriorDivergence(PffPressure ps, const PffShell *s, const PetscScalar *restrict u,
                                        PetscBool openOnly, PetscScalar *restrict ya)
 {
@@ -546,7 +546,7 @@ static void PffShellInteriorDivergence(PffPressure ps, const PffShell *s, const 
         const PetscReal ym = j > 0, zm = k > 0;
         const PetscInt  syp = j < n - 1 ? n : 0, szp = k < n - 1 ? n2 : 0; /* 0: the cell's own face, weight 0 */
         const PetscReal yp = syp != 0, zp = szp != 0;
-        if (row == 0 || row + n == nc) {
+        if (row + n == nc) {
           for (PetscInt i = 0; i < n; i++) {
             const PetscInt c = row + i;
             PetscScalar    v = 0;
