@@ -107,6 +107,8 @@ typedef struct {
 
 /* Life cycle. Create borrows grid (it must outlive the particles and be set up). SetFromOptions reads
    -particles_jitter j   jitter of the seeding lattice as a fraction of the sub-cell spacing, [0, 1] (default 1)
+   -particles_jitter_band b  cells within b of a change of the seeding function's type are seeded on the lattice,
+                         so that the initial interface is as smooth as the lattice's, [0, 8] (default 2)
    -particles_seed s     key of the counter-based RNG (default 0)
    -particles_substep_cfl c  cells a particle may move per RK3 sub-step (default 1) */
 PETSC_EXTERN PetscErrorCode PffParticlesCreate(PffGrid grid, PffParticles *p);

@@ -19,6 +19,7 @@ PetscErrorCode PffParticlesCreate(PffGrid grid, PffParticles *part)
   PetscCallMPI(MPI_Comm_rank(p->comm, &p->rank));
   PetscCallMPI(MPI_Comm_size(p->comm, &p->size));
   p->jitter     = PFF_PARTICLES_JITTER_DEFAULT;
+  p->jitterBand = PFF_PARTICLES_JITTER_BAND_DEFAULT;
   p->seed       = PFF_PARTICLES_SEED_DEFAULT;
   p->substepCfl = PFF_PARTICLES_SUBSTEP_CFL_DEFAULT;
   PetscCall(PffGridGetSizes(grid, &p->n0, &p->nlevels, p->origin, &p->h0, p->periodic));
@@ -40,6 +41,9 @@ PetscErrorCode PffParticlesSetFromOptions(PffParticles p)
   PetscOptionsBegin(p->comm, NULL, "FLIP particles", "PffParticles");
   PetscCall(PffOptionsReal("-particles_jitter", "Jitter of the seeding lattice as a fraction of the sub-cell spacing",
                            "PffParticlesSeed", p->jitter, &p->jitter, NULL));
+  PetscCall(PffOptionsInt("-particles_jitter_band",
+                          "Cells around the seeding function's type changes whose particles sit on the lattice",
+                          "PffParticlesSeed", p->jitterBand, &p->jitterBand, NULL));
   PetscCall(PffOptionsInt("-particles_seed", "Key of the counter-based random number generator", "PffParticlesSeed",
                           seed, &seed, NULL));
   PetscCall(PffOptionsReal("-particles_substep_cfl", "Cells a particle may move per RK3 sub-step", "PffParticlesAdvect",
@@ -47,6 +51,9 @@ PetscErrorCode PffParticlesSetFromOptions(PffParticles p)
   PetscOptionsEnd();
   PetscCheck(p->jitter >= 0 && p->jitter <= 1, p->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-particles_jitter %g is invalid: must be in [0, 1]", (double)p->jitter);
+  PetscCheck(p->jitterBand >= 0 && p->jitterBand <= PFF_PARTICLES_JITTER_BAND_MAX, p->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-particles_jitter_band %" PetscInt_FMT " is invalid: must be in [0, %d]", p->jitterBand,
+             PFF_PARTICLES_JITTER_BAND_MAX);
   PetscCheck(seed >= 0, p->comm, PETSC_ERR_ARG_OUTOFRANGE, "-particles_seed %" PetscInt_FMT " is invalid: must be >= 0",
              seed);
   PetscCheck(p->substepCfl > 0 && PetscIsNormalReal(p->substepCfl), p->comm, PETSC_ERR_ARG_OUTOFRANGE,

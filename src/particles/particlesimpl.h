@@ -4,6 +4,8 @@
 #include <pff.h>
 
 #define PFF_PARTICLES_JITTER_DEFAULT 1.0
+#define PFF_PARTICLES_JITTER_BAND_DEFAULT 2
+#define PFF_PARTICLES_JITTER_BAND_MAX 8
 #define PFF_PARTICLES_SEED_DEFAULT 0
 #define PFF_PARTICLES_SUBSTEP_CFL_DEFAULT 1.0
 #define PFF_PARTICLES_MAX_SUBSTEPS 16
@@ -55,6 +57,7 @@ struct _n_PffParticles {
 
   /* options */
   PetscReal jitter, substepCfl;
+  PetscInt  jitterBand; /* cells within this many of a change of the seeding type sit on the lattice */
   uint64_t  seed;
 
   /* store */

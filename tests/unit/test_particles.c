@@ -13,6 +13,13 @@
    an owned block and in its bin, and the numbers wrapped and clamped (partition independent) match
    a recount from the displaced positions.
 
+   Band: seeded again with -particles_jitter_band 2 (the default), 1 and 0, and with the plane tilted by 0.3 at
+   band 2. A cell is in the band when the particle types (liquid, air) at the lattice sub-cells of the cells within
+   r cells of it (at its own level; periodic axes wrapped, points beyond a wall ignored) differ and none of those
+   sub-cells is crossed by the plane; this is recomputed here point by point. Every particle of a band cell must
+   sit at its sub-cell centre, and no particle of another cell may (the jitter puts it there with probability 0);
+   the level plane has band cells, band 0 none.
+
    Sample run:  mpiexec -n 4 ./test_particles
    Prints the same lines on any number of ranks. */
 #include "pfftest.h"
@@ -22,7 +29,7 @@ static const char help[] = "Particle seeding, binning and migration.\n";
 #define N0 8
 
 typedef struct {
-  PetscReal holeLo[3], holeHi[3], y0;
+  PetscReal holeLo[3], holeHi[3], y0, tilt; /* liquid below y0 + tilt (x - holeLo[0]) */
 } SeedCtx;
 
 static PetscErrorCode SeedFn(const PetscReal x[3], PetscInt *type, PetscReal v[3], void *ctx)
@@ -32,7 +39,7 @@ static PetscErrorCode SeedFn(const PetscReal x[3], PetscInt *type, PetscReal v[3
   PetscFunctionBeginUser;
   PetscBool in = PETSC_TRUE;
   for (int a = 0; a < 3; a++) in = (PetscBool)(in && x[a] >= s->holeLo[a] && x[a] < s->holeHi[a]);
-  *type = in ? -1 : (x[1] < s->y0 ? PFF_PARTICLE_LIQUID : PFF_PARTICLE_AIR);
+  *type = in ? -1 : (x[1] < s->y0 + s->tilt * (x[0] - s->holeLo[0]) ? PFF_PARTICLE_LIQUID : PFF_PARTICLE_AIR);
   for (int a = 0; a < 3; a++) v[a] = x[a];
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -218,21 +225,139 @@ static PetscErrorCode TestMigrate(const PffTestCtx *ctx, PffParticles part, cons
 }
 
 /* Bad options are rejected with the key in the message. */
-static PetscErrorCode TestOptions(const PffTestCtx *ctx)
+/* The seeding function's particle type at grid position g (level-0 cells), -1 outside the walls (y, z) */
+static PetscErrorCode TypeAtGrid(const PffTestCtx *ctx, const SeedCtx *sc, PetscReal g[3], PetscInt *type)
 {
-  PffParticles   part;
-  PetscErrorCode ierr;
+  PetscReal x[3], v[3];
 
   PetscFunctionBeginUser;
+  *type = -1;
+  for (int a = 0; a < 3; a++) {
+    const PetscReal len = (PetscReal)(ctx->nb[a] * N0);
+    if (a == 0)
+      g[a] = g[a] < 0 ? g[a] + len : g[a] >= len ? g[a] - len : g[a]; /* periodic in x */
+    else if (g[a] < 0 || g[a] >= len)
+      PetscFunctionReturn(PETSC_SUCCESS);
+    x[a] = ctx->origin[a] + ctx->h0 * g[a];
+  }
+  PetscCall(SeedFn(x, type, v, (void *)sc));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Whether cell cc of raster block gid is in the band of r cells: the particle types (liquid, air; no particle does
+   not count) at the sub-cell centres of the cells within r cells of it (at its own level) differ, and no sub-cell
+   there is crossed by a change (a corner of the box its particle may jitter in, 1e-6 inside, has another type) */
+static PetscErrorCode BandExpected(const PffTestCtx *ctx, const SeedCtx *sc, PetscInt gid, const PetscInt cc[3],
+                                   PetscInt r, PetscBool *band)
+{
+  const PetscInt  l = ctx->level[gid], w = 2 * r + 1;
+  const PetscInt  ijk[3] = {gid % ctx->nb[0], (gid / ctx->nb[0]) % ctx->nb[1], gid / (ctx->nb[0] * ctx->nb[1])};
+  const PetscReal h      = (PetscReal)(1 << l); /* grid units */
+  PetscInt        lo = PFF_PARTICLE_NTYPES, hi = -1;
+  PetscBool       crossed = PETSC_FALSE;
+
+  PetscFunctionBeginUser;
+  for (PetscInt q = 0; q < 8 * w * w * w; q++) {
+    const PetscInt off[3] = {(q / 8) % w - r, (q / 8 / w) % w - r, q / 8 / (w * w) - r};
+    PetscReal      centre[3];
+    PetscInt       type, clo = PFF_PARTICLE_NTYPES, chi = -1;
+    for (int a = 0; a < 3; a++)
+      centre[a] = (PetscReal)(ijk[a] * N0) + ((PetscReal)(cc[a] + off[a]) + 0.25 + 0.5 * (PetscReal)((q >> a) & 1)) * h;
+    for (PetscInt corner = -1; corner < 8; corner++) { /* -1: the centre itself */
+      PetscReal g[3];
+      for (int a = 0; a < 3; a++)
+        g[a] = centre[a] + (corner < 0 ? 0 : ((corner >> a) & 1 ? 0.25 : -0.25) * (1 - 1e-6) * h);
+      PetscCall(TypeAtGrid(ctx, sc, g, &type));
+      if (type < 0) continue;
+      if (corner < 0) {
+        lo = PetscMin(lo, type);
+        hi = PetscMax(hi, type);
+      }
+      clo = PetscMin(clo, type);
+      chi = PetscMax(chi, type);
+    }
+    crossed = (PetscBool)(crossed || chi > clo);
+  }
+  *band = (PetscBool)(hi > lo && !crossed);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Particles on the lattice inside and outside the band cells, with -particles_jitter_band r; some: the band must
+   hold particles */
+static PetscErrorCode TestBand(const PffTestCtx *ctx, const SeedCtx *sc, PetscInt r, PetscBool some)
+{
+  PffParticles      part;
+  PffParticleArrays a;
+  PetscBool        *band;
+  char              val[8];
+  PetscInt64        n[4] = {0, 0, 0, 0}; /* band: on lattice, off; other: on, off */
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscSNPrintf(val, sizeof(val), "%" PetscInt_FMT, r));
+  PetscCall(PetscOptionsSetValue(NULL, "-particles_jitter_band", val));
   PetscCall(PffParticlesCreate(ctx->grid, &part));
-  PetscCall(PetscOptionsSetValue(NULL, "-particles_jitter", "2"));
-  PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
-  ierr = PffParticlesSetFromOptions(part);
-  PetscCall(PetscPopErrorHandler());
-  PetscCall(PetscOptionsClearValue(NULL, "-particles_jitter"));
-  PetscCheck(ierr != 0, ctx->comm, PETSC_ERR_PLIB, "-particles_jitter 2 was accepted");
+  PetscCall(PffParticlesSetFromOptions(part));
+  PetscCall(PetscOptionsClearValue(NULL, "-particles_jitter_band"));
+  PetscCall(PffParticlesSeed(part, SeedFn, (void *)sc));
+  PetscCall(PetscMalloc1(ctx->nblocks * N0 * N0 * N0, &band));
+  for (PetscInt gid = 0; gid < ctx->nblocks; gid++) {
+    const PetscInt l = ctx->level[gid], nn = N0 >> l;
+    if (l < 0) continue;
+    for (PetscInt c = 0; c < nn * nn * nn; c++) {
+      const PetscInt cc[3] = {c % nn, (c / nn) % nn, c / (nn * nn)};
+      PetscCall(BandExpected(ctx, sc, gid, cc, r, &band[gid * N0 * N0 * N0 + c]));
+    }
+  }
+  PetscCall(PffParticlesGetArrays(part, &a));
+  for (PetscInt i = 0; i < a.n; i++) {
+    const uint64_t sub = a.id[i] % 8, c = (a.id[i] / 8) % (N0 * N0 * N0);
+    const PetscInt gid = (PetscInt)(a.id[i] / 8 / (N0 * N0 * N0)), l = ctx->level[gid], nn = N0 >> l;
+    const PetscInt ijk[3] = {gid % ctx->nb[0], (gid / ctx->nb[0]) % ctx->nb[1], gid / (ctx->nb[0] * ctx->nb[1])};
+    const PetscInt cc[3]  = {(PetscInt)(c % (uint64_t)nn), (PetscInt)((c / (uint64_t)nn) % (uint64_t)nn),
+                             (PetscInt)(c / (uint64_t)(nn * nn))};
+    PetscBool      on     = PETSC_TRUE;
+    for (int d = 0; d < 3; d++) {
+      const PetscReal centre = (PetscReal)(ijk[d] * N0) +
+                               ((PetscReal)cc[d] + 0.25 + 0.5 * (PetscReal)((sub >> d) & 1)) * (PetscReal)(1 << l);
+      on = (PetscBool)(on && PetscAbsReal(a.x[3 * i + d] - centre) < 1e-5);
+    }
+    n[(band[gid * N0 * N0 * N0 + (PetscInt)c] ? 0 : 2) + (on ? 0 : 1)]++;
+  }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, n, 4, MPIU_INT64, MPI_SUM, ctx->comm));
+  PetscCheck(n[1] == 0 && n[2] == 0, ctx->comm, PETSC_ERR_PLIB,
+             "band %" PetscInt_FMT ": %" PetscInt64_FMT " particles of band cells off the lattice, %" PetscInt64_FMT
+             " of other cells on it",
+             r, n[1], n[2]);
+  PetscCheck(n[3] > 0 && (!some || n[0] > 0) && (r > 0 || n[0] == 0), ctx->comm, PETSC_ERR_PLIB,
+             "band %" PetscInt_FMT ": no cells %s the band", r, n[3] == 0 ? "outside" : "in");
+  PetscCall(PetscPrintf(ctx->comm,
+                        "band %" PetscInt_FMT ": %" PetscInt64_FMT
+                        " particles on the lattice (band cells), %" PetscInt64_FMT " jittered\n",
+                        r, n[0], n[3]));
+  PetscCall(PetscFree(band));
   PetscCall(PffParticlesDestroy(&part));
-  PetscCall(PetscPrintf(ctx->comm, "options: -particles_jitter 2 rejected\n"));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode TestOptions(const PffTestCtx *ctx)
+{
+  const char *bad[][2] = {
+      {"-particles_jitter", "2"}, {"-particles_jitter_band", "9"}, {"-particles_jitter_band", "-1"}};
+
+  PetscFunctionBeginUser;
+  for (size_t q = 0; q < sizeof(bad) / sizeof(bad[0]); q++) {
+    PffParticles   part;
+    PetscErrorCode ierr;
+    PetscCall(PffParticlesCreate(ctx->grid, &part));
+    PetscCall(PetscOptionsSetValue(NULL, bad[q][0], bad[q][1]));
+    PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
+    ierr = PffParticlesSetFromOptions(part);
+    PetscCall(PetscPopErrorHandler());
+    PetscCall(PetscOptionsClearValue(NULL, bad[q][0]));
+    PetscCheck(ierr != 0, ctx->comm, PETSC_ERR_PLIB, "%s %s was accepted", bad[q][0], bad[q][1]);
+    PetscCall(PffParticlesDestroy(&part));
+    PetscCall(PetscPrintf(ctx->comm, "options: %s %s rejected\n", bad[q][0], bad[q][1]));
+  }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -249,15 +374,22 @@ int main(int argc, char **argv)
   PetscCall(PffInitializePackage());
   PetscCall(PffTestCreateGrid(PETSC_COMM_WORLD, nb, periodic, origin, 1.0 / 16, N0, 2, -1, 0, 11, &ctx));
   /* aligned with level-1 cells (2 h0) */
-  SeedCtx sc = {{origin[0] + 4 * ctx.h0, origin[1] + 6 * ctx.h0, origin[2] + 2 * ctx.h0},
-                {origin[0] + 14 * ctx.h0, origin[1] + 12 * ctx.h0, origin[2] + 10 * ctx.h0},
-                origin[1] + 10 * ctx.h0};
+  SeedCtx sc     = {{origin[0] + 4 * ctx.h0, origin[1] + 6 * ctx.h0, origin[2] + 2 * ctx.h0},
+                    {origin[0] + 14 * ctx.h0, origin[1] + 12 * ctx.h0, origin[2] + 10 * ctx.h0},
+                    origin[1] + 10 * ctx.h0,
+                    0};
+  SeedCtx tilted = sc;
+  tilted.tilt    = 0.3;
   PetscCall(TestOptions(&ctx));
   PetscCall(PffParticlesCreate(ctx.grid, &part));
   PetscCall(PffParticlesSetFromOptions(part));
   PetscCall(TestSeed(&ctx, &sc, part, &s));
   PetscCall(TestMigrate(&ctx, part, &s));
   PetscCall(PffParticlesDestroy(&part));
+  PetscCall(TestBand(&ctx, &sc, 2, PETSC_TRUE));
+  PetscCall(TestBand(&ctx, &sc, 1, PETSC_TRUE));
+  PetscCall(TestBand(&ctx, &sc, 0, PETSC_FALSE));
+  PetscCall(TestBand(&ctx, &tilted, 2, PETSC_FALSE));
   PetscCall(PffGridDestroy(&ctx.grid));
   PetscCall(PetscFinalize());
   return 0;
