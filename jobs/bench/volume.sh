@@ -17,6 +17,8 @@ declare -A CASES=(
   [drop_pool]="drop_pool.yaml"
   [still_1e3_1000]="still_water.yaml -sim_max_steps 1000 -sim_t_end 1000"
   [still_1e4_1000]="still_water.yaml -still_ratio 1e4 -sim_max_steps 1000 -sim_t_end 1000"
+  [still_1e3_1000_band0]="still_water.yaml -particles_jitter_band 0 -sim_max_steps 1000 -sim_t_end 1000"
+  [still_1e4_1000_band0]="still_water.yaml -still_ratio 1e4 -particles_jitter_band 0 -sim_max_steps 1000 -sim_t_end 1000"
   [still_lattice_1000]="still_water.yaml -particles_jitter 0 -pressure_ksp_rtol 1e-10 -sim_max_steps 1000 -sim_t_end 1000"
   [still_lattice_1e4_1000]="still_water.yaml -still_ratio 1e4 -particles_jitter 0 -pressure_ksp_rtol 1e-10 -sim_max_steps 1000 -sim_t_end 1000"
   [rt3d_w32]="rt3d.yaml"
@@ -35,7 +37,7 @@ declare -A CASES=(
   [dam_break_3lev]="dam_break_3lev.yaml"
   [drop_pool_2lev]="drop_pool_2lev.yaml"
 )
-ORDER=${PFF_BENCH_CASES:-"still_small_1e5 dam_break_small_cfl3 dam_break_small_cfl1 dam_break_small_cfl0.1 dam_break_small_cfl0.01 dam_break_small_dtmax1e-6 bubbles_small_003 still_water_2lev still_water_3lev rt3d_small_2lev rt3d_small_3lev dam_break drop_pool rt3d_w32 dam_break_2lev dam_break_3lev drop_pool_2lev still_1e3_1000 still_1e4_1000 still_lattice_1000 still_lattice_1e4_1000"}
+ORDER=${PFF_BENCH_CASES:-"still_small_1e5 dam_break_small_cfl3 dam_break_small_cfl1 dam_break_small_cfl0.1 dam_break_small_cfl0.01 dam_break_small_dtmax1e-6 bubbles_small_003 still_water_2lev still_water_3lev rt3d_small_2lev rt3d_small_3lev dam_break drop_pool rt3d_w32 dam_break_2lev dam_break_3lev drop_pool_2lev still_1e3_1000 still_1e4_1000 still_1e3_1000_band0 still_1e4_1000_band0 still_lattice_1000 still_lattice_1e4_1000"}
 [ -f "$CSV" ] || echo "case,options,ranks,steps,wall_s,liquid_drift,liquid_max_drift,gas_drift,gas_max_drift,peak_umax_grid,load_before,status" > "$CSV"
 for c in $ORDER; do
   set -- ${CASES[$c]}
