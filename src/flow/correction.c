@@ -424,10 +424,10 @@ PetscErrorCode PffFlowVolumeCorrection_Private(PffFlow f, PffFlowStepStats *st)
 
 /* The advection channels with the displacement as velocity d / dt: chUa = u + d_gas / dt for the gas,
    chUl = (the extrapolated liquid velocity, or u without extrapolation) + d_liquid / dt; halos
-   exchanged. On a face between a liquid and a gas cell each phase keeps only the part of d that moves
-   it towards its own side: the correction fills a liquid cell with liquid and a gas cell with gas and
-   never carries a particle across the interface (a type-blind d pulled the gas into every liquid cell
-   short of particles, where it was deleted as a bubble, which left the cell short again). */
+   exchanged. On a face between a liquid and a gas cell the gas keeps only the part of d that moves it
+   into the gas cell (a type-blind d pulled the gas into every liquid cell short of particles, where it
+   was deleted as a bubble, which left the cell short again); the liquid keeps all of d, or, with
+   -flow_volume_correction_interface closed, neither phase crosses the face. */
 PetscErrorCode PffFlowCorrectionVelocity_Private(PffFlow f, PetscReal dt, PetscBool extrapolated)
 {
   PetscInt        nlocal;
@@ -454,13 +454,15 @@ PetscErrorCode PffFlowCorrectionVelocity_Private(PffFlow f, PetscReal dt, PetscB
             PetscBool      lo, hi;
             PffFlowFaceTags_Private(vphi, i, j, k, d, n, &lo, &hi);
             const PetscReal dd = disp[c];
-            PetscReal       dg = dd;
-            if (lo && !hi)
+            PetscReal       dg = dd, dl = dd;
+            if (lo != hi && f->volCorrInterface == PFF_FLOW_CORR_CLOSED)
+              dg = dl = 0;
+            else if (lo && !hi)
               dg = PetscMax(dd, 0); /* liquid below, gas above: + moves into the gas */
             else if (!lo && hi)
               dg = PetscMin(dd, 0);
             ua[c] = (float)(u[c] + idt * dg);
-            ul[c] = (float)((extrapolated ? ul[c] : u[c]) + idt * dd);
+            ul[c] = (float)((extrapolated ? ul[c] : u[c]) + idt * dl);
           }
     }
   }

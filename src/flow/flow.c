@@ -1,7 +1,9 @@
 /* PffFlow life cycle and options. */
 #include "flowimpl.h"
 
-const char *const PffFlowModels[] = {"two_phase", "liquid", "PffFlowModel", "PFF_FLOW_", NULL};
+const char *const PffFlowModels[]               = {"two_phase", "liquid", "PffFlowModel", "PFF_FLOW_", NULL};
+const char *const PffFlowCorrectionInterfaces[] = {"liquid", "closed", "PffFlowCorrectionInterface", "PFF_FLOW_CORR_",
+                                                   NULL};
 
 const char *const PffFlowStageNames[] = {"P2G",    "PhaseField", "Forces",     "Pressure", "G2P",
                                          "Advect", "Escaped",    "Correction", "Adapt",    NULL};
@@ -83,6 +85,12 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
                            "PffFlowSetFromOptions", f->volCorrMaxDisp, &f->volCorrMaxDisp, NULL));
   PetscCall(PffOptionsReal("-flow_volume_correction_rtol", "Relative tolerance of the volume-correction solve",
                            "PffFlowSetFromOptions", f->volCorrRtol, &f->volCorrRtol, NULL));
+  PetscCall(
+      PffOptionsEnum("-flow_volume_correction_interface",
+                     "What the correction's displacement may do at a liquid-gas face: liquid (the liquid crosses, "
+                     "the gas moves into the gas only) or closed (neither phase crosses)",
+                     "PffFlowSetFromOptions", PffFlowCorrectionInterfaces, (PetscEnum)f->volCorrInterface,
+                     (PetscEnum *)&f->volCorrInterface, NULL));
   PetscCall(PffOptionsBool("-flow_delete_bubbles", "Delete escaped air particles deep in liquid (Sec. 3.4)",
                            "PffFlowSetFromOptions", f->deleteBubbles, &f->deleteBubbles, NULL));
   PetscCall(PffOptionsEnum("-flow_model", "Flow model: two_phase (PF-FLIP) or liquid (free surface, tall cells)",

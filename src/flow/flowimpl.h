@@ -54,10 +54,11 @@ struct _n_PffFlow {
   void      *staticSolidCtx;
 
   /* physics and numerics */
-  PetscReal rho[PFF_PARTICLE_NTYPES], nu[PFF_PARTICLE_NTYPES], gravity[3];
-  PetscReal cfl, dtMax, alphaPhi, deltaPhi, flip;
-  PetscReal volCorr, volCorrMaxDisp, volCorrRtol; /* -flow_volume_correction* (correction.c) */
-  PetscBool usePressure, deleteBubbles;
+  PetscReal                  rho[PFF_PARTICLE_NTYPES], nu[PFF_PARTICLE_NTYPES], gravity[3];
+  PetscReal                  cfl, dtMax, alphaPhi, deltaPhi, flip;
+  PetscReal                  volCorr, volCorrMaxDisp, volCorrRtol; /* -flow_volume_correction* (correction.c) */
+  PffFlowCorrectionInterface volCorrInterface;
+  PetscBool                  usePressure, deleteBubbles;
   PetscBool liquidSurfaceVolume; /* the liquid model's surface from the particles' volume fraction (liquid.c) */
   PetscReal rho0;                /* kernel sum rho~_0 (Eq. 7) */
 
