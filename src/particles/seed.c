@@ -142,6 +142,26 @@ static void BandReduce(PffBand *b, PetscInt n, PetscBool flags[])
   for (PetscInt c = 0; c < n * n * n; c++) flags[c] = (PetscBool)(b->hi[cur][c] > b->lo[cur][c]);
 }
 
+/* The least and largest type of the 8 sub-cell centres of each of the m^3 extended cells */
+static void CellRanges(const PffBand *b, PetscInt m, signed char lo[], signed char hi[])
+{
+  const PetscInt ms = 2 * m;
+
+  for (PetscInt c = 0; c < m * m * m; c++) {
+    const PetscInt q[3] = {c % m, (c / m) % m, c / (m * m)};
+    signed char    l = PFF_BAND_NONE, h = SCHAR_MIN;
+    for (PetscInt sub = 0; sub < 8; sub++) {
+      const signed char t =
+          b->type[(2 * q[0] + (sub & 1)) + ms * ((2 * q[1] + (sub >> 1 & 1)) + ms * (2 * q[2] + (sub >> 2)))];
+      if (t == PFF_BAND_NONE) continue;
+      l = PetscMin(l, t);
+      h = PetscMax(h, t);
+    }
+    lo[c] = l;
+    hi[c] = h;
+  }
+}
+
 /* band[c] for the n^3 cells of block info: whether the particle type changes within r cells of c, read at the lattice
    sub-cell centres, and no sub-cell within r cells holds a change (the interface lies on sub-cell faces, where the
    lattice places it exactly). Where an interface crosses sub-cells the jitter is what represents its position inside
@@ -166,27 +186,24 @@ static PetscErrorCode BandCells(PffParticles p, const PffBlockInfo *info, PffSee
                             0.5 * (PetscReal)(q[2] - 2 * r) + 0.25};
     PetscCall(TypeAt(p, info, x, fn, ctx, &b->type[c]));
   }
-  for (PetscInt c = 0; c < m * m * m; c++) {
-    const PetscInt q[3] = {c % m, (c / m) % m, c / (m * m)};
-    signed char    l = PFF_BAND_NONE, h = SCHAR_MIN;
-    for (PetscInt sub = 0; sub < 8; sub++) {
-      const signed char t =
-          b->type[(2 * q[0] + (sub & 1)) + ms * ((2 * q[1] + (sub >> 1 & 1)) + ms * (2 * q[2] + (sub >> 2)))];
-      if (t == PFF_BAND_NONE) continue;
-      l = PetscMin(l, t);
-      h = PetscMax(h, t);
-    }
-    b->lo[0][c] = l;
-    b->hi[0][c] = h;
-  }
+  CellRanges(b, m, b->lo[0], b->hi[0]);
   BandReduce(b, n, band);
   for (PetscInt c = 0; c < n * n * n; c++) any = (PetscBool)(any || band[c]);
   if (!any) PetscFunctionReturn(PETSC_SUCCESS);
-  /* the sub-cells a change crosses: a corner of the box their particle may jitter in against the centre's type */
+  /* the sub-cells a change crosses: a corner of the box their particle may jitter in against the centre's type. Only
+     cells within one cell of a change of the centres' types are looked at: a change crossing a sub-cell flips a
+     centre there, unless it is thinner than a sub-cell, which the lattice does not see either */
+  CellRanges(b, m, b->lo[1], b->hi[1]);
   for (PetscInt e = 0; e < m * m * m; e++) {
     const PetscInt q[3]  = {e % m, (e / m) % m, e / (m * m)};
-    signed char    cross = 0;
-    for (PetscInt sub = 0; sub < 8 && !cross; sub++) {
+    signed char    cross = 0, nl = PFF_BAND_NONE, nh = SCHAR_MIN; /* the range of the 27 cells around */
+    for (PetscInt w = 0; w < 27; w++) {
+      const PetscInt o[3] = {q[0] + w % 3 - 1, q[1] + (w / 3) % 3 - 1, q[2] + w / 9 - 1};
+      if (o[0] < 0 || o[1] < 0 || o[2] < 0 || o[0] >= m || o[1] >= m || o[2] >= m) continue;
+      nl = PetscMin(nl, b->lo[1][o[0] + m * (o[1] + m * o[2])]);
+      nh = PetscMax(nh, b->hi[1][o[0] + m * (o[1] + m * o[2])]);
+    }
+    for (PetscInt sub = 0; sub < 8 && !cross && nh > nl; sub++) {
       const PetscInt s[3] = {2 * q[0] + (sub & 1), 2 * q[1] + (sub >> 1 & 1), 2 * q[2] + (sub >> 2)};
       signed char    l = b->type[s[0] + ms * (s[1] + ms * s[2])], h = l;
       for (PetscInt corner = 0; corner < 8; corner++) {
