@@ -37,8 +37,9 @@ PETSC_EXTERN const char *const PffFlowModels[];
 /* -flow_volume_correction_interface: what the two-phase correction's displacement may do at a face between a liquid
    and a gas cell. liquid (the default): the liquid takes all of it, the gas only the part that moves it into the gas
    cell; closed: neither phase crosses it (the correction works within each phase, the interface moves with the flow
-   only: still pools, drops and rt3d keep their volume better, the dam break worse; docs/validation.md). */
-typedef enum { PFF_FLOW_CORR_LIQUID, PFF_FLOW_CORR_CLOSED } PffFlowCorrectionInterface;
+   only: still pools, drops and rt3d keep their volume better, the dam break worse; docs/validation.md); layer: no
+   face of an interface cell (0 < phi < 1) moves, elsewhere the rule of liquid. */
+typedef enum { PFF_FLOW_CORR_LIQUID, PFF_FLOW_CORR_CLOSED, PFF_FLOW_CORR_LAYER } PffFlowCorrectionInterface;
 PETSC_EXTERN const char *const PffFlowCorrectionInterfaces[];
 
 /* What one adaptation did (PF-FLIP Sec. 5.4, -adapt_levels). */

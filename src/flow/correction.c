@@ -427,7 +427,9 @@ PetscErrorCode PffFlowVolumeCorrection_Private(PffFlow f, PffFlowStepStats *st)
    exchanged. On a face between a liquid and a gas cell the gas keeps only the part of d that moves it
    into the gas cell (a type-blind d pulled the gas into every liquid cell short of particles, where it
    was deleted as a bubble, which left the cell short again); the liquid keeps all of d, or, with
-   -flow_volume_correction_interface closed, neither phase crosses the face. */
+   -flow_volume_correction_interface closed, neither phase crosses the face. With layer no face of an interface cell
+   (0 < phi < 1) moves: the displacement evens out the bulk's particle noise, and where it reached the interface it
+   roughened it, which the square root of Eq. 7 counts as liquid. */
 PetscErrorCode PffFlowCorrectionVelocity_Private(PffFlow f, PetscReal dt, PetscBool extrapolated)
 {
   PetscInt        nlocal;
@@ -453,8 +455,14 @@ PetscErrorCode PffFlowCorrectionVelocity_Private(PffFlow f, PetscReal dt, PetscB
             const PetscInt c = i + n * (j + n * k);
             PetscBool      lo, hi;
             PffFlowFaceTags_Private(vphi, i, j, k, d, n, &lo, &hi);
-            const PetscReal dd = disp[c];
-            PetscReal       dg = dd, dl = dd;
+            PetscReal dd = disp[c];
+            if (f->volCorrInterface == PFF_FLOW_CORR_LAYER) {
+              const PetscInt  e[3] = {d == 0, d == 1, d == 2};
+              const PetscReal p0   = *PffViewsAt(vphi, i - e[0], j - e[1], k - e[2], n),
+                              p1   = *PffViewsAt(vphi, i, j, k, n);
+              if ((p0 > 0 && p0 < 1) || (p1 > 0 && p1 < 1)) dd = 0;
+            }
+            PetscReal dg = dd, dl = dd;
             if (lo != hi && f->volCorrInterface == PFF_FLOW_CORR_CLOSED)
               dg = dl = 0;
             else if (lo && !hi)

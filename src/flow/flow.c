@@ -2,8 +2,8 @@
 #include "flowimpl.h"
 
 const char *const PffFlowModels[]               = {"two_phase", "liquid", "PffFlowModel", "PFF_FLOW_", NULL};
-const char *const PffFlowCorrectionInterfaces[] = {"liquid", "closed", "PffFlowCorrectionInterface", "PFF_FLOW_CORR_",
-                                                   NULL};
+const char *const PffFlowCorrectionInterfaces[] = {"liquid",         "closed", "layer", "PffFlowCorrectionInterface",
+                                                   "PFF_FLOW_CORR_", NULL};
 
 const char *const PffFlowStageNames[] = {"P2G",    "PhaseField", "Forces",     "Pressure", "G2P",
                                          "Advect", "Escaped",    "Correction", "Adapt",    NULL};
@@ -88,7 +88,8 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
   PetscCall(
       PffOptionsEnum("-flow_volume_correction_interface",
                      "What the correction's displacement may do at a liquid-gas face: liquid (the liquid crosses, "
-                     "the gas moves into the gas only) or closed (neither phase crosses)",
+                     "the gas moves into the gas only), closed (neither phase crosses) or layer (no face of an "
+                     "interface cell moves)",
                      "PffFlowSetFromOptions", PffFlowCorrectionInterfaces, (PetscEnum)f->volCorrInterface,
                      (PetscEnum *)&f->volCorrInterface, NULL));
   PetscCall(PffOptionsBool("-flow_delete_bubbles", "Delete escaped air particles deep in liquid (Sec. 3.4)",
