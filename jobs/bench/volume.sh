@@ -4,6 +4,8 @@
 # line), peak max|u| on the grid, steps and wall time, the load average before the run.
 #   PFF_BENCH_RANKS  MPI ranks (default 2)     PFF_BENCH_EXE  the pfflip binary (default build/bin/pfflip)
 #   PFF_BENCH_CASES  names of the cases to run (default all, see below)
+#   PFF_BENCH_EXTRA  options appended to every case (e.g. -flow_volume_correction_interface closed), also in the
+#                    CSV's options column
 set -euo pipefail
 ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 OUT=${PFF_BENCH_DIR:-$ROOT/output/bench}
@@ -40,7 +42,7 @@ declare -A CASES=(
 ORDER=${PFF_BENCH_CASES:-"still_small_1e5 dam_break_small_cfl3 dam_break_small_cfl1 dam_break_small_cfl0.1 dam_break_small_cfl0.01 dam_break_small_dtmax1e-6 bubbles_small_003 still_water_2lev still_water_3lev rt3d_small_2lev rt3d_small_3lev dam_break drop_pool rt3d_w32 dam_break_2lev dam_break_3lev drop_pool_2lev still_1e3_1000 still_1e4_1000 still_1e3_1000_band0 still_1e4_1000_band0 still_lattice_1000 still_lattice_1e4_1000"}
 [ -f "$CSV" ] || echo "case,options,ranks,steps,wall_s,liquid_drift,liquid_max_drift,gas_drift,gas_max_drift,peak_umax_grid,load_before,status" > "$CSV"
 for c in $ORDER; do
-  set -- ${CASES[$c]}
+  set -- ${CASES[$c]} ${PFF_BENCH_EXTRA:-}
   yaml=$1; shift
   dir=$OUT/volume_$c
   rm -rf "$dir"

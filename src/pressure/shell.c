@@ -520,9 +520,6 @@ PetscErrorCode PffPressureShellGetCoefficients_Private(Mat S, PetscReal **cf)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* y = G^T diag(M) (mask u) = sum_f h_upper^2 u_f g_f over the face rows r = 3 c + d of the face Vec u,
-   with mask the open faces (c_f != 0) if openOnly, else every face that has a lower cell (walls and
-   inactive neighbours have no row in G). -y is V D u, the volume-weighted divergence. */
 /* ya = the divergence's part from the faces inside the blocks (the faces with both cells in one block,
    PFF_FACE_INTERIOR: the lower faces of the cells not on a block's lower sides), gathered cell by cell as in
    PffShellInterior: a cell takes h^2 u of its own lower faces and minus that of its upper neighbours' lower faces
@@ -576,6 +573,9 @@ static void PffShellInteriorDivergence(PffPressure ps, const PffShell *s, const 
   }
 }
 
+/* y = G^T diag(M) (mask u) = sum_f h_upper^2 u_f g_f over the face rows r = 3 c + d of the face Vec u,
+   with mask the open faces (c_f != 0) if openOnly, else every face that has a lower cell (walls and
+   inactive neighbours have no row in G). -y is V D u, the volume-weighted divergence. */
 PetscErrorCode PffPressureShellDivergence_Private(PffPressure ps, Mat S, Vec u, PetscBool openOnly, Vec y)
 {
   PffShell          *s;

@@ -97,6 +97,30 @@ static PetscErrorCode CheckBins(PffParticles part, const PffTestCtx *ctx)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* The lattice place a seeded particle's id names: raster block gid, its level l, the block's raster index ijk, the cell
+   cc at level l and the sub-cell sub (bit a: upper half along axis a) */
+typedef struct {
+  PetscInt gid, l, ijk[3], cc[3], sub;
+} IdPlace;
+
+static IdPlace PlaceOf(const PffTestCtx *ctx, uint64_t id)
+{
+  const uint64_t c = (id / 8) % (N0 * N0 * N0);
+  IdPlace        q;
+
+  q.sub            = (PetscInt)(id % 8);
+  q.gid            = (PetscInt)(id / 8 / (N0 * N0 * N0));
+  q.l              = ctx->level[q.gid];
+  q.ijk[0]         = q.gid % ctx->nb[0];
+  q.ijk[1]         = (q.gid / ctx->nb[0]) % ctx->nb[1];
+  q.ijk[2]         = q.gid / (ctx->nb[0] * ctx->nb[1]);
+  const uint64_t n = (uint64_t)(N0 >> q.l);
+  q.cc[0]          = (PetscInt)(c % n);
+  q.cc[1]          = (PetscInt)((c / n) % n);
+  q.cc[2]          = (PetscInt)(c / (n * n));
+  return q;
+}
+
 static PetscErrorCode TestSeed(const PffTestCtx *ctx, const SeedCtx *sc, PffParticles part, Summary *got)
 {
   PetscInt64 expect[PFF_PARTICLE_NTYPES] = {0, 0};
@@ -138,12 +162,9 @@ static PetscErrorCode TestSeed(const PffTestCtx *ctx, const SeedCtx *sc, PffPart
   PffParticleArrays a;
   PetscCall(PffParticlesGetArrays(part, &a));
   for (PetscInt i = 0; i < a.n; i++) {
-    const uint64_t  sub = a.id[i] % 8, c = (a.id[i] / 8) % (N0 * N0 * N0);
-    const PetscInt  gid = (PetscInt)(a.id[i] / 8 / (N0 * N0 * N0)), l = ctx->level[gid], n = N0 >> l;
-    const PetscInt  ijk[3] = {gid % ctx->nb[0], (gid / ctx->nb[0]) % ctx->nb[1], gid / (ctx->nb[0] * ctx->nb[1])};
-    const PetscInt  cc[3]  = {(PetscInt)(c % (uint64_t)n), (PetscInt)((c / (uint64_t)n) % (uint64_t)n),
-                              (PetscInt)(c / (uint64_t)(n * n))};
-    const PetscReal h      = (PetscReal)(1 << l); /* grid units */
+    const IdPlace   pl = PlaceOf(ctx, a.id[i]);
+    const PetscInt  l = pl.l, sub = pl.sub, *ijk = pl.ijk, *cc = pl.cc;
+    const PetscReal h = (PetscReal)(1 << l); /* grid units */
     PetscReal       x[3];
     PetscCheck(PffParticleWordLevel(a.word[i]) == l, PETSC_COMM_SELF, PETSC_ERR_PLIB,
                "particle level %" PetscInt_FMT ", block level %" PetscInt_FMT, PffParticleWordLevel(a.word[i]), l);
@@ -224,7 +245,6 @@ static PetscErrorCode TestMigrate(const PffTestCtx *ctx, PffParticles part, cons
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Bad options are rejected with the key in the message. */
 /* The seeding function's particle type at grid position g (level-0 cells), -1 outside the walls (y, z) */
 static PetscErrorCode TypeAtGrid(const PffTestCtx *ctx, const SeedCtx *sc, PetscReal g[3], PetscInt *type)
 {
@@ -310,18 +330,16 @@ static PetscErrorCode TestBand(const PffTestCtx *ctx, const SeedCtx *sc, PetscIn
   }
   PetscCall(PffParticlesGetArrays(part, &a));
   for (PetscInt i = 0; i < a.n; i++) {
-    const uint64_t sub = a.id[i] % 8, c = (a.id[i] / 8) % (N0 * N0 * N0);
-    const PetscInt gid = (PetscInt)(a.id[i] / 8 / (N0 * N0 * N0)), l = ctx->level[gid], nn = N0 >> l;
-    const PetscInt ijk[3] = {gid % ctx->nb[0], (gid / ctx->nb[0]) % ctx->nb[1], gid / (ctx->nb[0] * ctx->nb[1])};
-    const PetscInt cc[3]  = {(PetscInt)(c % (uint64_t)nn), (PetscInt)((c / (uint64_t)nn) % (uint64_t)nn),
-                             (PetscInt)(c / (uint64_t)(nn * nn))};
-    PetscBool      on     = PETSC_TRUE;
+    const IdPlace pl = PlaceOf(ctx, a.id[i]);
+    PetscBool     on = PETSC_TRUE;
     for (int d = 0; d < 3; d++) {
-      const PetscReal centre = (PetscReal)(ijk[d] * N0) +
-                               ((PetscReal)cc[d] + 0.25 + 0.5 * (PetscReal)((sub >> d) & 1)) * (PetscReal)(1 << l);
+      const PetscReal centre =
+          (PetscReal)(pl.ijk[d] * N0) +
+          ((PetscReal)pl.cc[d] + 0.25 + 0.5 * (PetscReal)((pl.sub >> d) & 1)) * (PetscReal)(1 << pl.l);
       on = (PetscBool)(on && PetscAbsReal(a.x[3 * i + d] - centre) < 1e-5);
     }
-    n[(band[gid * N0 * N0 * N0 + (PetscInt)c] ? 0 : 2) + (on ? 0 : 1)]++;
+    const PetscInt c = pl.cc[0] + (N0 >> pl.l) * (pl.cc[1] + (N0 >> pl.l) * pl.cc[2]);
+    n[(band[pl.gid * N0 * N0 * N0 + c] ? 0 : 2) + (on ? 0 : 1)]++;
   }
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, n, 4, MPIU_INT64, MPI_SUM, ctx->comm));
   PetscCheck(n[1] == 0 && n[2] == 0, ctx->comm, PETSC_ERR_PLIB,
@@ -339,6 +357,7 @@ static PetscErrorCode TestBand(const PffTestCtx *ctx, const SeedCtx *sc, PetscIn
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Bad options are rejected with the key in the message. */
 static PetscErrorCode TestOptions(const PffTestCtx *ctx)
 {
   const char *bad[][2] = {
