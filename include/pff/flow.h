@@ -17,6 +17,7 @@ typedef struct _n_PffFlow *PffFlow;
 #define PFF_FLOW_VOLCORR_DEFAULT 0.5   /* -flow_volume_correction: kappa, share of the volume error removed per step */
 #define PFF_FLOW_VOLCORR_MAXDISP_DEFAULT 0.5       /* -flow_volume_correction_max_displacement, in cells */
 #define PFF_FLOW_VOLCORR_RTOL_DEFAULT 1e-3         /* -flow_volume_correction_rtol of its solve */
+#define PFF_FLOW_VOLCONTROL_DEFAULT 1.0            /* -flow_volume_control: gain of the liquid volume's control */
 #define PFF_FLOW_EXTRAPOLATE_LAYERS_DEFAULT 3      /* -flow_extrapolate_layers: the paper's "a few cells" (Sec. 3.7) */
 #define PFF_FLOW_ADAPT_BAND_DEFAULT 1.0            /* -adapt_band: beta_bw of Sec. 5.4 step 6 */
 #define PFF_FLOW_ADAPT_DELAY_DEFAULT 3             /* -adapt_coarsen_delay: D_p >= 3 (Sec. 5.4) */
@@ -105,6 +106,11 @@ PETSC_EXTERN PetscErrorCode PffFlowUpdateFields(PffFlow flow, PetscBool vorticit
 
 PETSC_EXTERN PetscErrorCode PffFlowGetTime(PffFlow flow, PetscReal *t, PetscInt *step);
 PETSC_EXTERN PetscErrorCode PffFlowSetTime(PffFlow flow, PetscReal t, PetscInt step);
+/* The state of the liquid volume's control (-flow_volume_control, docs/flow.md): the liquid volume it holds (0 until
+   the first step sets it) and the liquid's target particle volume fraction s*. A checkpoint stores both, so that a
+   restart continues the control as the uninterrupted run would. Not collective. */
+PETSC_EXTERN PetscErrorCode PffFlowGetVolumeControl(PffFlow flow, PetscReal *target, PetscReal *fraction);
+PETSC_EXTERN PetscErrorCode PffFlowSetVolumeControl(PffFlow flow, PetscReal target, PetscReal fraction);
 PETSC_EXTERN PetscErrorCode PffFlowGetParticles(PffFlow flow, PffParticles *p);
 /* The levels of dynamic adaptivity (-adapt_levels; 0: off). Not collective. */
 PETSC_EXTERN PetscErrorCode PffFlowGetAdaptLevels(PffFlow flow, PetscInt *levels);

@@ -28,6 +28,8 @@ PetscErrorCode PffFlowCreate(PffGrid grid, PffFlow *flow)
   f->volCorr                  = PFF_FLOW_VOLCORR_DEFAULT;
   f->volCorrMaxDisp           = PFF_FLOW_VOLCORR_MAXDISP_DEFAULT;
   f->volCorrRtol              = PFF_FLOW_VOLCORR_RTOL_DEFAULT;
+  f->volControl               = PFF_FLOW_VOLCONTROL_DEFAULT;
+  f->volFraction              = 1;
   f->usePressure              = PETSC_TRUE;
   f->deleteBubbles            = PETSC_TRUE;
   f->extrapLayers             = PFF_FLOW_EXTRAPOLATE_LAYERS_DEFAULT;
@@ -85,6 +87,10 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
                            "PffFlowSetFromOptions", f->volCorrMaxDisp, &f->volCorrMaxDisp, NULL));
   PetscCall(PffOptionsReal("-flow_volume_correction_rtol", "Relative tolerance of the volume-correction solve",
                            "PffFlowSetFromOptions", f->volCorrRtol, &f->volCorrRtol, NULL));
+  PetscCall(PffOptionsReal("-flow_volume_control",
+                           "Gain of the control that holds the liquid volume sum(phi V) at its value after the seed "
+                           "through the liquid's target particle fraction (0: target 1, no control)",
+                           "PffFlowSetFromOptions", f->volControl, &f->volControl, NULL));
   PetscCall(
       PffOptionsEnum("-flow_volume_correction_interface",
                      "What the correction's displacement may do at a liquid-gas face: liquid (the liquid crosses, "
@@ -166,6 +172,8 @@ PetscErrorCode PffFlowSetFromOptions(PffFlow f)
              (double)f->volCorrMaxDisp);
   PetscCheck(f->volCorrRtol > 0 && f->volCorrRtol < 1, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-flow_volume_correction_rtol %g is invalid: must be in (0, 1)", (double)f->volCorrRtol);
+  PetscCheck(f->volControl >= 0 && f->volControl <= 2, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-flow_volume_control %g is invalid: must be in [0, 2]", (double)f->volControl);
   PetscCheck(f->extrapLayers >= 0, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-flow_extrapolate_layers %" PetscInt_FMT " is invalid: must be >= 0", f->extrapLayers);
   PetscCheck(f->adapt.levels >= 0, f->comm, PETSC_ERR_ARG_OUTOFRANGE,
@@ -450,6 +458,25 @@ PetscErrorCode PffFlowSetTime(PffFlow f, PetscReal t, PetscInt step)
   PetscFunctionBeginUser;
   f->t    = t;
   f->step = step;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowGetVolumeControl(PffFlow f, PetscReal *target, PetscReal *fraction)
+{
+  PetscFunctionBeginUser;
+  if (target) *target = f->volTarget;
+  if (fraction) *fraction = f->volFraction;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowSetVolumeControl(PffFlow f, PetscReal target, PetscReal fraction)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(target >= 0 && fraction > 0 && !PetscIsInfOrNanReal(target) && !PetscIsInfOrNanReal(fraction), f->comm,
+             PETSC_ERR_ARG_OUTOFRANGE, "volume control state (target %g, fraction %g) is invalid", (double)target,
+             (double)fraction);
+  f->volTarget   = target;
+  f->volFraction = fraction;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

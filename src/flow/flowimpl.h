@@ -58,7 +58,9 @@ struct _n_PffFlow {
   PetscReal                  cfl, dtMax, alphaPhi, deltaPhi, flip;
   PetscReal                  volCorr, volCorrMaxDisp, volCorrRtol; /* -flow_volume_correction* (correction.c) */
   PffFlowCorrectionInterface volCorrInterface;
-  PetscBool                  usePressure, deleteBubbles;
+  PetscReal                  volControl; /* -flow_volume_control: gain of the liquid volume's control (correction.c) */
+  PetscReal volTarget, volFraction;      /* the liquid volume it holds (0: not yet set) and the liquid's target s* */
+  PetscBool usePressure, deleteBubbles;
   PetscBool liquidSurfaceVolume; /* the liquid model's surface from the particles' volume fraction (liquid.c) */
   PetscReal rho0;                /* kernel sum rho~_0 (Eq. 7) */
 

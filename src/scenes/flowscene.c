@@ -276,9 +276,12 @@ static PetscErrorCode PffFlowSceneConservation(PffFlowScene *fs)
 /* The extra values of a scene checkpoint, each pair liquid then gas: the reference volumes V0 and the
    max |drift| so far, so that a restarted run measures its drift since the seed, as the uninterrupted
    run would; the particle counts after the seed and the bubbles deleted since, so that its
-   conservation line counts from the run's start; and the densities, which a restart must not change.
-   Checkpoints written before the counts and densities were stored hold only the first 4. */
-#define PFF_FLOW_SCENE_NEXTRA 9
+   conservation line counts from the run's start; the densities, which a restart must not change; and the state of
+   the liquid volume's control (PffFlowGetVolumeControl), so that it goes on as in the uninterrupted run.
+   Checkpoints written before the counts and densities were stored hold only the first 4, those written before the
+   control's state the first 9 (a restart from them starts the control again). */
+#define PFF_FLOW_SCENE_NEXTRA 11
+#define PFF_FLOW_SCENE_NEXTRA_COUNTS 9
 #define PFF_FLOW_SCENE_NEXTRA_LEGACY 4
 
 /* <output_dir>/checkpoint.h5, written to a temporary name and renamed by the io module. The rigid bodies' state
@@ -305,6 +308,7 @@ static PetscErrorCode PffFlowSceneCheckpoint(PffFlowScene *fs)
     extra[7 + k] = rho[k];
   }
   extra[6] = (PetscReal)fs->bubblesDeletedRun;
+  PetscCall(PffFlowGetVolumeControl(fs->flow, &extra[9], &extra[10]));
   PetscCall(PffFlowGetTime(fs->flow, &t, &step));
   PetscCall(PffFlowGetParticles(fs->flow, &p));
   PetscCall(PetscSNPrintf(path, sizeof(path), "%s/checkpoint.h5", fs->scene->outdir));
@@ -335,17 +339,19 @@ static PetscErrorCode PffFlowSceneStart(PffFlowScene *fs)
   PetscCall(PffFlowGetBodies(fs->flow, &bodies));
   PetscCall(PffBodiesGetCheckpointState(bodies, &nbody, NULL));
   PetscCall(PffIOGetCheckpointExtraCount(fs->grid, fs->restart, &nextra));
-  /* the scene's values, then the bodies' (checkpoints before bodies were stored have none) */
-  PetscCheck(
-      nextra <= PFF_FLOW_SCENE_NEXTRA || nextra == PFF_FLOW_SCENE_NEXTRA + nbody, fs->scene->comm, PETSC_ERR_ARG_INCOMP,
-      "-sim_restart %s holds the state of %" PetscInt_FMT " rigid bodies, the scene has %" PetscInt_FMT
-      " (-body_<i>_*)",
-      fs->restart, (nextra - PFF_FLOW_SCENE_NEXTRA) / PFF_BODY_CHECKPOINT_VALUES, nbody / PFF_BODY_CHECKPOINT_VALUES);
-  PetscCheck(!nbody || nextra == PFF_FLOW_SCENE_NEXTRA + nbody, fs->scene->comm, PETSC_ERR_ARG_INCOMP,
+  /* the scene's values (nscene of them: a checkpoint from before the control's state has 9), then the bodies'
+     (checkpoints before bodies were stored have none) */
+  const PetscInt nscene =
+      nextra == PFF_FLOW_SCENE_NEXTRA_COUNTS + nbody ? PFF_FLOW_SCENE_NEXTRA_COUNTS : PFF_FLOW_SCENE_NEXTRA;
+  PetscCheck(nextra <= nscene || nextra == nscene + nbody, fs->scene->comm, PETSC_ERR_ARG_INCOMP,
+             "-sim_restart %s holds the state of %" PetscInt_FMT " rigid bodies, the scene has %" PetscInt_FMT
+             " (-body_<i>_*)",
+             fs->restart, (nextra - nscene) / PFF_BODY_CHECKPOINT_VALUES, nbody / PFF_BODY_CHECKPOINT_VALUES);
+  PetscCheck(!nbody || nextra == nscene + nbody, fs->scene->comm, PETSC_ERR_ARG_INCOMP,
              "-sim_restart %s holds no rigid bodies, the scene has %" PetscInt_FMT " (-body_<i>_*)", fs->restart,
              nbody / PFF_BODY_CHECKPOINT_VALUES);
   /* any other count is the reader's error: the checkpoint is not one of a fluid scene */
-  if (nextra != 0 && nextra != PFF_FLOW_SCENE_NEXTRA_LEGACY) nextra = PFF_FLOW_SCENE_NEXTRA + nbody;
+  if (nextra != 0 && nextra != PFF_FLOW_SCENE_NEXTRA_LEGACY) nextra = nscene + nbody;
   PetscCall(PetscMalloc1(PFF_FLOW_SCENE_NEXTRA + nbody, &extra));
   {
     /* an adaptive run continues on the grid the checkpoint was written on (its level map); a static one
@@ -361,7 +367,8 @@ static PetscErrorCode PffFlowSceneStart(PffFlowScene *fs)
     }
   }
   PetscCall(PffIOReadCheckpoint(fs->grid, p, fs->restart, &t, &step, nextra, extra));
-  if (nextra == PFF_FLOW_SCENE_NEXTRA) {
+  if (nextra == nscene + nbody) { /* with the counts and densities (with bodies these were not read back until the
+                                     control's state was added) */
     PetscReal rho[PFF_PARTICLE_NTYPES];
     char      diff[256] = "";
     PetscCall(PffFlowGetDensities(fs->flow, rho));
@@ -374,8 +381,9 @@ static PetscErrorCode PffFlowSceneStart(PffFlowScene *fs)
     for (PetscInt k = 0; k < PFF_PARTICLE_NTYPES; k++) fs->countStart[k] = (PetscInt64)extra[4 + k];
     fs->bubblesDeletedRun = (PetscInt64)extra[6];
     fs->countsCarried     = PETSC_TRUE;
+    if (nscene == PFF_FLOW_SCENE_NEXTRA) PetscCall(PffFlowSetVolumeControl(fs->flow, extra[9], extra[10]));
   }
-  if (nbody) PetscCall(PffBodiesSetCheckpointState(bodies, extra + PFF_FLOW_SCENE_NEXTRA));
+  if (nbody) PetscCall(PffBodiesSetCheckpointState(bodies, extra + nscene));
   PetscCall(PffFlowSetTime(fs->flow, t, step));
   PetscCall(PffFlowUpdateFields(fs->flow, PETSC_FALSE));
   fs->restarted = PETSC_TRUE;
@@ -400,21 +408,22 @@ static PetscErrorCode PffFlowSceneStart(PffFlowScene *fs)
 static PetscErrorCode PffFlowSceneDiagRow(PffFlowScene *fs, PetscInt step, PetscReal t, const PffFlowStepStats *st,
                                           PetscLogDouble wall)
 {
-  PetscReal umaxGrid;
+  PetscReal umaxGrid, fraction;
   char      extra[512] = "";
 
   PetscFunctionBeginUser;
   PetscCall(PffFlowGetDiagnostics(fs->flow, &umaxGrid, NULL));
+  PetscCall(PffFlowGetVolumeControl(fs->flow, NULL, &fraction));
   fs->umaxGrid = umaxGrid;
   PetscCall(PffFlowSceneVolumes(fs));
   if (fs->ops.diagnose) PetscCall(fs->ops.diagnose(fs, t, extra, sizeof(extra)));
   if (fs->diag) {
     fprintf(fs->diag,
             "%" PetscInt_FMT ",%.9e,%.9e,%.6e,%.6e,%" PetscInt64_FMT ",%" PetscInt_FMT
-            ",%.3e,%.6e,%.9e,%" PetscInt64_FMT ",%" PetscInt64_FMT ",%.4e,%.9e%s\n",
+            ",%.3e,%.6e,%.9e,%" PetscInt64_FMT ",%" PetscInt64_FMT ",%.4e,%.9e,%.6f%s\n",
             step, (double)t, (double)(t / fs->timeUnit), (double)st->dt, (double)st->cfl, st->particles,
             st->pressure.its, (double)st->pressure.rnorm, (double)umaxGrid, (double)fs->liquidVolume,
-            st->bubblesDeleted, st->dropletCandidates, (double)wall, (double)fs->gasVolume, extra);
+            st->bubblesDeleted, st->dropletCandidates, (double)wall, (double)fs->gasVolume, (double)fraction, extra);
     fflush(fs->diag);
   }
   PetscCall(PffFlowSceneCheckDrift(fs, step));
@@ -459,7 +468,7 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
     if (rank == 0 && !fseek(fs->diag, 0, SEEK_END) && ftell(fs->diag) == 0)
       fprintf(fs->diag,
               "step,t,t_over_t0,dt,cfl,particles,ksp_its,ksp_rnorm,umax_grid,liquid_volume,bubbles_deleted,"
-              "droplet_candidates,wall_s,gas_volume%s\n",
+              "droplet_candidates,wall_s,gas_volume,liquid_target_fraction%s\n",
               fs->ops.diagHeader ? fs->ops.diagHeader : "");
   }
   PetscCall(PffFlowGetTime(fs->flow, &t, &step));

@@ -92,6 +92,7 @@ OPTIONS = {
     "flow_volume_correction": ("real", "unit"),
     "flow_volume_correction_max_displacement": ("real", "pos"),
     "flow_volume_correction_rtol": ("real", "open_unit"),
+    "flow_volume_control": ("real", "nonneg"),
     "flow_delete_bubbles": ("bool", None),
     "flow_extrapolate_layers": ("int", "nonneg"),
     "particles_jitter": ("real", "unit"),
@@ -294,6 +295,7 @@ def build(config_dir):
     V("dam", "flow_volume_correction", ("nan", "-0.5"))
     V("dam", "flow_volume_correction_max_displacement", ("0",))
     V("dam", "flow_volume_correction_rtol", ("nan", "-1"))
+    V("dam", "flow_volume_control", ("nan", "-1", "3"))
     V("dam", "flow_extrapolate_layers", ("1.5", "abc", "99999999999999999999"))
     V("dam", "flow_pressure", ("maybe",))
     V("dam", "flow_delete_bubbles", ("nan",))

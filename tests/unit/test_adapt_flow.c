@@ -173,6 +173,11 @@ static PetscErrorCode Run(MPI_Comm comm)
   PetscCall(CopyParticles(flowA, flowB));
   PetscCall(PffFlowGetTime(flowA, &t, &step));
   PetscCall(PffFlowSetTime(flowB, t, step));
+  {
+    PetscReal target, fraction; /* the liquid volume's control goes on as a restart continues it */
+    PetscCall(PffFlowGetVolumeControl(flowA, &target, &fraction));
+    PetscCall(PffFlowSetVolumeControl(flowB, target, fraction));
+  }
 
   PetscCall(ZeroPressure(gridA, flowA));
   PetscCall(ZeroPressure(gridB, flowB));
