@@ -4,7 +4,7 @@ pff_add_unit(test_flow_viscosity RANKS 1 2)
 # reference, and two levels.
 pff_add_unit(test_flow_extrapolate RANKS 1 2 4)
 # flow: liquid and gas volumes of the fluid cells (PffFlowGetPhaseVolumes, issue 10): closed box half full, with a
-# solid cube and on two levels.
+# solid cube and on two levels; and the liquid volume's control over a step (the volume it holds, its clamp).
 pff_add_unit(test_flow_volumes RANKS 1 2 4)
 # flow: particles, pressure, pffmg and flow follow a grid adapt (topology state), against a grid set up on the new
 # map; also threaded.

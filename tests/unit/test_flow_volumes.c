@@ -10,9 +10,13 @@
      - two levels (the blocks with x >= 1/2 coarse): liquid + gas is 1 to rounding, liquid 1/2 plus the surface term
    within 0.5%. Each case prints both volumes to 6 digits, the same on any number of ranks, and fails through
    PetscCheck.
+   A fourth case checks the liquid volume's control (-flow_volume_control, docs/flow.md) over one step of the uniform
+   box: the first step takes the liquid volume of the phase field after the seed as the volume to hold, and a
+   volume out of reach (twice the liquid's, set by PffFlowSetVolumeControl as a restart would) moves the target
+   fraction s* by -1/2 in one step, which the clamp stops at 0.8.
 
    Sample run:  mpiexec -n 4 ./test_flow_volumes
-   Prints three lines (the same on any number of ranks). */
+   Prints five lines (the same on any number of ranks). */
 #include <pff.h>
 
 static const char help[] = "Liquid and gas volumes of the fluid cells (PffFlowGetPhaseVolumes).\n";
@@ -91,6 +95,50 @@ static PetscErrorCode RunCase(MPI_Comm comm, const char name[], PetscBool solid,
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+static PetscErrorCode RunControl(MPI_Comm comm)
+{
+  PffGrid          grid;
+  PffFlow          flow;
+  PffFlowStepStats st;
+  const PetscInt   cells[3]    = {16, 16, 16};
+  const PetscBool  periodic[3] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE}, solid = PETSC_FALSE;
+  const PetscReal  origin[3] = {0, 0, 0};
+  PetscReal        liquid, target, fraction;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridCreate(comm, &grid));
+  PetscCall(PffGridSetCells(grid, cells));
+  PetscCall(PffGridSetBlockSize(grid, 8));
+  PetscCall(PffGridSetDomain(grid, origin, 1.0 / 16));
+  PetscCall(PffGridSetPeriodic(grid, periodic));
+  PetscCall(PffGridSetUp(grid));
+  PetscCall(PffFlowCreate(grid, &flow));
+  PetscCall(PffFlowSetFromOptions(flow));
+  PetscCall(PffFlowSetUp(flow));
+  PetscCall(PffFlowSeed(flow, SeedHalf, (void *)&solid));
+  PetscCall(PffFlowGetPhaseVolumes(flow, &liquid, NULL));
+  PetscCall(PffFlowGetVolumeControl(flow, &target, &fraction));
+  PetscCheck(target == 0 && fraction == 1, comm, PETSC_ERR_PLIB, "control before the first step: %g, %g",
+             (double)target, (double)fraction);
+  PetscCall(PffFlowStep(flow, 1.0, &st));
+  PetscCall(PffFlowGetVolumeControl(flow, &target, &fraction));
+  PetscCall(PetscPrintf(comm, "control: holds %.6f (liquid after the seed %.6f), fraction %.6f\n", (double)target,
+                        (double)liquid, (double)fraction));
+  PetscCheck(PetscAbsReal(target - liquid) <= 1e-12 * liquid && fraction == 1, comm, PETSC_ERR_PLIB,
+             "the first step must hold the seed's liquid volume %.15g at fraction 1, not %.15g at %.15g",
+             (double)liquid, (double)target, (double)fraction);
+  PetscCall(PffFlowSetVolumeControl(flow, 2 * liquid, 1.0));
+  PetscCall(PffFlowStep(flow, 1.0, &st));
+  PetscCall(PffFlowGetVolumeControl(flow, &target, &fraction));
+  PetscCall(PetscPrintf(comm, "control: out of reach, fraction %.6f\n", (double)fraction));
+  PetscCheck(target == 2 * liquid && fraction == (PetscReal)0.8, comm, PETSC_ERR_PLIB,
+             "a volume out of reach must stop the fraction at 0.8, not %.15g (holding %.15g)", (double)fraction,
+             (double)target);
+  PetscCall(PffFlowDestroy(&flow));
+  PetscCall(PffGridDestroy(&grid));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 int main(int argc, char **argv)
 {
   MPI_Comm comm;
@@ -104,6 +152,7 @@ int main(int argc, char **argv)
   PetscCall(RunCase(comm, "uniform", PETSC_FALSE, PETSC_FALSE));
   PetscCall(RunCase(comm, "solid cube", PETSC_TRUE, PETSC_FALSE));
   PetscCall(RunCase(comm, "two levels", PETSC_FALSE, PETSC_TRUE));
+  PetscCall(RunControl(comm));
   PetscCall(PetscFinalize());
   return 0;
 }
