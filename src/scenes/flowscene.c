@@ -367,8 +367,7 @@ static PetscErrorCode PffFlowSceneStart(PffFlowScene *fs)
     }
   }
   PetscCall(PffIOReadCheckpoint(fs->grid, p, fs->restart, &t, &step, nextra, extra));
-  if (nextra == nscene + nbody) { /* with the counts and densities (with bodies these were not read back until the
-                                     control's state was added) */
+  if (nextra == nscene + nbody) { /* the counts and densities are there */
     PetscReal rho[PFF_PARTICLE_NTYPES];
     char      diff[256] = "";
     PetscCall(PffFlowGetDensities(fs->flow, rho));

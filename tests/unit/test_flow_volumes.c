@@ -52,16 +52,38 @@ static PetscErrorCode SeedHalf(const PetscReal x[3], PetscInt *type, PetscReal v
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-static PetscErrorCode RunCase(MPI_Comm comm, const char name[], PetscBool solid, PetscBool twoLevels)
+/* The closed unit box of every case (16^3 cells, 8^3 blocks), with the solid cube or on two levels, seeded half full.
+ */
+static PetscErrorCode CreateBox(MPI_Comm comm, PetscBool solid, PetscBool twoLevels, PffGrid *grid, PffFlow *flow)
 {
-  PffGrid         grid;
-  PffFlow         flow;
   const PetscInt  cells[3]    = {16, 16, 16};
   const PetscBool periodic[3] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE};
   const PetscReal origin[3]   = {0, 0, 0};
   /* raster 2 x 2 x 2, x fastest: the blocks with x >= 1/2 at level 1 */
-  const PetscInt  levels[8] = {0, 1, 0, 1, 0, 1, 0, 1};
-  const PetscReal fluid     = 1 - (solid ? PetscPowReal(SolidHi - SolidLo, 3) : 0);
+  const PetscInt levels[8] = {0, 1, 0, 1, 0, 1, 0, 1};
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridCreate(comm, grid));
+  PetscCall(PffGridSetCells(*grid, cells));
+  PetscCall(PffGridSetBlockSize(*grid, 8));
+  PetscCall(PffGridSetLevels(*grid, twoLevels ? 2 : 1));
+  PetscCall(PffGridSetDomain(*grid, origin, 1.0 / 16));
+  PetscCall(PffGridSetPeriodic(*grid, periodic));
+  if (twoLevels) PetscCall(PffGridSetRefinementMap(*grid, levels));
+  PetscCall(PffGridSetUp(*grid));
+  PetscCall(PffFlowCreate(*grid, flow));
+  PetscCall(PffFlowSetFromOptions(*flow));
+  if (solid) PetscCall(PffFlowSetSolid(*flow, SolidCube, NULL));
+  PetscCall(PffFlowSetUp(*flow));
+  PetscCall(PffFlowSeed(*flow, SeedHalf, &solid));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode RunCase(MPI_Comm comm, const char name[], PetscBool solid, PetscBool twoLevels)
+{
+  PffGrid         grid;
+  PffFlow         flow;
+  const PetscReal fluid = 1 - (solid ? PetscPowReal(SolidHi - SolidLo, 3) : 0);
   /* the particle volume below y = 1/2 plus the square root's 0.16 h per unit area of free surface (the
      solid's top face covers 1/16 of it; on two levels half the surface has h = 1/8) */
   const PetscReal area      = solid ? 1 - PetscSqr(SolidHi - SolidLo) : 1,
@@ -70,19 +92,7 @@ static PetscErrorCode RunCase(MPI_Comm comm, const char name[], PetscBool solid,
   PetscReal       liquid, gas;
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridCreate(comm, &grid));
-  PetscCall(PffGridSetCells(grid, cells));
-  PetscCall(PffGridSetBlockSize(grid, 8));
-  PetscCall(PffGridSetLevels(grid, twoLevels ? 2 : 1));
-  PetscCall(PffGridSetDomain(grid, origin, 1.0 / 16));
-  PetscCall(PffGridSetPeriodic(grid, periodic));
-  if (twoLevels) PetscCall(PffGridSetRefinementMap(grid, levels));
-  PetscCall(PffGridSetUp(grid));
-  PetscCall(PffFlowCreate(grid, &flow));
-  PetscCall(PffFlowSetFromOptions(flow));
-  if (solid) PetscCall(PffFlowSetSolid(flow, SolidCube, NULL));
-  PetscCall(PffFlowSetUp(flow));
-  PetscCall(PffFlowSeed(flow, SeedHalf, &solid));
+  PetscCall(CreateBox(comm, solid, twoLevels, &grid, &flow));
   PetscCall(PffFlowGetPhaseVolumes(flow, &liquid, &gas));
   PetscCall(PetscPrintf(comm, "%s: liquid %.6f  gas %.6f  fluid %.6f (expected %.6f)\n", name, (double)liquid,
                         (double)gas, (double)(liquid + gas), (double)fluid));
@@ -100,22 +110,10 @@ static PetscErrorCode RunControl(MPI_Comm comm)
   PffGrid          grid;
   PffFlow          flow;
   PffFlowStepStats st;
-  const PetscInt   cells[3]    = {16, 16, 16};
-  const PetscBool  periodic[3] = {PETSC_FALSE, PETSC_FALSE, PETSC_FALSE}, solid = PETSC_FALSE;
-  const PetscReal  origin[3] = {0, 0, 0};
   PetscReal        liquid, target, fraction;
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridCreate(comm, &grid));
-  PetscCall(PffGridSetCells(grid, cells));
-  PetscCall(PffGridSetBlockSize(grid, 8));
-  PetscCall(PffGridSetDomain(grid, origin, 1.0 / 16));
-  PetscCall(PffGridSetPeriodic(grid, periodic));
-  PetscCall(PffGridSetUp(grid));
-  PetscCall(PffFlowCreate(grid, &flow));
-  PetscCall(PffFlowSetFromOptions(flow));
-  PetscCall(PffFlowSetUp(flow));
-  PetscCall(PffFlowSeed(flow, SeedHalf, (void *)&solid));
+  PetscCall(CreateBox(comm, PETSC_FALSE, PETSC_FALSE, &grid, &flow));
   PetscCall(PffFlowGetPhaseVolumes(flow, &liquid, NULL));
   PetscCall(PffFlowGetVolumeControl(flow, &target, &fraction));
   PetscCheck(target == 0 && fraction == 1, comm, PETSC_ERR_PLIB, "control before the first step: %g, %g",
