@@ -39,11 +39,18 @@
      SWEEP pc=pffmg n=<N> level=0 ns_per_cell=<t> bytes_per_cell=44 copy_GBs=<bw> bound_ns_per_cell=<t> ratio=<r>
    (one fixed red-black sweep of the finest level against its memory traffic at the streaming copy
    bandwidth measured in the same run) and
-     ITERATION pc=pffmg n=<N> cell_updates=<u> per_finest_cell=<u/cells> iteration_s=<s> bound_s=<s> ratio=<r>
-   imbalance=<max rank/mean> (the smoother's cell updates, all levels, per FCG iteration of the last solve, and the time
-   of an iteration against u x 44 B at the copy bandwidth of all ranks; a lower bound, without residuals, transfers and
-   Krylov vectors), with setup_s = KSPSetUp + KSPSetUpOnBlocks, solve_s = KSPSolve (PffPressureStats, timed with
-   PetscTime inside the PressSolve log event; -log_view shows one stage per grid), relres
+     ITERATION pc=pffmg n=<N> cell_updates=<u> per_finest_cell=<u/cells> visits_per_finest_cell=<v/cells>
+   iteration_s=<s> bound_s=<s> ratio=<r> imbalance=<max rank/mean> (the smoother's cell updates, all levels, per FCG
+   iteration of the last solve, the cells its block visits brought in, and the time of an iteration against u x 44 B
+   at the copy bandwidth of all ranks: the smoothing alone, every in-cache sweep of a visit counted as if it
+   streamed), and
+     TRAFFIC pc=pffmg n=<N> B_per_finest_cell=<B> smoothing=<B> transfers=<B> kcycle=<B> outer=<B> copy_GBs=<bw>
+   iteration_s=<s> bound_s=<s> ratio=<r> (the bytes an iteration must move, per cell of the finest grid: 44 B per
+   visited cell, the cycles' transfers, the K-cycles' and the outer FCG's vectors and products, each operation
+   streaming its arrays once (PffPressureGetSolveTraffic, PffPressureMGGetStats; test_pressure_traffic checks the
+   Krylov count against PETSc's log), and the iteration's time against that traffic at the copy bandwidth), with setup_s
+   = KSPSetUp + KSPSetUpOnBlocks, solve_s = KSPSolve (PffPressureStats, timed with PetscTime inside the PressSolve log
+   event; -log_view shows one stage per grid), relres
    =
    ||b - A p|| / ||b|| recomputed here from the module's operator, b and p. With -bench_repeat R (default 1)
    each PC sets up (new coefficients, as in a time step) and solves R times and the times are the
@@ -297,18 +304,37 @@ static PetscErrorCode SweepRate(MPI_Comm comm, PffPressure ps, KSP ksp, PetscInt
                           N, (double)ns, BENCH_SWEEP_BYTES, (double)gbs, (double)bound, (double)(ns / bound)));
   }
   if (pst->its > 0) {
-    /* an iteration against the time its smoothing traffic takes at the copy bandwidth of all ranks: the
-       cell updates of all levels x 44 B (a lower bound: residuals, transfers and Krylov vectors omitted) */
-    PetscMPIInt size;
+    /* an iteration against the time its memory traffic takes at the copy bandwidth of all ranks, two ways: the
+       cell updates of all levels x 44 B (the smoothing alone, every in-cache sweep counted as if it streamed), and
+       the bytes it must move: 44 B per cell a block visit brings in, the transfers, the K-cycles' and the outer
+       FCG's vectors and products (each operation streaming its arrays once; PffPressureGetSolveTraffic) */
+    PetscMPIInt    size;
+    PetscLogDouble outer;
+    PetscBool      known;
     PetscCallMPI(MPI_Comm_size(comm, &size));
+    PetscCall(PffPressureGetSolveTraffic(ps, pst, &outer, &known));
+    PetscInt nglob;
+    PetscCall(VecGetSize(x, &nglob));
+    const PetscReal cells = (PetscReal)nglob, bw = gbs * 1e9 * size;
     const PetscReal upd = (PetscReal)mst.cellUpdates / pst->its, it = pst->solveTime / pst->its;
-    const PetscReal bnd = upd * BENCH_SWEEP_BYTES / (gbs * 1e9 * size);
+    const PetscReal bnd      = upd * BENCH_SWEEP_BYTES / bw;
+    const PetscReal smooth   = BENCH_SWEEP_BYTES * (PetscReal)mst.cellVisits / pst->its,
+                    transfer = mst.bytesTransfer / pst->its, kcycle = mst.bytesKCycle / pst->its,
+                    out = outer / pst->its, total = smooth + transfer + kcycle + out;
     PetscCall(PetscPrintf(
         comm,
-        "ITERATION pc=pffmg n=%" PetscInt_FMT " cell_updates=%.3g per_finest_cell=%.2f iteration_s=%.4f "
-        "bound_s=%.4f ratio=%.2f imbalance=%.2f\n",
-        N, (double)upd, (double)(upd / ((PetscReal)nloc * size)), (double)it, (double)bnd, (double)(it / bnd),
+        "ITERATION pc=pffmg n=%" PetscInt_FMT " cell_updates=%.3g per_finest_cell=%.2f "
+        "visits_per_finest_cell=%.2f iteration_s=%.4f bound_s=%.4f ratio=%.2f imbalance=%.2f\n",
+        N, (double)upd, (double)(upd / cells), (double)(mst.cellVisits / pst->its / cells), (double)it, (double)bnd,
+        (double)(it / bnd),
         (double)(mst.cellUpdates > 0 ? (PetscReal)mst.cellUpdatesMax * size / (PetscReal)mst.cellUpdates : 1)));
+    if (known)
+      PetscCall(PetscPrintf(comm,
+                            "TRAFFIC pc=pffmg n=%" PetscInt_FMT " B_per_finest_cell=%.0f smoothing=%.0f transfers=%.0f "
+                            "kcycle=%.0f outer=%.0f copy_GBs=%.1f iteration_s=%.4f bound_s=%.4f ratio=%.2f\n",
+                            N, (double)(total / cells), (double)(smooth / cells), (double)(transfer / cells),
+                            (double)(kcycle / cells), (double)(out / cells), (double)gbs, (double)it,
+                            (double)(total / bw), (double)(it * bw / total)));
   }
   PetscCall(PetscRandomDestroy(&rnd));
   PetscCall(VecDestroy(&x));

@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""pff-bench-poisson output (RESULT, MEMORY, SWEEP, ITERATION lines and the "# <date> <commit> load ..."
+"""pff-bench-poisson output (RESULT, MEMORY, SWEEP, ITERATION, TRAFFIC lines and the "# <date> <commit> load ..."
 headers that jobs/bench/poisson.sh and the docs' commands write) -> one CSV row per PC run.
 
 Usage: /usr/bin/python3 postproc/poisson_csv.py output/bench/poisson.txt > docs/data/poisson.csv
@@ -13,7 +13,8 @@ import sys
 FIELDS = ["commit", "load1", "options", "pc", "grid", "n", "ratio", "ranks", "threads", "its", "setup_s", "solve_s",
           "relres", "peak_rss_MB_max_rank", "peak_rss_B_per_cell", "solver_B_per_cell", "iteration_s", "sweep_ns_per_cell",
           "sweep_bound_ns_per_cell", "sweep_ratio", "copy_GBs", "it_cell_updates", "it_updates_per_finest_cell",
-          "it_bound_s", "it_ratio"]
+          "it_bound_s", "it_ratio", "it_visits_per_finest_cell", "traffic_B_per_finest_cell", "traffic_smoothing",
+          "traffic_transfers", "traffic_kcycle", "traffic_outer", "traffic_bound_s", "traffic_ratio"]
 
 
 def pairs(line):
@@ -52,7 +53,14 @@ def rows_of(path):
             elif cur is not None and line.startswith("ITERATION "):
                 p = pairs(line)
                 cur.update(it_cell_updates=p.get("cell_updates", ""), it_updates_per_finest_cell=p.get("per_finest_cell", ""),
-                           it_bound_s=p.get("bound_s", ""), it_ratio=p.get("ratio", ""))
+                           it_bound_s=p.get("bound_s", ""), it_ratio=p.get("ratio", ""),
+                           it_visits_per_finest_cell=p.get("visits_per_finest_cell", ""))
+            elif cur is not None and line.startswith("TRAFFIC "):
+                p = pairs(line)
+                cur.update(traffic_B_per_finest_cell=p.get("B_per_finest_cell", ""), traffic_smoothing=p.get("smoothing", ""),
+                           traffic_transfers=p.get("transfers", ""), traffic_kcycle=p.get("kcycle", ""),
+                           traffic_outer=p.get("outer", ""), traffic_bound_s=p.get("bound_s", ""),
+                           traffic_ratio=p.get("ratio", ""))
     return rows
 
 

@@ -73,6 +73,12 @@ PETSC_EXTERN PetscErrorCode    PffPressureCheckSolve(PffPressure ps, const PffPr
                                                      PetscInt step, PetscReal t, const char hint[]);
 PETSC_EXTERN const char *const PffPressureOperatorTypes[];
 
+/* The bytes the last solve's Krylov vectors and operator products must move, summed over ranks, with st its
+   statistics; the preconditioner's share is pffmg's (PffPressureMGGetStats). A count of PETSc 3.18's KSPFCG, each
+   operation streaming its vectors once (src/pressure/traffic.c); *known is false for other KSP types. Collective. */
+PETSC_EXTERN PetscErrorCode PffPressureGetSolveTraffic(PffPressure ps, const PffPressureStats *st,
+                                                       PetscLogDouble *bytes, PetscBool *known);
+
 /* Sets the KSP's Amat type (default PFF_PRESSURE_OPERATOR_AIJ); option -pressure_operator aij|shell.
    Takes effect at the next SetCoefficients. Logically collective. */
 PETSC_EXTERN PetscErrorCode PffPressureSetOperatorType(PffPressure ps, PffPressureOperatorType type);
@@ -166,10 +172,15 @@ typedef struct {
   PetscInt64 blockRelaxations; /* block relaxations, summed over ranks by GetStats */
   PetscInt64 cellUpdates;      /* cell updates, summed over ranks by GetStats */
   PetscInt64 cellUpdatesMax;   /* the largest rank's cell updates (GetStats); max/mean is the smoothing imbalance */
-  PetscInt64 adaptiveSteps;    /* steps of Algorithm 2 on this rank */
+  PetscInt64 cellVisits; /* cells brought in by block visits (a visit's repeated in-cache sweeps count once), summed */
+  PetscLogDouble bytesTransfer; /* bytes of the cycles' transfers: x zeroed, residual and restriction, prolongation */
+  PetscLogDouble bytesKCycle;   /* bytes of the K-cycles' Krylov vectors and level products (PffPressureFCGBytes) */
+  PetscInt64     adaptiveSteps; /* steps of Algorithm 2 on this rank */
 } PffMGStats;
 
-/* Statistics since the last reset (collective: sums over ranks). */
+/* Statistics since the last reset (collective: sums over ranks). The byte counts are a model, not a measurement:
+   each operation reads and writes its arrays once (src/pressure/traffic.c); a block visit moves 44 B per cell
+   (cellVisits), the coarsest level's direct solve is not counted. */
 PETSC_EXTERN PetscErrorCode PffPressureMGGetStats(PffPressure ps, PffMGStats *stats);
 PETSC_EXTERN PetscErrorCode PffPressureMGResetStats(PffPressure ps);
 /* Level L's Galerkin operator and the prolongation from level L+1 (NULL on the coarsest); borrowed. On a

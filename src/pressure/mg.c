@@ -72,6 +72,16 @@ static PetscErrorCode PffMGQueryPressure(PC pc, PffPressure *ps)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Bytes of one product with level L's operator on this rank (the K-cycle's): a matrix-free level reads x, its
+   three float face coefficients and the double diagonal part ds, and writes y; an AIJ level its CSR values and
+   indices, x and y. */
+static PetscLogDouble LevelProductBytes(const PffMGLevel *lv)
+{
+  if (lv->mf) return (8.0 + 3 * sizeof(PffMGReal) + 8.0 + 8.0) * lv->nrows;
+  return (lv->ai ? (PetscLogDouble)lv->ai[lv->nrows] : 7.0 * lv->nrows) * (sizeof(PetscScalar) + sizeof(PetscInt)) +
+         (sizeof(PetscInt) + 8.0 + 8.0) * lv->nrows;
+}
+
 static PetscErrorCode VCycle(PffMG *mg, PetscInt L, Vec b, Vec x)
 {
   PffMGLevel *lv = &mg->lev[L];
@@ -97,12 +107,22 @@ static PetscErrorCode VCycle(PffMG *mg, PetscInt L, Vec b, Vec x)
     PetscCall(MatMultTranspose(lv->P, lv->r, c->b));
   }
   PetscCall(PetscLogEventEnd(ev, 0, 0, 0, 0));
-  if (c->kcycle)
+  if (c->kcycle) {
+    PetscInt       its;
+    PetscLogDouble krylov;
+    PetscBool      known;
     PetscCall(KSPSolve(c->kcycle, c->b, c->x));
-  else
+    PetscCall(KSPGetIterationNumber(c->kcycle, &its));
+    PetscCall(PffPressureFCGBytes_Private(c->kcycle, its, c->nrows, &krylov, &known));
+    mg->stats.bytesKCycle += krylov + its * LevelProductBytes(c);
+  } else
     PetscCall(VCycle(mg, L + 1, c->b, c->x));
   PetscCall(PetscLogEventBegin(ev, 0, 0, 0, 0));
   if (mg->opt.correction != 1.0) PetscCall(VecScale(c->x, mg->opt.correction));
+  /* x zeroed (8 B per cell), the residual and its restriction (x, b, ds and cf read, the coarse b written; counted
+     so on AIJ levels too), the prolongation (coarse x read, x read and written), the correction's scale */
+  mg->stats.bytesTransfer +=
+      (8.0 + 36.0 + 16.0) * lv->nrows + (8.0 + 8.0 + (mg->opt.correction != 1.0 ? 16.0 : 0)) * c->nrows;
   if (lv->mf)
     PetscCall(PffMGStencilProlongAdd_Private(mg, L, c->x, x));
   else
@@ -406,19 +426,27 @@ static PetscErrorCode PffPressureGetMG(PffPressure ps, PffMG **mg)
 
 PetscErrorCode PffPressureMGGetStats(PffPressure ps, PffMGStats *stats)
 {
-  PffMG     *mg;
-  PetscInt64 sum[2], mx;
+  PffMG         *mg;
+  PetscInt64     sum[3], mx;
+  PetscLogDouble bytes[2];
 
   PetscFunctionBeginUser;
   PetscCall(PffPressureGetMG(ps, &mg));
   *stats = mg->stats;
   sum[0] = mg->stats.blockRelaxations;
   sum[1] = mg->stats.cellUpdates;
-  PetscCallMPI(MPIU_Allreduce(MPI_IN_PLACE, sum, 2, MPIU_INT64, MPI_SUM, mg->comm));
+  sum[2] = mg->stats.cellVisits;
+  PetscCallMPI(MPIU_Allreduce(MPI_IN_PLACE, sum, 3, MPIU_INT64, MPI_SUM, mg->comm));
   PetscCallMPI(MPIU_Allreduce(&mg->stats.cellUpdates, &mx, 1, MPIU_INT64, MPI_MAX, mg->comm));
   stats->blockRelaxations = sum[0];
   stats->cellUpdates      = sum[1];
   stats->cellUpdatesMax   = mx;
+  stats->cellVisits       = sum[2];
+  bytes[0]                = mg->stats.bytesTransfer;
+  bytes[1]                = mg->stats.bytesKCycle;
+  PetscCallMPI(MPIU_Allreduce(MPI_IN_PLACE, bytes, 2, MPIU_PETSCLOGDOUBLE, MPI_SUM, mg->comm));
+  stats->bytesTransfer = bytes[0];
+  stats->bytesKCycle   = bytes[1];
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -428,7 +456,9 @@ PetscErrorCode PffPressureMGResetStats(PffPressure ps)
 
   PetscFunctionBeginUser;
   PetscCall(PffPressureGetMG(ps, &mg));
-  mg->stats.applications = mg->stats.blockRelaxations = mg->stats.cellUpdates = mg->stats.adaptiveSteps = 0;
+  mg->stats.applications = mg->stats.blockRelaxations = mg->stats.cellUpdates = mg->stats.cellVisits =
+      mg->stats.adaptiveSteps                                                 = 0;
+  mg->stats.bytesTransfer = mg->stats.bytesKCycle = 0;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

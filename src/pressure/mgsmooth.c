@@ -112,6 +112,7 @@ static PetscErrorCode SmoothJacobi(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, Pets
         xa[i] += mg->opt.omega * ra[i] * (lv->mf ? (PetscReal)lv->st->idf[i] : lv->idiag[i]);
       mg->stats.blockRelaxations++;
       mg->stats.cellUpdates += lv->start[lb + 1] - lv->start[lb];
+      mg->stats.cellVisits += lv->start[lb + 1] - lv->start[lb];
     }
     PetscCall(VecRestoreArrayRead(lv->r, &ra));
     PetscCall(VecRestoreArray(x, &xa));
@@ -158,6 +159,7 @@ PetscErrorCode PffMGSmoothFixed_Private(PffMG *mg, PetscInt L, Vec b, Vec x, Pet
       PetscCall(VecRestoreArray(x, &xa));
       mg->stats.blockRelaxations += q1 - q0;
       mg->stats.cellUpdates += cells;
+      mg->stats.cellVisits += cells;
     }
   PetscCall(PetscLogEventEnd(PFF_MGSmooth, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -201,9 +203,9 @@ static PetscErrorCode RelaxActive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, Petsc
     PetscCall(VecGetArray(x, &xa));
     PetscCall(VecGetArrayRead(b, &ba));
     for (PetscInt pass = 0; pass < 2; pass++) {
-      PetscInt64 relax = 0, cells = 0;
+      PetscInt64 relax = 0, cells = 0, visited = 0;
       if (pass == 1) PetscCall(PffMGGhostsEnd_Private(lv, x, &ga));
-#pragma omp parallel for schedule(dynamic, 1) reduction(+ : relax, cells) if (nactive >= 8 && lv->omp)
+#pragma omp parallel for schedule(dynamic, 1) reduction(+ : relax, cells, visited) if (nactive >= 8 && lv->omp)
       for (PetscInt q = 0; q < nactive; q++) {
         const PetscInt lb = mg->list[q];
         if (mg->colour[lb] != c || lv->remote[lb] != pass) continue;
@@ -217,9 +219,11 @@ static PetscErrorCode RelaxActive(PffMG *mg, PffMGLevel *lv, Vec b, Vec x, Petsc
         mg->bres[lb] = r;
         relax += k;
         cells += (PetscInt64)k * (lv->start[lb + 1] - lv->start[lb]);
+        visited += lv->start[lb + 1] - lv->start[lb];
       }
       mg->stats.blockRelaxations += relax;
       mg->stats.cellUpdates += cells;
+      mg->stats.cellVisits += visited;
     }
     if (ga) PetscCall(VecRestoreArrayRead(lv->ghost, &ga));
     PetscCall(VecRestoreArrayRead(b, &ba));

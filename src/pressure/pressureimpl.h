@@ -128,6 +128,7 @@ PETSC_INTERN PetscErrorCode PffPressureChannelToVec_Private(PffPressure, PetscIn
 PETSC_INTERN PetscErrorCode PffPressureVecToChannel_Private(PffPressure, Vec, PffChannelKind, PetscInt);
 PETSC_INTERN PetscErrorCode PffPressureMaxDivergenceVec_Private(PffPressure, Vec, PetscReal *);
 PETSC_INTERN PetscErrorCode PffPressureMGRegister_Private(void);
+PETSC_INTERN PetscErrorCode PffPressureFCGBytes_Private(KSP, PetscInt, PetscInt, PetscLogDouble *, PetscBool *);
 PETSC_INTERN PetscErrorCode PffPressureMGIsActive_Private(PC, PetscBool *);
 PETSC_INTERN PetscErrorCode PffPressureMGSetFromOptions_Private(PC);
 PETSC_INTERN PetscErrorCode PffPressureMGComposePressure_Private(PC, PffPressure);

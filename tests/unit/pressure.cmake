@@ -14,3 +14,6 @@ pff_add_unit(test_pressure_dirichlet RANKS 1 2 4)
 # with random beta and closed faces; Jacobi-CG with (S, S) as with (A, A); projection with
 # -pressure_operator shell as with aij (pffmg and jacobi), also with Dirichlet walls. At 1, 2 and 4 ranks.
 pff_add_unit(test_pressure_shell RANKS 1 2 4)
+# memory-traffic count of a solve (the bench's ITERATION/TRAFFIC lines) against the Vec and Mat operations PETSc
+# logged in a stage around an FCG solve: default, wrapped and standard truncation; unknown for CG. At 1, 2 and 4 ranks.
+pff_add_unit(test_pressure_traffic RANKS 1 2 4)
