@@ -11,6 +11,10 @@
 #   bash jobs/bench/adaptive.sh                     W = 64: uniform about 6 min, each adaptive run 2-4 min
 #   PFF_W=32 PFF_BANDS="1" bash jobs/bench/adaptive.sh   a smaller check
 #   PFF_RUNS="adaptive" ...                          skip the uniform run (its row stays in the CSV)
+#   PFF_EXTRA="-flow_volume_control 0" ...           options appended to every run; the run's name and output
+#                                                    directory carry them (spaces as _), e.g. the volume control's
+#                                                    rows of docs/validation.md, "The volume control on adaptive grids"
+# adaptive.log also gets the number of steps that changed the grid (blocks refined or coarsened).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/../setup.sh"
 W=${PFF_W:-64}
@@ -28,6 +32,10 @@ rev=$(git -C "$PFF_ROOT" describe --always --dirty)
 bench() {
   local name=$1 levels=$2 band=$3
   shift 3
+  if [ -n "${PFF_EXTRA:-}" ]; then
+    name="${name}_$(tr ' ,' '__' <<<"$PFF_EXTRA")"
+    set -- "$@" $PFF_EXTRA
+  fi
   local dir=$out/${name}_W$W
   mkdir -p "$dir"
   local start load
@@ -49,7 +57,9 @@ bench() {
   inside=$(sed -n 's/.*inside_band=\([^ ]*\).*/\1/p' <<<"$line")
   share=$(sed -n 's/.*Adapt \([0-9.]*\)%.*/\1/p' "$dir/log.txt")
   echo "$name,$W,$levels,$band,$ranks,$OMP_NUM_THREADS,$steps,$wall,$sps,$rss,$particles,$spike,$dev,$inside,${share:-0},$start,$load,$rev" | tee -a "$csv"
-  echo "# $name W=$W $rev: $line" >>"$out/adaptive.log"
+  local changes
+  changes=$(grep -E '^step ' "$dir/log.txt" | grep -cE 'blocks \+[1-9]|blocks \+[0-9]+ -[1-9]' || true)
+  echo "# $name W=$W $rev: $line grid_changes=$changes" >>"$out/adaptive.log"
 }
 
 for run in ${PFF_RUNS:-uniform adaptive}; do
