@@ -261,9 +261,7 @@ static PetscErrorCode CopyBandwidth(MPI_Comm comm, PetscReal *gbs)
 }
 
 /* pffmg only: the time of one fixed red-black sweep of the finest level per cell, against the time
-   its memory traffic takes at the copy bandwidth. A sweep reads b (8 B), cf (12 B), ds (8 B) and
-   reads and writes x (16 B) per cell: 44 B. */
-#define BENCH_SWEEP_BYTES 44.0
+   its memory traffic takes at the copy bandwidth: PFF_MG_VISIT_BYTES per cell (a sweep is one visit). */
 static PetscErrorCode SweepRate(MPI_Comm comm, PffPressure ps, KSP ksp, PetscInt N, const PffPressureStats *pst)
 {
   PffMGStats     mst;
@@ -296,12 +294,12 @@ static PetscErrorCode SweepRate(MPI_Comm comm, PffPressure ps, KSP ksp, PetscInt
   PetscCall(CopyBandwidth(comm, &gbs));
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &gbs, 1, MPIU_REAL, MPI_MIN, comm));
   {
-    const PetscReal ns = best / sweeps / (PetscReal)nloc * 1e9, bound = BENCH_SWEEP_BYTES / gbs;
+    const PetscReal ns = best / sweeps / (PetscReal)nloc * 1e9, bound = PFF_MG_VISIT_BYTES / gbs;
     PetscCall(PetscPrintf(comm,
                           "SWEEP pc=pffmg n=%" PetscInt_FMT
                           " level=0 ns_per_cell=%.2f bytes_per_cell=%.0f copy_GBs=%.1f "
                           "bound_ns_per_cell=%.2f ratio=%.2f\n",
-                          N, (double)ns, BENCH_SWEEP_BYTES, (double)gbs, (double)bound, (double)(ns / bound)));
+                          N, (double)ns, PFF_MG_VISIT_BYTES, (double)gbs, (double)bound, (double)(ns / bound)));
   }
   if (pst->its > 0) {
     /* an iteration against the time its memory traffic takes at the copy bandwidth of all ranks, two ways: the
@@ -317,8 +315,8 @@ static PetscErrorCode SweepRate(MPI_Comm comm, PffPressure ps, KSP ksp, PetscInt
     PetscCall(VecGetSize(x, &nglob));
     const PetscReal cells = (PetscReal)nglob, bw = gbs * 1e9 * size;
     const PetscReal upd = (PetscReal)mst.cellUpdates / pst->its, it = pst->solveTime / pst->its;
-    const PetscReal bnd      = upd * BENCH_SWEEP_BYTES / bw;
-    const PetscReal smooth   = BENCH_SWEEP_BYTES * (PetscReal)mst.cellVisits / pst->its,
+    const PetscReal bnd      = upd * PFF_MG_VISIT_BYTES / bw;
+    const PetscReal smooth   = PFF_MG_VISIT_BYTES * (PetscReal)mst.cellVisits / pst->its,
                     transfer = mst.bytesTransfer / pst->its, kcycle = mst.bytesKCycle / pst->its,
                     out = outer / pst->its, total = smooth + transfer + kcycle + out;
     PetscCall(PetscPrintf(

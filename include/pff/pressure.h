@@ -174,13 +174,17 @@ typedef struct {
   PetscInt64 cellUpdatesMax;   /* the largest rank's cell updates (GetStats); max/mean is the smoothing imbalance */
   PetscInt64 cellVisits; /* cells brought in by block visits (a visit's repeated in-cache sweeps count once), summed */
   PetscLogDouble bytesTransfer; /* bytes of the cycles' transfers: x zeroed, residual and restriction, prolongation */
-  PetscLogDouble bytesKCycle;   /* bytes of the K-cycles' Krylov vectors and level products (PffPressureFCGBytes) */
+  PetscLogDouble bytesKCycle;   /* bytes of the K-cycles' Krylov vectors and level products (src/pressure/traffic.c) */
   PetscInt64     adaptiveSteps; /* steps of Algorithm 2 on this rank */
 } PffMGStats;
 
+/* The bytes a block visit moves per cell: b and x (read and written) in double, three float face coefficients,
+   the float diagonal and its inverse. Smoothing moves cellVisits x this. */
+#define PFF_MG_VISIT_BYTES 44.0
+
 /* Statistics since the last reset (collective: sums over ranks). The byte counts are a model, not a measurement:
-   each operation reads and writes its arrays once (src/pressure/traffic.c); a block visit moves 44 B per cell
-   (cellVisits), the coarsest level's direct solve is not counted. */
+   each operation reads and writes its arrays once (src/pressure/traffic.c); a block visit moves PFF_MG_VISIT_BYTES
+   per cell (cellVisits), the coarsest level's direct solve is not counted. */
 PETSC_EXTERN PetscErrorCode PffPressureMGGetStats(PffPressure ps, PffMGStats *stats);
 PETSC_EXTERN PetscErrorCode PffPressureMGResetStats(PffPressure ps);
 /* Level L's Galerkin operator and the prolongation from level L+1 (NULL on the coarsest); borrowed. On a

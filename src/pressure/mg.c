@@ -72,16 +72,6 @@ static PetscErrorCode PffMGQueryPressure(PC pc, PffPressure *ps)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Bytes of one product with level L's operator on this rank (the K-cycle's): a matrix-free level reads x, its
-   three float face coefficients and the double diagonal part ds, and writes y; an AIJ level its CSR values and
-   indices, x and y. */
-static PetscLogDouble LevelProductBytes(const PffMGLevel *lv)
-{
-  if (lv->mf) return (8.0 + 3 * sizeof(PffMGReal) + 8.0 + 8.0) * lv->nrows;
-  return (lv->ai ? (PetscLogDouble)lv->ai[lv->nrows] : 7.0 * lv->nrows) * (sizeof(PetscScalar) + sizeof(PetscInt)) +
-         (sizeof(PetscInt) + 8.0 + 8.0) * lv->nrows;
-}
-
 static PetscErrorCode VCycle(PffMG *mg, PetscInt L, Vec b, Vec x)
 {
   PffMGLevel *lv = &mg->lev[L];
@@ -109,18 +99,21 @@ static PetscErrorCode VCycle(PffMG *mg, PetscInt L, Vec b, Vec x)
   PetscCall(PetscLogEventEnd(ev, 0, 0, 0, 0));
   if (c->kcycle) {
     PetscInt       its;
-    PetscLogDouble krylov;
+    PetscLogDouble krylov, product;
     PetscBool      known;
     PetscCall(KSPSolve(c->kcycle, c->b, c->x));
     PetscCall(KSPGetIterationNumber(c->kcycle, &its));
     PetscCall(PffPressureFCGBytes_Private(c->kcycle, its, c->nrows, &krylov, &known));
-    mg->stats.bytesKCycle += krylov + its * LevelProductBytes(c);
+    /* a matrix-free level's product reads x, three float face coefficients and the double ds, and writes y */
+    PetscCall(PffPressureProductBytes_Private(c->A, 8.0 + 3 * sizeof(PffMGReal) + 8.0 + 8.0, &product));
+    mg->stats.bytesKCycle += krylov + its * product;
   } else
     PetscCall(VCycle(mg, L + 1, c->b, c->x));
   PetscCall(PetscLogEventBegin(ev, 0, 0, 0, 0));
   if (mg->opt.correction != 1.0) PetscCall(VecScale(c->x, mg->opt.correction));
   /* x zeroed (8 B per cell), the residual and its restriction (x, b, ds and cf read, the coarse b written; counted
-     so on AIJ levels too), the prolongation (coarse x read, x read and written), the correction's scale */
+     so on AIJ levels too), the prolongation (coarse x read, x read and written), the correction's scale; the
+     visits' smoothing is counted as cellVisits x PFF_MG_VISIT_BYTES */
   mg->stats.bytesTransfer +=
       (8.0 + 36.0 + 16.0) * lv->nrows + (8.0 + 8.0 + (mg->opt.correction != 1.0 ? 16.0 : 0)) * c->nrows;
   if (lv->mf)

@@ -129,6 +129,7 @@ PETSC_INTERN PetscErrorCode PffPressureVecToChannel_Private(PffPressure, Vec, Pf
 PETSC_INTERN PetscErrorCode PffPressureMaxDivergenceVec_Private(PffPressure, Vec, PetscReal *);
 PETSC_INTERN PetscErrorCode PffPressureMGRegister_Private(void);
 PETSC_INTERN PetscErrorCode PffPressureFCGBytes_Private(KSP, PetscInt, PetscInt, PetscLogDouble *, PetscBool *);
+PETSC_INTERN PetscErrorCode PffPressureProductBytes_Private(Mat, PetscReal, PetscLogDouble *);
 PETSC_INTERN PetscErrorCode PffPressureMGIsActive_Private(PC, PetscBool *);
 PETSC_INTERN PetscErrorCode PffPressureMGSetFromOptions_Private(PC);
 PETSC_INTERN PetscErrorCode PffPressureMGComposePressure_Private(PC, PffPressure);

@@ -45,10 +45,9 @@ PetscErrorCode PffPressureFCGBytes_Private(KSP ksp, PetscInt its, PetscInt nloca
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Bytes of one product with the operator on this rank: the matrix-free shell reads x and its three face
-   coefficients (double) and writes y; an assembled matrix reads its values and column indices, its row
-   pointers, x and writes y. */
-static PetscErrorCode ProductBytes(Mat A, PetscLogDouble *bytes)
+/* Bytes of one product with A on this rank: a MATSHELL moves shellRow bytes per row (its owner knows what it reads);
+   an assembled matrix reads its values and column indices, its row pointers and x, and writes y. */
+PetscErrorCode PffPressureProductBytes_Private(Mat A, PetscReal shellRow, PetscLogDouble *bytes)
 {
   PetscBool isshell;
   PetscInt  m;
@@ -57,7 +56,7 @@ static PetscErrorCode ProductBytes(Mat A, PetscLogDouble *bytes)
   PetscCall(MatGetLocalSize(A, &m, NULL));
   PetscCall(PetscObjectTypeCompare((PetscObject)A, MATSHELL, &isshell));
   if (isshell)
-    *bytes = (8.0 + 3 * 8.0 + 8.0) * m;
+    *bytes = shellRow * m;
   else {
     MatInfo info;
     PetscCall(MatGetInfo(A, MAT_LOCAL, &info));
@@ -83,7 +82,8 @@ PetscErrorCode PffPressureGetSolveTraffic(PffPressure ps, const PffPressureStats
   PetscCall(MatGetLocalSize(A, &m, NULL));
   PetscCall(PffPressureFCGBytes_Private(ps->ksp, st->its, m, &krylov, known));
   PetscCall(KSPGetInitialGuessNonzero(ps->ksp, &nonzero));
-  PetscCall(ProductBytes(A, &product));
+  /* the pressure shell reads x and its three double face coefficients and writes y */
+  PetscCall(PffPressureProductBytes_Private(A, 8.0 + 3 * 8.0 + 8.0, &product));
   *bytes = krylov + (st->its + (nonzero ? 1 : 0)) * product;
   PetscCallMPI(MPIU_Allreduce(MPI_IN_PLACE, bytes, 1, MPIU_PETSCLOGDOUBLE, MPI_SUM, ps->comm));
   PetscCallMPI(MPIU_Allreduce(MPI_IN_PLACE, known, 1, MPIU_BOOL, MPI_LAND, ps->comm));
