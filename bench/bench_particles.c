@@ -10,12 +10,12 @@
    particles about half a cell per step and migrates them. A streaming copy of 2 x 256 MiB per rank
    (read + write counted) at 1 and 2 threads gives the memory speed the kernels are held to. Prints
      RESULT copy ranks=<r> gb_s_1t=<x> gb_s_2t=<y>
-     RESULT kernel=<p2g|g2p|advect> ranks=<r> walls=<0|1> particles=<n> mparts_s_1t=<x> mparts_s_2t=<y> bytes=<b>
-            copy_share_1t=<s> copy_share_2t=<s>
-   bytes is the particle state a kernel must move at least in the compact store (float positions and
-   velocities, a 4-byte word): P2G reads x, v, word = 28 B; G2P reads x, v, word and writes v = 40 B;
-   advection reads x, word and writes x = 28 B), and copy_share the share of the copy's bandwidth that the
-   rate times bytes reaches (issue 12: a kernel at memory speed reaches about 1). */
+     RESULT kernel=<p2g|g2p|advect|p2g_volume> ranks=<r> walls=<0|1> particles=<n> mparts_s_1t=<x> mparts_s_2t=<y>
+   bytes=<b> copy_share_1t=<s> copy_share_2t=<s> bytes is the particle state a kernel must move at least in the compact
+   store (float positions and velocities, a 4-byte word): P2G reads x, v, word = 28 B; G2P reads x, v, word and writes v
+   = 40 B; advection reads x, word and writes x = 28 B), and copy_share the share of the copy's bandwidth that the rate
+   times bytes reaches (issue 12: a kernel at memory speed reaches about 1). p2g_volume is P2G as the fluid scenes call
+   it, with the particle-volume channel of the density correction (three more face values per corner; the same 28 B). */
 #include <pff.h>
 #include <omp.h>
 
@@ -43,11 +43,11 @@ int main(int argc, char **argv)
 {
   PffGrid      grid;
   PffParticles part;
-  PetscInt     n = 64, reps = 3, chMass, chMom, chU, chDU;
+  PetscInt     n = 64, reps = 3, chMass, chMom, chVolume, chU, chDU;
   PetscMPIInt  size;
   PetscBool    walls     = PETSC_FALSE;
   PetscReal    origin[3] = {0, 0, 0}, density[2] = {1000, 1}, alpha[2 * PFF_GRID_MAX_LEVELS];
-  double       rate[3][2];
+  double       rate[4][2];
   PetscInt64   count[2];
 
   PetscCall(PetscInitialize(&argc, &argv, NULL, help));
@@ -66,6 +66,7 @@ int main(int argc, char **argv)
   PetscCall(PffGridSetUp(grid));
   PetscCall(PffGridAddChannel(grid, "mass", PFF_CHANNEL_FACE, 1, &chMass));
   PetscCall(PffGridAddChannel(grid, "mom", PFF_CHANNEL_FACE, 1, &chMom));
+  PetscCall(PffGridAddChannel(grid, "volume", PFF_CHANNEL_FACE, 1, &chVolume));
   PetscCall(PffGridAddChannel(grid, "u", PFF_CHANNEL_FACE, 2, &chU));
   PetscCall(PffGridAddChannel(grid, "du", PFF_CHANNEL_FACE, 2, &chDU));
   PetscCall(PffGridFillChannel(grid, chU, TaylorGreen, NULL));
@@ -83,13 +84,15 @@ int main(int argc, char **argv)
   const double    np = (double)(count[0] + count[1]);
   for (int t = 0; t < 2; t++) {
     omp_set_num_threads(t + 1);
-    for (int k = 0; k < 3; k++) {
+    for (int k = 0; k < 4; k++) {
       double best = 1e30;
       for (PetscInt r = 0; r <= reps; r++) {
         PetscCallMPI(MPI_Barrier(PETSC_COMM_WORLD));
         const double t0 = MPI_Wtime();
         if (k == 0)
           PetscCall(PffParticlesP2G(part, density, chMass, chMom, -1));
+        else if (k == 3)
+          PetscCall(PffParticlesP2G(part, density, chMass, chMom, chVolume));
         else if (k == 1)
           PetscCall(PffParticlesG2P(part, chU, chDU, alpha));
         else
@@ -125,9 +128,9 @@ int main(int argc, char **argv)
   }
   PetscCall(
       PetscPrintf(PETSC_COMM_WORLD, "RESULT copy ranks=%d gb_s_1t=%.2f gb_s_2t=%.2f\n", (int)size, gbs[0], gbs[1]));
-  const char  *names[3] = {"p2g", "g2p", "advect"};
-  const double bytes[3] = {28, 40, 28};
-  for (int k = 0; k < 3; k++)
+  const char  *names[4] = {"p2g", "g2p", "advect", "p2g_volume"};
+  const double bytes[4] = {28, 40, 28, 28};
+  for (int k = 0; k < 4; k++)
     PetscCall(PetscPrintf(PETSC_COMM_WORLD,
                           "RESULT kernel=%s ranks=%d walls=%d particles=%.0f mparts_s_1t=%.2f mparts_s_2t=%.2f "
                           "bytes=%.0f copy_share_1t=%.3f copy_share_2t=%.3f\n",
