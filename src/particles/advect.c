@@ -148,10 +148,10 @@ static void PffAdvectChunkComponent(const PffSampleBlock *b, int d, PetscInt m, 
     memcpy(ci, cc, sizeof(ci));
     memcpy(ti, tc, sizeof(ti));
   }
-  for (PetscInt j = 0; j < m; j++) {
-    const int32_t o = (ci[0][j] + gw) + mm * ((ci[1][j] + gw) + mm * (ci[2][j] + gw)) + koff[j];
-    val[j]          = PffTrilinear_Private(tile, o, st, ti[0][j], ti[1][j], ti[2][j]);
-  }
+  int32_t o[PFF_CHUNK];
+  for (PetscInt j = 0; j < m; j++) o[j] = (ci[0][j] + gw) + mm * ((ci[1][j] + gw) + mm * (ci[2][j] + gw)) + koff[j];
+  for (PetscInt j = PffTrilinearChunk16_Private(tile, o, st, ti[0], ti[1], ti[2], m, val); j < m; j++)
+    val[j] = PffTrilinear_Private(tile, o[j], st, ti[0][j], ti[1][j], ti[2][j]);
   for (PetscInt j = 0; j < m; j++) od[j] = scale * val[j];
 }
 

@@ -42,11 +42,11 @@ PetscErrorCode PffParticlesInterpolateCell(PffParticles p, PetscInt ch, PffParti
       }
       const int32_t *restrict cx = c[0], *restrict cy = c[1], *restrict cz = c[2];
       const float *restrict tx = tt[0], *restrict ty = tt[1], *restrict tz = tt[2], *t = b->tile[0][0];
-      float w[PFF_CHUNK]; /* val's address goes to fn: gathers into it would not vectorise */
-      for (PetscInt j = 0; j < m; j++) {
-        const int32_t o = (cx[j] + 1) + (int32_t)mm * ((cy[j] + 1) + (int32_t)mm * (cz[j] + 1));
-        w[j]            = PffTrilinear_Private(t, o, st, tx[j], ty[j], tz[j]);
-      }
+      float   w[PFF_CHUNK]; /* val's address goes to fn: gathers into it would not vectorise */
+      int32_t o[PFF_CHUNK];
+      for (PetscInt j = 0; j < m; j++) o[j] = (cx[j] + 1) + (int32_t)mm * ((cy[j] + 1) + (int32_t)mm * (cz[j] + 1));
+      for (PetscInt j = PffTrilinearChunk16_Private(t, o, st, tx, ty, tz, m, w); j < m; j++)
+        w[j] = PffTrilinear_Private(t, o[j], st, tx[j], ty[j], tz[j]);
       memcpy(val, w, sizeof(float) * (size_t)m);
       fn(j0, m, val, ctx);
     }

@@ -8,7 +8,8 @@
    its ghost tiles, so chunks of particles are interpolated in float without a branch
    (PffChunkLattice_Private locates the lattices once per chunk and serves u and du). In a block beside
    a wall or hole the lattices are first clamped there as the grid's general path does
-   (PffChunkClamp_Private). */
+   (PffChunkClamp_Private). With AVX-512 the corners come by 64-bit gathers of x pairs
+   (PffTrilinear16_Private), half the gathered elements, with the same arithmetic. */
 #include "particlesimpl.h"
 
 PetscErrorCode PffParticlesG2P(PffParticles p, PetscInt chU, PetscInt chDU, const PetscReal alpha[])
@@ -58,11 +59,14 @@ PetscErrorCode PffParticlesG2P(PffParticles p, PetscInt chU, PetscInt chDU, cons
         }
         const int32_t *restrict cx = c[0], *restrict cy = c[1], *restrict cz = c[2];
         const float *restrict tx = t[0], *restrict ty = t[1], *restrict tz = t[2];
-        float ur[PFF_CHUNK], dr[PFF_CHUNK];
-        for (PetscInt j = 0; j < m; j++) {
-          const int32_t o = (cx[j] + 1) + (int32_t)mm * ((cy[j] + 1) + (int32_t)mm * (cz[j] + 1));
-          ur[j]           = PffTrilinear_Private(tu, o, st, tx[j], ty[j], tz[j]);
-          dr[j]           = PffTrilinear_Private(tdu, o, st, tx[j], ty[j], tz[j]);
+        float   ur[PFF_CHUNK], dr[PFF_CHUNK];
+        int32_t o[PFF_CHUNK];
+        for (PetscInt j = 0; j < m; j++) o[j] = (cx[j] + 1) + (int32_t)mm * ((cy[j] + 1) + (int32_t)mm * (cz[j] + 1));
+        const PetscInt j16 = PffTrilinearChunk16_Private(tu, o, st, tx, ty, tz, m, ur);
+        PffTrilinearChunk16_Private(tdu, o, st, tx, ty, tz, m, dr);
+        for (PetscInt j = j16; j < m; j++) {
+          ur[j] = PffTrilinear_Private(tu, o[j], st, tx[j], ty[j], tz[j]);
+          dr[j] = PffTrilinear_Private(tdu, o[j], st, tx[j], ty[j], tz[j]);
         }
         float *vd = &v[3 * j0 + d];
         for (PetscInt j = 0; j < m; j++) vd[3 * j] = a[j] * (vd[3 * j] + dr[j]) + (1 - a[j]) * ur[j];
