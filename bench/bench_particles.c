@@ -10,12 +10,15 @@
    particles about half a cell per step and migrates them. A streaming copy of 2 x 256 MiB per rank
    (read + write counted) at 1 and 2 threads gives the memory speed the kernels are held to. Prints
      RESULT copy ranks=<r> gb_s_1t=<x> gb_s_2t=<y>
-     RESULT kernel=<p2g|g2p|advect|p2g_volume> ranks=<r> walls=<0|1> particles=<n> mparts_s_1t=<x> mparts_s_2t=<y>
-   bytes=<b> copy_share_1t=<s> copy_share_2t=<s> bytes is the particle state a kernel must move at least in the compact
-   store (float positions and velocities, a 4-byte word): P2G reads x, v, word = 28 B; G2P reads x, v, word and writes v
-   = 40 B; advection reads x, word and writes x = 28 B), and copy_share the share of the copy's bandwidth that the rate
-   times bytes reaches (issue 12: a kernel at memory speed reaches about 1). p2g_volume is P2G as the fluid scenes call
-   it, with the particle-volume channel of the density correction (three more face values per corner; the same 28 B). */
+     RESULT kernel=<k> ranks=<r> walls=<0|1> particles=<n> mparts_s_1t=<x> mparts_s_2t=<y> bytes=<b>
+            copy_share_1t=<s> copy_share_2t=<s>
+   for k = p2g, g2p, advect and p2g_volume (P2G as the fluid scenes call it, with the particle-volume channel of
+   the density correction: three more face values per corner, the same state read).
+
+   bytes is the particle state a kernel must move at least in the compact store (float positions and
+   velocities, a 4-byte word): P2G reads x, v, word = 28 B; G2P reads x, v, word and writes v = 40 B;
+   advection reads x, word and writes x = 28 B), and copy_share the share of the copy's bandwidth that the
+   rate times bytes reaches (issue 12: a kernel at memory speed reaches about 1). */
 #include <pff.h>
 #include <omp.h>
 
