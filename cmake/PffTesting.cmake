@@ -40,14 +40,18 @@ function(pff_add_mpi_test name)
   endforeach()
 endfunction()
 
-# pff_add_unit(<name> RANKS <n...> [ARGS ...]) builds tests/unit/<name>.c against libpfflip and registers it.
+# pff_add_unit(<name> RANKS <n...> [ARGS ...] [NAME <test name>]) builds tests/unit/<name>.c against libpfflip
+# and registers it (as <test name>_np<n> when the same program runs again with other arguments).
 function(pff_add_unit name)
-  cmake_parse_arguments(U "" "THREADS" "RANKS;ARGS;LABELS" ${ARGN})
+  cmake_parse_arguments(U "" "THREADS;NAME" "RANKS;ARGS;LABELS" ${ARGN})
+  if(NOT U_NAME)
+    set(U_NAME ${name})
+  endif()
   if(NOT TARGET ${name})
     add_executable(${name} ${name}.c)
     target_link_libraries(${name} PRIVATE pfflip)
     set_target_properties(${name} PROPERTIES RUNTIME_OUTPUT_DIRECTORY ${PROJECT_BINARY_DIR}/tests)
   endif()
-  pff_add_mpi_test(${name} COMMAND $<TARGET_FILE:${name}> ${U_ARGS} RANKS ${U_RANKS} LABELS unit ${U_LABELS}
+  pff_add_mpi_test(${U_NAME} COMMAND $<TARGET_FILE:${name}> ${U_ARGS} RANKS ${U_RANKS} LABELS unit ${U_LABELS}
                    THREADS ${U_THREADS})
 endfunction()

@@ -79,11 +79,18 @@ PETSC_EXTERN PetscErrorCode PffGetVersionString(char buf[], size_t len);
 /* One line per step on rank 0: step, simulated time, wall time per step, ETA. */
 typedef struct {
   PetscLogDouble start, last;
-  PetscReal      tend;
-  PetscInt       nsteps;
+  PetscReal      t0, tend;
+  PetscInt       step0, nsteps;
 } PffProgress;
-/* Starts the clock. tend (simulated end time) or nsteps (step count) gives the ETA; pass 0 for unknown. */
-PETSC_EXTERN PetscErrorCode PffProgressStart(PffProgress *p, PetscReal tend, PetscInt nsteps);
+/* Starts the clock at simulated time t0 and step step0 (non-zero after a restart, so that the ETA
+   uses the rate of this run only). tend (simulated end time) or nsteps (step count) gives the ETA;
+   pass 0 for unknown. */
+PETSC_EXTERN PetscErrorCode PffProgressStart(PffProgress *p, PetscReal t0, PetscReal tend, PetscInt step0,
+                                             PetscInt nsteps);
+/* Estimated wall time left after `elapsed` seconds since the start, at step `step` and time t: the
+   rate since the start extrapolated to tend and to nsteps, the sooner of the two when both are
+   known; -1 when neither is known yet. Not collective. */
+PETSC_EXTERN double PffProgressETA(const PffProgress *p, PetscInt step, PetscReal t, double elapsed);
 /* Prints "step <s> t <t> wall/step <w> s ETA <e> s <extra>". Collective (reduces nothing; rank 0 prints). */
 PETSC_EXTERN PetscErrorCode PffProgressPrint(MPI_Comm comm, PffProgress *p, PetscInt step, PetscReal t,
                                              const char extra[]);

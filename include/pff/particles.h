@@ -110,11 +110,17 @@ typedef struct {
    -particles_jitter_band b  cells within b of a change of the seeding function's type are seeded on the lattice,
                          so that the initial interface is as smooth as the lattice's, [0, 8] (default 2)
    -particles_seed s     key of the counter-based RNG (default 0)
-   -particles_substep_cfl c  cells a particle may move per RK3 sub-step (default 1) */
+   -particles_substep_cfl c  cells a particle may move per RK3 sub-step (default 1)
+   -particles_io_chunk r  particles per collective transfer when frames and checkpoints write or read the store
+                         (default 1048576): the conversion buffers hold r rows whatever the count */
 PETSC_EXTERN PetscErrorCode PffParticlesCreate(PffGrid grid, PffParticles *p);
 PETSC_EXTERN PetscErrorCode PffParticlesSetFromOptions(PffParticles p);
 /* Jitter of the next Seed, as -particles_jitter (0 = the regular lattice). Not collective. */
 PETSC_EXTERN PetscErrorCode PffParticlesSetJitter(PffParticles p, PetscReal jitter);
+/* Particles per collective transfer of frames and checkpoints, as -particles_io_chunk (>= 1). Not collective,
+   but every rank must set the same value before a write or a read. */
+PETSC_EXTERN PetscErrorCode PffParticlesSetIOChunk(PffParticles p, PetscInt rows);
+PETSC_EXTERN PetscErrorCode PffParticlesGetIOChunk(PffParticles p, PetscInt *rows);
 PETSC_EXTERN PetscErrorCode PffParticlesDestroy(PffParticles *p);
 
 /* Seeds 2 x 2 x 2 jittered particles per cell of every owned block at the block's level (particle

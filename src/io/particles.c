@@ -5,6 +5,10 @@
    therefore depends on the partition, but the set of particles does not. Every rank takes part in
    every collective call, selecting nothing when it holds no particle. x and v are float32 in frames
    (converted here, so that the transfer stays collective) and float64 in checkpoints (exact restart).
+   Both directions move at most -particles_io_chunk rows per rank and collective call, so that the
+   conversion buffers stay a few tens of MB at any count (whole-store buffers added 24 B per particle
+   to a checkpointing run's peak, 0.8 GB per rank in rt3d at W = 128); every rank makes as many calls
+   as the rank with the most rows, selecting nothing once its own are done.
 
    Reading (restart on any number of ranks): rank r of P reads rows [N r / P, N (r + 1) / P), appends
    them to the empty store and migrates them to the owners of their blocks. */
@@ -24,23 +28,105 @@ static PetscErrorCode PffIOSelectRows(hid_t space, hsize_t start, hsize_t n, hsi
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Creates dataset name of total rows (x ncol) and writes this rank's n rows at start. */
-static PetscErrorCode PffIOWriteRows(hid_t group, const char name[], hid_t filetype, hid_t memtype, hsize_t total,
-                                     hsize_t ncol, hsize_t start, hsize_t n, hid_t dxpl, const void *buf)
+/* The rows of one rank in a dataset of total rows, moved in nchunks collective calls of at most chunk rows. */
+typedef struct {
+  hid_t      group, dxpl;
+  hsize_t    total, start; /* rows in all, this rank's first */
+  PetscInt64 n, chunk, nchunks;
+} PffIORows;
+
+static PetscErrorCode PffIORowsSetUp(PffParticles particles, MPI_Comm comm, hid_t group, hid_t dxpl, PetscInt64 total,
+                                     PetscInt64 start, PetscInt64 n, PffIORows *r)
 {
-  const hsize_t dims[2] = {total, ncol};
-  hid_t         dset, fspace, mspace;
+  PetscInt   chunk;
+  PetscInt64 nmax = n;
 
   PetscFunctionBeginUser;
-  PetscCall(PffH5CreateDataset_Private(group, name, filetype, ncol > 0 ? 2 : 1, dims, &dset));
+  PetscCall(PffParticlesGetIOChunk(particles, &chunk));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nmax, 1, MPIU_INT64, MPI_MAX, comm));
+  r->group   = group;
+  r->dxpl    = dxpl;
+  r->total   = (hsize_t)total;
+  r->start   = (hsize_t)start;
+  r->n       = n;
+  r->chunk   = chunk;
+  r->nchunks = (nmax + chunk - 1) / chunk;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* This rank's rows [*i0, *i0 + *m) of chunk c (m = 0 once they are done). */
+static inline void PffIORowsChunk(const PffIORows *r, PetscInt64 c, PetscInt64 *i0, PetscInt64 *m)
+{
+  *i0 = PetscMin(c * r->chunk, r->n);
+  *m  = PetscMin(r->chunk, r->n - *i0);
+}
+
+/* Fills buf with this rank's rows [i0, i0 + m) of a dataset, converted to its memory type. */
+typedef void (*PffIORowFill)(const void *ctx, PetscInt64 i0, PetscInt64 m, void *buf);
+
+/* Creates dataset name (rows x ncol, ncol = 0: 1-D) and writes this rank's rows chunk by chunk: through fill
+   into buf, or straight from data (rowbytes per row) when fill is NULL. */
+static PetscErrorCode PffIOWriteRows(const PffIORows *r, const char name[], hid_t filetype, hid_t memtype, hsize_t ncol,
+                                     PffIORowFill fill, const void *ctx, void *buf, const void *data, size_t rowbytes)
+{
+  const hsize_t dims[2] = {r->total, ncol};
+  hid_t         dset, fspace;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffH5CreateDataset_Private(r->group, name, filetype, ncol > 0 ? 2 : 1, dims, &dset));
   PffCallHDF5(fspace = H5Dget_space(dset));
-  PetscCall(PffIOSelectRows(fspace, start, n, ncol));
-  PetscCall(PffIOCreateMemSpace_Private(n, ncol, &mspace));
-  PffCallHDF5(H5Dwrite(dset, memtype, mspace, fspace, dxpl, buf));
-  PffCallHDF5(H5Sclose(mspace));
+  for (PetscInt64 c = 0; c < r->nchunks; c++) {
+    PetscInt64  i0, m;
+    const void *src;
+    hid_t       mspace;
+    PffIORowsChunk(r, c, &i0, &m);
+    if (fill) fill(ctx, i0, m, buf);
+    src = fill ? buf : data ? (const void *)((const char *)data + rowbytes * (size_t)i0) : NULL;
+    PetscCall(PffIOSelectRows(fspace, r->start + (hsize_t)i0, (hsize_t)m, ncol));
+    PetscCall(PffIOCreateMemSpace_Private((hsize_t)m, ncol, &mspace));
+    PffCallHDF5(H5Dwrite(dset, memtype, mspace, fspace, r->dxpl, src));
+    PffCallHDF5(H5Sclose(mspace));
+  }
   PffCallHDF5(H5Sclose(fspace));
   PffCallHDF5(H5Dclose(dset));
   PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The conversions of the store's rows to the files' (ctx: the store's PffParticleArrays). */
+static void PffIOFillWorld(const void *ctx, PetscInt64 i0, PetscInt64 m, void *buf)
+{
+  for (PetscInt64 i = 0; i < m; i++)
+    PffParticleArraysWorld((const PffParticleArrays *)ctx, (PetscInt)(i0 + i), (PetscReal *)buf + 3 * i);
+}
+
+static void PffIOFillWorldFloat(const void *ctx, PetscInt64 i0, PetscInt64 m, void *buf)
+{
+  const PffParticleArrays *a = (const PffParticleArrays *)ctx;
+  for (PetscInt64 j = 0; j < 3 * m; j++)
+    ((float *)buf)[j] = (float)(a->origin[j % 3] + a->h0 * (PetscReal)a->x[3 * i0 + j]);
+}
+
+static void PffIOFillVelocity(const void *ctx, PetscInt64 i0, PetscInt64 m, void *buf)
+{
+  const PffParticleArrays *a = (const PffParticleArrays *)ctx;
+  for (PetscInt64 j = 0; j < 3 * m; j++) ((PetscReal *)buf)[j] = (PetscReal)a->v[3 * i0 + j];
+}
+
+/* The packed word unpacked into the files' three byte datasets: type, level, flags (byte k). */
+typedef struct {
+  const PffParticleArrays *a;
+  int                      k;
+} PffIOByteField;
+
+static void PffIOFillByte(const void *ctx, PetscInt64 i0, PetscInt64 m, void *buf)
+{
+  const PffIOByteField *f = (const PffIOByteField *)ctx;
+  for (PetscInt64 i = 0; i < m; i++) {
+    const uint32_t w    = f->a->word[i0 + i];
+    ((uint8_t *)buf)[i] = (uint8_t)(f->k == 0   ? (uint32_t)PffParticleWordType(w)
+                                    : f->k == 1 ? (uint32_t)PffParticleWordLevel(w)
+                                                : PffParticleFlagsByte(w));
+  }
 }
 
 /* File and memory HDF5 types of a particle field (PffParticlesGetFileFields). */
@@ -103,55 +189,35 @@ PetscErrorCode PffIOWriteParticles_Private(PffParticles particles, MPI_Comm comm
   /* world positions (double in checkpoints: the store's floats come back exactly), velocities as
      stored or widened, and the packed word unpacked into the file's three byte datasets */
   {
-    PetscReal *xw = NULL;
-    float     *xf = NULL;
-    uint8_t   *bytes;
-    PetscCall(PetscMalloc1(n + 1, &bytes));
+    PffIORows            io;
+    PffParticleFieldInfo info[PFF_IO_MAX_FILE_FIELDS];
+    PetscInt             nf = PFF_IO_MAX_FILE_FIELDS;
+    void                *buf;
+    PetscCall(PffIORowsSetUp(particles, comm, group, dxpl, total, start, n, &io));
+    PetscCall(PetscMalloc(3 * sizeof(PetscReal) * (size_t)PetscMax(1, PetscMin(io.chunk, n)), &buf));
     if (dbl) {
-      PetscCall(PetscMalloc1(3 * n + 1, &xw));
-      for (PetscInt64 i = 0; i < n; i++) PffParticleArraysWorld(&a, (PetscInt)i, &xw[3 * i]);
-      PetscCall(PffIOWriteRows(group, "x", ftype, PFF_H5T_NATIVE_PETSCREAL, (hsize_t)total, 3, (hsize_t)start,
-                               (hsize_t)n, dxpl, xw));
-      for (PetscInt64 i = 0; i < 3 * n; i++) xw[i] = (PetscReal)a.v[i];
-      PetscCall(PffIOWriteRows(group, "v", ftype, PFF_H5T_NATIVE_PETSCREAL, (hsize_t)total, 3, (hsize_t)start,
-                               (hsize_t)n, dxpl, xw));
+      PetscCall(PffIOWriteRows(&io, "x", ftype, PFF_H5T_NATIVE_PETSCREAL, 3, PffIOFillWorld, &a, buf, NULL, 0));
+      PetscCall(PffIOWriteRows(&io, "v", ftype, PFF_H5T_NATIVE_PETSCREAL, 3, PffIOFillVelocity, &a, buf, NULL, 0));
     } else {
-      PetscCall(PetscMalloc1(3 * n + 1, &xf));
-      for (PetscInt64 i = 0; i < 3 * n; i++) xf[i] = (float)(a.origin[i % 3] + a.h0 * (PetscReal)a.x[i]);
-      PetscCall(
-          PffIOWriteRows(group, "x", ftype, H5T_NATIVE_FLOAT, (hsize_t)total, 3, (hsize_t)start, (hsize_t)n, dxpl, xf));
-      PetscCall(PffIOWriteRows(group, "v", ftype, H5T_NATIVE_FLOAT, (hsize_t)total, 3, (hsize_t)start, (hsize_t)n, dxpl,
-                               a.v));
+      PetscCall(PffIOWriteRows(&io, "x", ftype, H5T_NATIVE_FLOAT, 3, PffIOFillWorldFloat, &a, buf, NULL, 0));
+      PetscCall(PffIOWriteRows(&io, "v", ftype, H5T_NATIVE_FLOAT, 3, NULL, NULL, NULL, a.v, 3 * sizeof(float)));
     }
-    {
-      PffParticleFieldInfo info[PFF_IO_MAX_FILE_FIELDS];
-      PetscInt             nf = PFF_IO_MAX_FILE_FIELDS;
-      PetscCall(PffParticlesGetFileFields(&nf, info));
-      for (PetscInt f = 0; f < nf; f++) { /* the fields that need no code of their own, as stored */
-        hid_t ft, mt;
-        void *data;
-        PffIOFieldTypes(info[f].type, &ft, &mt);
-        PetscCall(PffParticlesGetFieldArray(particles, info[f].name, &data));
-        PetscCall(PffIOWriteRows(group, info[f].name, ft, mt, (hsize_t)total,
-                                 info[f].ncomp > 1 ? (hsize_t)info[f].ncomp : 0, (hsize_t)start, (hsize_t)n, dxpl,
-                                 data));
-      }
+    PetscCall(PffParticlesGetFileFields(&nf, info));
+    for (PetscInt f = 0; f < nf; f++) { /* the fields that need no code of their own, as stored */
+      hid_t ft, mt;
+      void *data;
+      PffIOFieldTypes(info[f].type, &ft, &mt);
+      PetscCall(PffParticlesGetFieldArray(particles, info[f].name, &data));
+      PetscCall(PffIOWriteRows(&io, info[f].name, ft, mt, info[f].ncomp > 1 ? (hsize_t)info[f].ncomp : 0, NULL, NULL,
+                               NULL, data, info[f].size * (size_t)info[f].ncomp));
     }
     const char *const names[3]  = {"type", "level", "flags"};
     const hid_t       ftypes[3] = {H5T_STD_U8LE, H5T_STD_I8LE, H5T_STD_U8LE};
     for (int k = 0; k < 3; k++) {
-      for (PetscInt64 i = 0; i < n; i++) {
-        const uint32_t w = a.word[i];
-        bytes[i]         = (uint8_t)(k == 0   ? (uint32_t)PffParticleWordType(w)
-                                     : k == 1 ? (uint32_t)PffParticleWordLevel(w)
-                                              : PffParticleFlagsByte(w));
-      }
-      PetscCall(PffIOWriteRows(group, names[k], ftypes[k], H5T_NATIVE_UINT8, (hsize_t)total, 0, (hsize_t)start,
-                               (hsize_t)n, dxpl, bytes));
+      const PffIOByteField bf = {&a, k};
+      PetscCall(PffIOWriteRows(&io, names[k], ftypes[k], H5T_NATIVE_UINT8, 0, PffIOFillByte, &bf, buf, NULL, 0));
     }
-    PetscCall(PetscFree(xw));
-    PetscCall(PetscFree(xf));
-    PetscCall(PetscFree(bytes));
+    PetscCall(PetscFree(buf));
   }
   PffCallHDF5(H5Gclose(group));
   *count = total;
@@ -249,13 +315,16 @@ static PetscErrorCode PffIOReadRows(hid_t group, const char name[], hid_t memtyp
 PetscErrorCode PffIOReadParticles_Private(PffParticles particles, PffGrid grid, MPI_Comm comm, hid_t file,
                                           const char path[], hid_t dxpl, PetscInt64 count)
 {
-  PetscMPIInt rank, size;
-  PetscInt64  lo, bad = -1;
-  PetscInt    n, nlevels;
-  PetscReal  *x, *v;
-  uint8_t    *type, *flags;
-  int8_t     *level;
-  hid_t       group;
+  PetscMPIInt          rank, size;
+  PetscInt64           lo, bad = -1;
+  PetscInt             n, nlevels, nf = PFF_IO_MAX_FILE_FIELDS;
+  PetscReal           *x, *v;
+  uint8_t             *type, *flags;
+  int8_t              *level;
+  hid_t                group;
+  PffIORows            io;
+  PffParticleArrays    a;
+  PffParticleFieldInfo info[PFF_IO_MAX_FILE_FIELDS];
 
   PetscFunctionBeginUser;
   PetscCallMPI(MPI_Comm_rank(comm, &rank));
@@ -280,41 +349,47 @@ PetscErrorCode PffIOReadParticles_Private(PffParticles particles, PffGrid grid, 
     }
     PetscCall(PetscFree(counts));
   }
-  PetscCall(PetscMalloc5(3 * n + 1, &x, 3 * n + 1, &v, n + 1, &type, n + 1, &level, n + 1, &flags));
-  PetscCall(PffIOReadRows(group, "x", PFF_H5T_NATIVE_PETSCREAL, 3, (hsize_t)lo, (hsize_t)n, dxpl, x));
-  PetscCall(PffIOReadRows(group, "v", PFF_H5T_NATIVE_PETSCREAL, 3, (hsize_t)lo, (hsize_t)n, dxpl, v));
-  PetscCall(PffIOReadRows(group, "type", H5T_NATIVE_UINT8, 0, (hsize_t)lo, (hsize_t)n, dxpl, type));
-  PetscCall(PffIOReadRows(group, "level", H5T_NATIVE_INT8, 0, (hsize_t)lo, (hsize_t)n, dxpl, level));
-  PetscCall(PffIOReadRows(group, "flags", H5T_NATIVE_UINT8, 0, (hsize_t)lo, (hsize_t)n, dxpl, flags));
-  /* PffParticlesAdd would stop on this rank alone; find the first bad row on any rank instead. */
-  for (PetscInt i = 0; i < n && bad < 0; i++)
-    if (type[i] >= PFF_PARTICLE_NTYPES || level[i] < 0 || level[i] >= nlevels) bad = lo + i;
-  if (bad < 0) bad = INT64_MAX;
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &bad, 1, MPIU_INT64, MPI_MIN, comm));
-  if (bad != INT64_MAX) {
-    PffCallHDF5(H5Gclose(group));
-    PetscCall(PetscFree5(x, v, type, level, flags));
-    SETERRQ(comm, PETSC_ERR_FILE_UNEXPECTED,
-            "checkpoint %s: particle row %" PetscInt64_FMT
-            " has a type that is not a PffParticleType or a level outside the grid's 0..%" PetscInt_FMT,
-            path, bad, nlevels - 1);
-  }
+  PetscCall(PffIORowsSetUp(particles, comm, group, dxpl, count, lo, n, &io));
   {
+    const PetscInt rows = (PetscInt)PetscMax(1, PetscMin(io.chunk, (PetscInt64)n));
+    PetscCall(PetscMalloc5(3 * rows, &x, 3 * rows, &v, rows, &type, rows, &level, rows, &flags));
+  }
+  PetscCall(PffParticlesGetFileFields(&nf, info));
+  for (PetscInt64 c = 0; c < io.nchunks; c++) {
+    PetscInt64 i0, m;
+    PetscInt   n0;
+    PffIORowsChunk(&io, c, &i0, &m);
+    const hsize_t at = (hsize_t)(lo + i0), rows = (hsize_t)m;
+    PetscCall(PffIOReadRows(group, "x", PFF_H5T_NATIVE_PETSCREAL, 3, at, rows, dxpl, x));
+    PetscCall(PffIOReadRows(group, "v", PFF_H5T_NATIVE_PETSCREAL, 3, at, rows, dxpl, v));
+    PetscCall(PffIOReadRows(group, "type", H5T_NATIVE_UINT8, 0, at, rows, dxpl, type));
+    PetscCall(PffIOReadRows(group, "level", H5T_NATIVE_INT8, 0, at, rows, dxpl, level));
+    PetscCall(PffIOReadRows(group, "flags", H5T_NATIVE_UINT8, 0, at, rows, dxpl, flags));
+    /* PffParticlesAdd would stop on this rank alone; every rank stops at the first chunk that holds a bad row
+       on any rank, naming the lowest such row */
+    for (PetscInt64 i = 0; i < m && bad < 0; i++)
+      if (type[i] >= PFF_PARTICLE_NTYPES || level[i] < 0 || level[i] >= nlevels) bad = lo + i0 + i;
+    if (bad < 0) bad = INT64_MAX;
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &bad, 1, MPIU_INT64, MPI_MIN, comm));
+    if (bad != INT64_MAX) {
+      PffCallHDF5(H5Gclose(group));
+      PetscCall(PetscFree5(x, v, type, level, flags));
+      SETERRQ(comm, PETSC_ERR_FILE_UNEXPECTED,
+              "checkpoint %s: particle row %" PetscInt64_FMT
+              " has a type that is not a PffParticleType or a level outside the grid's 0..%" PetscInt_FMT,
+              path, bad, nlevels - 1);
+    }
+    bad = -1;
     /* the fields the files take by themselves go straight into the rows Add appended */
-    PffParticleArrays    a;
-    PffParticleFieldInfo info[PFF_IO_MAX_FILE_FIELDS];
-    PetscInt             nf = PFF_IO_MAX_FILE_FIELDS, n0;
     PetscCall(PffParticlesGetArrays(particles, &a));
     n0 = a.n;
-    PetscCall(PffParticlesAdd(particles, n, x, v, NULL, type, level, flags));
-    PetscCall(PffParticlesGetFileFields(&nf, info));
+    PetscCall(PffParticlesAdd(particles, (PetscInt)m, x, v, NULL, type, level, flags));
     for (PetscInt f = 0; f < nf; f++) {
       hid_t ft, mt;
       char *data;
       PffIOFieldTypes(info[f].type, &ft, &mt);
       PetscCall(PffParticlesGetFieldArray(particles, info[f].name, (void **)&data));
-      PetscCall(PffIOReadRows(group, info[f].name, mt, info[f].ncomp > 1 ? (hsize_t)info[f].ncomp : 0, (hsize_t)lo,
-                              (hsize_t)n, dxpl,
+      PetscCall(PffIOReadRows(group, info[f].name, mt, info[f].ncomp > 1 ? (hsize_t)info[f].ncomp : 0, at, rows, dxpl,
                               data ? data + info[f].size * (size_t)info[f].ncomp * (size_t)n0 : NULL));
     }
   }

@@ -23,6 +23,7 @@ PetscErrorCode PffParticlesCreate(PffGrid grid, PffParticles *part)
   p->jitterBand = PFF_PARTICLES_JITTER_BAND_DEFAULT;
   p->seed       = PFF_PARTICLES_SEED_DEFAULT;
   p->substepCfl = PFF_PARTICLES_SUBSTEP_CFL_DEFAULT;
+  p->ioChunk    = PFF_PARTICLES_IO_CHUNK_DEFAULT;
   PetscCall(PffGridGetSizes(grid, &p->n0, &p->nlevels, p->origin, &p->h0, p->periodic));
   PetscCall(PffGridGetRaster(grid, nb, NULL, NULL));
   for (int d = 0; d < 3; d++) {
@@ -49,6 +50,9 @@ PetscErrorCode PffParticlesSetFromOptions(PffParticles p)
                           seed, &seed, NULL));
   PetscCall(PffOptionsReal("-particles_substep_cfl", "Cells a particle may move per RK3 sub-step", "PffParticlesAdvect",
                            p->substepCfl, &p->substepCfl, NULL));
+  PetscCall(PffOptionsBoundedInt("-particles_io_chunk",
+                                 "Particles per collective transfer of frames and checkpoints (bounds their buffers)",
+                                 "PffParticlesSetIOChunk", p->ioChunk, &p->ioChunk, NULL, 1));
   PetscOptionsEnd();
   PetscCheck(p->jitter >= 0 && p->jitter <= 1, p->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-particles_jitter %g is invalid: must be in [0, 1]", (double)p->jitter);
@@ -69,6 +73,22 @@ static PetscErrorCode PffParticleSoAFree(PffParticleSoA *s)
 #define PFF_PARTICLE_FIELD_FREE(name, type, k, f) PetscCall(PetscFree(s->name));
   PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_FREE)
 #undef PFF_PARTICLE_FIELD_FREE
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffParticlesSetIOChunk(PffParticles p, PetscInt rows)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(rows >= 1, PETSC_COMM_SELF, PETSC_ERR_ARG_OUTOFRANGE,
+             "PffParticlesSetIOChunk: %" PetscInt_FMT " rows, must be >= 1", rows);
+  p->ioChunk = rows;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffParticlesGetIOChunk(PffParticles p, PetscInt *rows)
+{
+  PetscFunctionBeginUser;
+  *rows = p->ioChunk;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

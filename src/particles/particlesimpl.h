@@ -8,6 +8,7 @@
 #define PFF_PARTICLES_JITTER_BAND_MAX 8
 #define PFF_PARTICLES_SEED_DEFAULT 0
 #define PFF_PARTICLES_SUBSTEP_CFL_DEFAULT 1.0
+#define PFF_PARTICLES_IO_CHUNK_DEFAULT (1 << 20)
 #define PFF_PARTICLES_MAX_SUBSTEPS 16
 
 /* Purposes of the counter-based RNG (the third key besides the seed and the particle id). */
@@ -58,6 +59,7 @@ struct _n_PffParticles {
   /* options */
   PetscReal jitter, substepCfl;
   PetscInt  jitterBand; /* cells within this many of a change of the seeding type sit on the lattice */
+  PetscInt  ioChunk;    /* particles per collective transfer of frames and checkpoints */
   uint64_t  seed;
 
   /* store */

@@ -126,7 +126,7 @@ static PetscErrorCode PffGridDemoRun(PffScene s)
   PetscCall(PetscLogStagePush(stOutput));
   PetscCall(PffGridDemoWrite(s, grid, frame++, t, 0));
   PetscCall(PetscLogStagePop());
-  PetscCall(PffProgressStart(&prog, 0, d->steps));
+  PetscCall(PffProgressStart(&prog, t, 0, 0, d->steps));
   for (PetscInt step = 1; step <= d->steps; step++) {
     PetscReal umax = 0, integral = 0;
     char      extra[128];

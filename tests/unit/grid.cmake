@@ -1,6 +1,7 @@
-# grid: Morton keys and grading (serial helpers), then the distributed grid at 1, 2 and 4 ranks:
+# grid: Morton keys, grading and the progress line's ETA (serial helpers of core), then the distributed grid at 1, 2 and 4 ranks:
 # partition, halo exchange (forward and reverse, across ranks and levels) and interpolation.
 pff_add_unit(test_morton RANKS 1)
+pff_add_unit(test_progress RANKS 1)
 pff_add_unit(test_grade RANKS 1)
 pff_add_unit(test_partition RANKS 1 2 4)
 pff_add_unit(test_halo RANKS 1 2 4)

@@ -15,11 +15,15 @@
      <path>; the next write replaces it and removes the .tmp;
    - errors: a missing file, a plain frame and a checkpoint of another raster fail with messages naming
      them;
-   - frames: PffIOWriteFrameParticles writes /particles (float32 x, the right count) and leaves the
-     hidden channel out of /fields and of the .xmf, whose particle grid is a Polyvertex; reading that
-     frame leaves the hidden channel untouched.
+   - frames: PffIOWriteFrameParticles writes /particles (float32 x, the right count, every row equal
+     to the checkpoint's rounded to float) and leaves the hidden channel out of /fields and of the .xmf,
+     whose particle grid is a Polyvertex; reading that frame leaves the hidden channel untouched;
+   - a particle row with an impossible type in the checkpoint's last rows fails the restart, naming the
+     row (every chunk of the read is checked).
+   Particles move -particles_io_chunk rows per collective call (default 2^20: one call here); the
+   ctest cases with -particles_io_chunk 1000 take many calls, a different number on each rank.
 
-   Sample run:  mpiexec -n 4 ./test_checkpoint -prefix /tmp/ckpt
+   Sample run:  mpiexec -n 4 ./test_checkpoint -prefix /tmp/ckpt [-particles_io_chunk 1000]
    Prints (the same on any number of ranks): the particle counts, masses and checksums. */
 #include <inttypes.h>
 #include <math.h>
@@ -31,7 +35,8 @@
 #include "pfftest.h"
 
 static const char help[] = "Checkpoint and particle-frame round trips.\n"
-                           "  -prefix <name>  prefix of the files written (default test_checkpoint)\n";
+                           "  -prefix <name>  prefix of the files written (default test_checkpoint)\n"
+                           "  -particles_io_chunk <rows>  particles per collective transfer\n";
 
 static const PetscReal density[PFF_PARTICLE_NTYPES] = {1000.0, 1.0};
 
@@ -178,6 +183,15 @@ static PetscErrorCode SeedFn(const PetscReal x[3], PetscInt *type, PetscReal v[3
   return PETSC_SUCCESS;
 }
 
+/* An empty store that takes -particles_io_chunk. */
+static PetscErrorCode CreateParticles(PffGrid grid, PffParticles *p)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffParticlesCreate(grid, p));
+  PetscCall(PffParticlesSetFromOptions(*p));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /* Grid + seeded particles + filled channels on comm, and their invariants. */
 static PetscErrorCode BuildState(MPI_Comm comm, PffGrid *grid, PffParticles *p, Invariants *inv)
 {
@@ -185,7 +199,7 @@ static PetscErrorCode BuildState(MPI_Comm comm, PffGrid *grid, PffParticles *p, 
   PetscCall(CreateGrid(comm, PETSC_TRUE, grid));
   PetscCall(Fill(*grid, 0, 0.0f));
   PetscCall(Fill(*grid, 1, 2.0f));
-  PetscCall(PffParticlesCreate(*grid, p));
+  PetscCall(CreateParticles(*grid, p));
   PetscCall(PffParticlesSeed(*p, SeedFn, NULL));
   if (inv) PetscCall(GetInvariants(*grid, *p, inv));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -203,7 +217,7 @@ static PetscErrorCode ReadAndCompare(MPI_Comm comm, const char path[], const Inv
 
   PetscFunctionBeginUser;
   PetscCall(CreateGrid(comm, PETSC_TRUE, &grid));
-  PetscCall(PffParticlesCreate(grid, &p));
+  PetscCall(CreateParticles(grid, &p));
   PetscCall(PffIOReadCheckpoint(grid, p, path, &time, &step, 2, extra));
   PetscCall(GetInvariants(grid, p, &inv));
   PetscCall(CompareInvariants(expect, &inv, what));
@@ -228,7 +242,7 @@ static PetscErrorCode ExpectReadError(MPI_Comm comm, PetscBool coarse, const cha
 
   PetscFunctionBeginUser;
   PetscCall(CreateGrid(comm, coarse, &grid));
-  PetscCall(PffParticlesCreate(grid, &p));
+  PetscCall(CreateParticles(grid, &p));
   PetscCall(PetscPushErrorHandler(PetscReturnErrorHandler, NULL));
   ierr = PffIOReadCheckpoint(grid, p, path, NULL, NULL, 2, extra);
   PetscCall(PetscPopErrorHandler());
@@ -244,6 +258,72 @@ static PetscErrorCode ExpectReadError(MPI_Comm comm, PetscBool coarse, const cha
 }
 
 /* Rank 0 alone, plain HDF5: /particles of the frame and the hidden channel's absence. */
+/* Rows [0, total) of /particles/name in path as memtype (size bytes per row). */
+static PetscErrorCode ReadParticleRows(const char path[], const char name[], hid_t memtype, size_t size,
+                                       PetscInt64 total, void **buf)
+{
+  hid_t file, dset;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscMalloc(size * (size_t)total + 1, buf));
+  PetscCheck((file = H5Fopen(path, H5F_ACC_RDONLY, H5P_DEFAULT)) >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN,
+             "cannot open %s", path);
+  dset = H5Dopen2(file, name, H5P_DEFAULT);
+  PetscCheck(dset >= 0 && H5Dread(dset, memtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, *buf) >= 0, PETSC_COMM_SELF,
+             PETSC_ERR_FILE_READ, "%s: cannot read %s", path, name);
+  H5Dclose(dset);
+  H5Fclose(file);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The frame's particle rows are the checkpoint's, written from the same store, in float: x and v rounded,
+   id, type, level and flags as they are. */
+static PetscErrorCode CompareFrameRows(const char frame[], const char ckpt[], PetscInt64 total)
+{
+  const char *const names[6] = {"/particles/x",    "/particles/v",     "/particles/id",
+                                "/particles/type", "/particles/level", "/particles/flags"};
+  const hid_t       types[6] = {H5T_NATIVE_FLOAT, H5T_NATIVE_FLOAT, H5T_NATIVE_UINT64,
+                                H5T_NATIVE_UINT8, H5T_NATIVE_UINT8, H5T_NATIVE_UINT8};
+  const size_t      sizes[6] = {3 * sizeof(float), 3 * sizeof(float), sizeof(uint64_t), 1, 1, 1};
+
+  PetscFunctionBeginUser;
+  for (int k = 0; k < 6; k++) {
+    void *a, *b;
+    PetscCall(ReadParticleRows(frame, names[k], types[k], sizes[k], total, &a));
+    PetscCall(ReadParticleRows(ckpt, names[k], types[k], sizes[k], total, &b));
+    for (PetscInt64 i = 0; i < total; i++)
+      PetscCheck(!memcmp((char *)a + sizes[k] * (size_t)i, (char *)b + sizes[k] * (size_t)i, sizes[k]), PETSC_COMM_SELF,
+                 PETSC_ERR_PLIB, "%s row %" PetscInt64_FMT ": the frame's %s differs from %s's", frame, i, names[k],
+                 ckpt);
+    PetscCall(PetscFree(a));
+    PetscCall(PetscFree(b));
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Writes type 9 into row `row` of path's /particles/type, as a damaged or foreign file could hold. */
+static PetscErrorCode DamageType(const char path[], PetscInt64 row)
+{
+  const hsize_t start = (hsize_t)row, one = 1;
+  const uint8_t bad = 9;
+  hid_t         file, dset, fspace, mspace;
+
+  PetscFunctionBeginUser;
+  PetscCheck((file = H5Fopen(path, H5F_ACC_RDWR, H5P_DEFAULT)) >= 0, PETSC_COMM_SELF, PETSC_ERR_FILE_OPEN,
+             "cannot open %s", path);
+  dset   = H5Dopen2(file, "/particles/type", H5P_DEFAULT);
+  fspace = H5Dget_space(dset);
+  mspace = H5Screate_simple(1, &one, NULL);
+  PetscCheck(H5Sselect_hyperslab(fspace, H5S_SELECT_SET, &start, NULL, &one, NULL) >= 0 &&
+                 H5Dwrite(dset, H5T_NATIVE_UINT8, mspace, fspace, H5P_DEFAULT, &bad) >= 0,
+             PETSC_COMM_SELF, PETSC_ERR_FILE_WRITE, "%s: cannot write row %" PetscInt64_FMT, path, row);
+  H5Sclose(mspace);
+  H5Sclose(fspace);
+  H5Dclose(dset);
+  H5Fclose(file);
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 static PetscErrorCode CheckFrameFile(const char path[], const char xmf[], PetscInt64 total)
 {
   hid_t      file, grp, attr, dset, space, type;
@@ -377,6 +457,7 @@ int main(int argc, char **argv)
   /* Frames: particles in single precision, the hidden channel absent. */
   PetscCall(PffIOWriteFrameParticles(grid, p, frame, time, 9, "test_checkpoint"));
   if (rank == 0) PetscCall(CheckFrameFile(frame, xmf, inv.count[0] + inv.count[1]));
+  if (rank == 0) PetscCall(CompareFrameRows(frame, ckpt, inv.count[0] + inv.count[1]));
   {
     PffGrid  g2;
     uint64_t s0 = 0, s1 = 0, r0 = 0, r1 = 0;
@@ -396,6 +477,14 @@ int main(int argc, char **argv)
   PetscCall(ExpectReadError(comm, PETSC_TRUE, missing, "no such file"));
   PetscCall(ExpectReadError(comm, PETSC_TRUE, frame, "not a checkpoint"));
   PetscCall(ExpectReadError(comm, PETSC_FALSE, ckpt, "has level 1 in the file but 0 in the grid"));
+  {
+    char             expect[64];
+    const PetscInt64 row = inv.count[0] + inv.count[1] - 3;
+    PetscCall(PetscSNPrintf(expect, sizeof(expect), "particle row %" PetscInt64_FMT " has a type", row));
+    if (rank == 0) PetscCall(DamageType(ckpt1, row));
+    PetscCallMPI(MPI_Barrier(comm));
+    PetscCall(ExpectReadError(comm, PETSC_TRUE, ckpt1, expect));
+  }
   PetscCall(PetscPrintf(comm, "checkpoint round trips, cross-rank restart, crash safety, errors and frames: ok\n"));
 
   if (one != MPI_COMM_NULL) PetscCallMPI(MPI_Comm_free(&one));
