@@ -87,6 +87,12 @@ PETSC_EXTERN PetscErrorCode PffFlowSetSolid(PffFlow flow, PffSolidFn fn, void *c
 /* A prescribed velocity field instead of P2G/forces/pressure/G2P: particles are only transported
    (and the phase field is computed on demand). Before SetUp. */
 PETSC_EXTERN PetscErrorCode PffFlowSetPrescribedVelocity(PffFlow flow, PffVelocityFn fn, void *ctx);
+/* A prescribed field that separates, u(x, t) = amplitude(t) shape(x, comp, 0): the shape is sampled on the grid
+   once (again after a topology change) and every later sample is a scaled copy of it, instead of a call of the
+   field's function per face (the time step samples the field two to four times). Before SetUp. */
+typedef PetscReal (*PffAmplitudeFn)(PetscReal t, void *ctx);
+PETSC_EXTERN PetscErrorCode PffFlowSetPrescribedSeparable(PffFlow flow, PffVelocityFn shape, PffAmplitudeFn amplitude,
+                                                          void *ctx);
 /* Allocates channels, particle store and pressure solver (the grid must be set up). Collective. */
 PETSC_EXTERN PetscErrorCode PffFlowSetUp(PffFlow flow);
 PETSC_EXTERN PetscErrorCode PffFlowDestroy(PffFlow *flow);

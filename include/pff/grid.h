@@ -230,6 +230,8 @@ PETSC_EXTERN PetscErrorCode PffGridGetBlockViews(PffGrid grid, PetscInt ch, Pets
 /* Zeroes channel ch: its owned values and every ghost box its views reach (not the neighbours' storage beyond
    them), with the threads; what a kernel that adds into a block's neighbourhood (P2G) needs before it starts. */
 PETSC_EXTERN PetscErrorCode PffGridZeroChannel(PffGrid grid, PetscInt ch);
+/* dst = a src on the owned values (not the ghosts), with the threads; the channels must have the same kind. */
+PETSC_EXTERN PetscErrorCode PffGridScaleChannel(PffGrid grid, PetscInt dst, PetscReal a, PetscInt src);
 
 /* How a channel's values follow their block when PffGridAdapt changes its level (blocks keep their place
    and size; only their cells per axis change):

@@ -129,7 +129,20 @@ PetscErrorCode PffFlowPrescribe_Private(PffFlow f, PetscReal t)
   PffPrescribeCtx pc = {f, t};
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridFillChannel(f->grid, f->chU, PffPrescribedValue, &pc));
+  if (!f->prescribedAmp) {
+    PetscCall(PffGridFillChannel(f->grid, f->chU, PffPrescribedValue, &pc));
+    PetscFunctionReturn(PETSC_SUCCESS);
+  }
+  {
+    PetscObjectState state;
+    PetscCall(PffGridGetTopologyState(f->grid, &state));
+    if (f->shapeState != state + 1) { /* +1: a grid that never changed has state 0, "never sampled" here */
+      pc.t = 0;
+      PetscCall(PffGridFillChannel(f->grid, f->chShape, PffPrescribedValue, &pc));
+      f->shapeState = state + 1;
+    }
+  }
+  PetscCall(PffGridScaleChannel(f->grid, f->chU, f->prescribedAmp(t, f->prescribedCtx), f->chShape));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

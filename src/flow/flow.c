@@ -240,6 +240,19 @@ PetscErrorCode PffFlowSetPrescribedVelocity(PffFlow f, PffVelocityFn fn, void *c
   f->prescribed      = fn;
   f->prescribedCtx   = ctx;
   f->prescribedNextT = PETSC_MAX_REAL;
+  f->prescribedAmp   = NULL;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowSetPrescribedSeparable(PffFlow f, PffVelocityFn shape, PffAmplitudeFn amplitude, void *ctx)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(!f->setupcalled, f->comm, PETSC_ERR_ORDER, "PffFlowSetPrescribedSeparable: call it before PffFlowSetUp");
+  PetscCheck(shape && amplitude, f->comm, PETSC_ERR_ARG_NULL,
+             "PffFlowSetPrescribedSeparable: shape and amplitude are needed");
+  PetscCall(PffFlowSetPrescribedVelocity(f, shape, ctx));
+  f->prescribedAmp = amplitude;
+  f->shapeState    = 0;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -267,6 +280,11 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
   PetscCall(PffGridAddChannel(f->grid, "phi", PFF_CHANNEL_CELL, 1, &f->chPhi));
   PetscCall(PffGridAddChannel(f->grid, "p", PFF_CHANNEL_CELL, 1, &f->chP));
   PetscCall(PffGridAddChannel(f->grid, "vorticity", PFF_CHANNEL_CELL, 1, &f->chVort));
+  if (f->prescribedAmp) {
+    PetscCall(PffGridAddChannel(f->grid, "velocity_shape", PFF_CHANNEL_FACE, 1, &f->chShape));
+    PetscCall(PffGridSetChannelOutput(f->grid, f->chShape, PETSC_FALSE));
+    PetscCall(PffGridSetChannelTransfer(f->grid, f->chShape, PFF_TRANSFER_NONE)); /* sampled again instead */
+  }
   /* a prescribed field moves both phases alike; without layers nothing is allocated */
   if (!f->prescribed && f->extrapLayers > 0) {
     PetscCall(PffGridAddChannel(f->grid, "velocity_liquid", PFF_CHANNEL_FACE, width, &f->chUl));

@@ -64,11 +64,14 @@ struct _n_PffFlow {
   PetscBool liquidSurfaceVolume; /* the liquid model's surface from the particles' volume fraction (liquid.c) */
   PetscReal rho0;                /* kernel sum rho~_0 (Eq. 7) */
 
-  PffSolidFn    solid;
-  void         *solidCtx;
-  PffVelocityFn prescribed;
-  void         *prescribedCtx;
-  PetscReal     prescribedNextT, prescribedNextU; /* the field's speed at prescribedNextT, sampled last step */
+  PffSolidFn       solid;
+  void            *solidCtx;
+  PffVelocityFn    prescribed;
+  void            *prescribedCtx;
+  PetscReal        prescribedNextT, prescribedNextU; /* the field's speed at prescribedNextT, sampled last step */
+  PffAmplitudeFn   prescribedAmp;                    /* separable field: u = amp(t) shape, the shape in chShape */
+  PetscInt         chShape;
+  PetscObjectState shapeState; /* 1 + the grid's topology state when chShape was sampled (0: never) */
 
   /* channels */
   PetscInt chMass, chMassRef, chUt, chU, chPhiF, chBeta, chOpen, chPhi, chP, chCdiv, chVort;

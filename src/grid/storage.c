@@ -198,6 +198,27 @@ PetscErrorCode PffGridZeroChannel(PffGrid g, PetscInt ch)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+PetscErrorCode PffGridScaleChannel(PffGrid g, PetscInt dst, PetscReal a, PetscInt src)
+{
+  PffChannel *d = NULL, *s = NULL;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetChannel_Private(g, dst, &d));
+  PetscCall(PffGridGetChannel_Private(g, src, &s));
+  PetscCheck(d->kind == s->kind, PETSC_COMM_SELF, PETSC_ERR_ARG_INCOMP,
+             "PffGridScaleChannel: channels %" PetscInt_FMT " and %" PetscInt_FMT " are not of the same kind", dst,
+             src);
+  {
+    float *restrict y       = d->data;
+    const float *restrict x = s->data;
+    const PetscInt64 n      = (PetscInt64)d->ncomp * g->ncells;
+    const float      af     = (float)a;
+#pragma omp parallel for simd schedule(static)
+    for (PetscInt64 i = 0; i < n; i++) y[i] = af * x[i];
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 PetscErrorCode PffGridGetBlockViews(PffGrid g, PetscInt ch, PetscInt lb, PetscInt comp, const PffView **views)
 {
   PetscFunctionBeginUser;

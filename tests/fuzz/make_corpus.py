@@ -98,6 +98,7 @@ OPTIONS = {
     "particles_jitter": ("real", "unit"),
     "particles_seed": ("int", None),
     "particles_substep_cfl": ("real", "pos"),
+    "particles_io_chunk": ("int", "pos"),
     # pressure
     "pressure_assembly": ("enum", ("ptap", "direct")),
     "pressure_operator": ("enum", ("aij", "shell")),
@@ -302,6 +303,7 @@ def build(config_dir):
     V("dam", "particles_jitter", ("nan", "-1"))
     V("dam", "particles_seed", ("1.5",))
     V("dam", "particles_substep_cfl", ("nan", "0"))
+    V("dam", "particles_io_chunk", ("0", "1.5"))
     V("dam", "sim_t_end", ("nan", "inf", "0", "-1"))
     V("dam", "sim_output_interval", ("nan", "-1"))
     V("dam", "sim_max_steps", ("1.5", "-1", "1e300"))
