@@ -347,8 +347,9 @@ static PetscErrorCode PffIOWriteFile(PffGrid grid, const char path[], PetscReal 
                       L.nactive, npart < 0 ? 0 : npart));
   PetscCall(PffIOLayoutDestroy_Private(&L));
 #if defined(__GLIBC__)
-  /* The particle buffers (24 B per particle for a checkpoint's positions) came from the heap, and glibc kept their
-     pages resident after the free: rt3d at W = 128 grew by 640-770 MB per rank at each checkpoint. */
+  /* glibc keeps the pages of freed heap buffers resident: with whole-store particle buffers rt3d at W = 128 grew by
+     640-770 MB per rank at each checkpoint. The particles now move in chunks (particles.c), so what remains to
+     hand back is the chunk buffer and the field datasets' block buffers. */
   malloc_trim(0);
 #endif
   PetscCall(PetscLogEventEnd(PFF_IOWrite, 0, 0, 0, 0));

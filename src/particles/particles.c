@@ -1,7 +1,6 @@
 /* The particle store: life cycle, options, structure-of-arrays storage with growable capacity,
    appending and removing particles, and global totals (count and mass per type, Eq. 5). */
 #include "particlesimpl.h"
-#include <omp.h>
 
 const char *const PffParticleTypes[] = {"liquid", "air", "PffParticleType", "PFF_PARTICLE_", NULL};
 

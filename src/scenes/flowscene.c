@@ -436,7 +436,7 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
   PffFlowStepStats st;
   PetscMPIInt      rank;
   PetscReal        t, tEnd = fs->tEnd * fs->timeUnit, every = fs->outputInterval * fs->timeUnit, nextOut;
-  PetscInt         frame                   = 0, step, step0;
+  PetscInt         step, frame = 0;
   PetscLogDouble   total[PFF_FLOW_NSTAGES] = {0}, stepTime = 0, tstart, tnow;
   PetscBool        deleteBubbles;
   PffBodies        bodies;
@@ -484,7 +484,6 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
     frame                = (PetscInt)done + 1;
     nextOut              = every > 0 ? (done + 1) * every : tEnd;
   }
-  step0 = step;
   PetscCall(PffProgressStart(&prog, t, tEnd, step, fs->maxSteps));
   PetscCall(PetscTime(&tstart));
   while (t < tEnd * (1 - 1e-12) && (!fs->maxSteps || step < fs->maxSteps)) {
@@ -558,10 +557,10 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
   PetscCall(PffFlowSceneConservation(fs));
   /* the step count is the run's (restarts included), the wall time and the rate this process's */
   PetscCall(PetscPrintf(s->comm, "summary: %" PetscInt_FMT " steps  t %.6e  wall %.2f s  (%.3f s/step)", step,
-                        (double)t, tnow - tstart, step > step0 ? stepTime / (double)(step - step0) : 0.0));
+                        (double)t, tnow - tstart, step > prog.step0 ? stepTime / (double)(step - prog.step0) : 0.0));
   if (fs->restarted)
     PetscCall(PetscPrintf(s->comm, "  over the %" PetscInt_FMT " steps since the restart at step %" PetscInt_FMT,
-                          step - step0, step0));
+                          step - prog.step0, prog.step0));
   PetscCall(PetscPrintf(s->comm, "\n"));
   /* the slowest rank sets the pace: shares of the largest per-rank stage times */
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, total, PFF_FLOW_NSTAGES, MPI_DOUBLE, MPI_MAX, s->comm));
