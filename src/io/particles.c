@@ -294,21 +294,39 @@ PetscErrorCode PffIOCheckParticles_Private(hid_t file, const char path[], PetscI
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Reads rows [start, start + n) of /particles/<name> into buf, converted to memtype. */
-static PetscErrorCode PffIOReadRows(hid_t group, const char name[], hid_t memtype, hsize_t ncol, hsize_t start,
-                                    hsize_t n, hid_t dxpl, void *buf)
+/* A dataset of /particles open for the whole read, so that every chunk selects in the same file space. */
+typedef struct {
+  hid_t dset, space;
+} PffIOSource;
+
+static PetscErrorCode PffIOSourceOpen(hid_t group, const char name[], PffIOSource *s)
 {
-  hid_t dset, fspace, mspace;
+  PetscFunctionBeginUser;
+  PffCallHDF5(s->dset = H5Dopen2(group, name, H5P_DEFAULT));
+  PffCallHDF5(s->space = H5Dget_space(s->dset));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+static PetscErrorCode PffIOSourceClose(PffIOSource *s)
+{
+  PetscFunctionBeginUser;
+  if (s->space >= 0) PffCallHDF5(H5Sclose(s->space));
+  if (s->dset >= 0) PffCallHDF5(H5Dclose(s->dset));
+  s->dset = s->space = H5I_INVALID_HID;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* Reads rows [start, start + n) of an open dataset (rows x ncol, ncol = 0: 1-D) into buf, converted to memtype. */
+static PetscErrorCode PffIOSourceRead(const PffIOSource *s, hid_t memtype, hsize_t ncol, hsize_t start, hsize_t n,
+                                      hid_t dxpl, void *buf)
+{
+  hid_t mspace;
 
   PetscFunctionBeginUser;
-  PffCallHDF5(dset = H5Dopen2(group, name, H5P_DEFAULT));
-  PffCallHDF5(fspace = H5Dget_space(dset));
-  PetscCall(PffIOSelectRows(fspace, start, n, ncol));
+  PetscCall(PffIOSelectRows(s->space, start, n, ncol));
   PetscCall(PffIOCreateMemSpace_Private(n, ncol, &mspace));
-  PffCallHDF5(H5Dread(dset, memtype, mspace, fspace, dxpl, buf));
+  PffCallHDF5(H5Dread(s->dset, memtype, mspace, s->space, dxpl, buf));
   PffCallHDF5(H5Sclose(mspace));
-  PffCallHDF5(H5Sclose(fspace));
-  PffCallHDF5(H5Dclose(dset));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -323,6 +341,8 @@ PetscErrorCode PffIOReadParticles_Private(PffParticles particles, PffGrid grid, 
   int8_t              *level;
   hid_t                group;
   PffIORows            io;
+  PffIOSource          src[5 + PFF_IO_MAX_FILE_FIELDS]; /* x, v, type, level, flags, then the file fields */
+  const char          *own[5] = {"x", "v", "type", "level", "flags"};
   PffParticleArrays    a;
   PffParticleFieldInfo info[PFF_IO_MAX_FILE_FIELDS];
 
@@ -355,16 +375,18 @@ PetscErrorCode PffIOReadParticles_Private(PffParticles particles, PffGrid grid, 
     PetscCall(PetscMalloc5(3 * rows, &x, 3 * rows, &v, rows, &type, rows, &level, rows, &flags));
   }
   PetscCall(PffParticlesGetFileFields(&nf, info));
+  for (PetscInt k = 0; k < 5 + nf; k++) src[k].dset = src[k].space = H5I_INVALID_HID;
+  for (PetscInt k = 0; k < 5 + nf; k++) PetscCall(PffIOSourceOpen(group, k < 5 ? own[k] : info[k - 5].name, &src[k]));
   for (PetscInt64 c = 0; c < io.nchunks; c++) {
     PetscInt64 i0, m;
     PetscInt   n0;
     PffIORowsChunk(&io, c, &i0, &m);
     const hsize_t at = (hsize_t)(lo + i0), rows = (hsize_t)m;
-    PetscCall(PffIOReadRows(group, "x", PFF_H5T_NATIVE_PETSCREAL, 3, at, rows, dxpl, x));
-    PetscCall(PffIOReadRows(group, "v", PFF_H5T_NATIVE_PETSCREAL, 3, at, rows, dxpl, v));
-    PetscCall(PffIOReadRows(group, "type", H5T_NATIVE_UINT8, 0, at, rows, dxpl, type));
-    PetscCall(PffIOReadRows(group, "level", H5T_NATIVE_INT8, 0, at, rows, dxpl, level));
-    PetscCall(PffIOReadRows(group, "flags", H5T_NATIVE_UINT8, 0, at, rows, dxpl, flags));
+    PetscCall(PffIOSourceRead(&src[0], PFF_H5T_NATIVE_PETSCREAL, 3, at, rows, dxpl, x));
+    PetscCall(PffIOSourceRead(&src[1], PFF_H5T_NATIVE_PETSCREAL, 3, at, rows, dxpl, v));
+    PetscCall(PffIOSourceRead(&src[2], H5T_NATIVE_UINT8, 0, at, rows, dxpl, type));
+    PetscCall(PffIOSourceRead(&src[3], H5T_NATIVE_INT8, 0, at, rows, dxpl, level));
+    PetscCall(PffIOSourceRead(&src[4], H5T_NATIVE_UINT8, 0, at, rows, dxpl, flags));
     /* PffParticlesAdd would stop on this rank alone; every rank stops at the first chunk that holds a bad row
        on any rank, naming the lowest such row */
     for (PetscInt64 i = 0; i < m && bad < 0; i++)
@@ -372,6 +394,7 @@ PetscErrorCode PffIOReadParticles_Private(PffParticles particles, PffGrid grid, 
     if (bad < 0) bad = INT64_MAX;
     PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &bad, 1, MPIU_INT64, MPI_MIN, comm));
     if (bad != INT64_MAX) {
+      for (PetscInt k = 0; k < 5 + nf; k++) PetscCall(PffIOSourceClose(&src[k]));
       PffCallHDF5(H5Gclose(group));
       PetscCall(PetscFree5(x, v, type, level, flags));
       SETERRQ(comm, PETSC_ERR_FILE_UNEXPECTED,
@@ -389,10 +412,11 @@ PetscErrorCode PffIOReadParticles_Private(PffParticles particles, PffGrid grid, 
       char *data;
       PffIOFieldTypes(info[f].type, &ft, &mt);
       PetscCall(PffParticlesGetFieldArray(particles, info[f].name, (void **)&data));
-      PetscCall(PffIOReadRows(group, info[f].name, mt, info[f].ncomp > 1 ? (hsize_t)info[f].ncomp : 0, at, rows, dxpl,
-                              data ? data + info[f].size * (size_t)info[f].ncomp * (size_t)n0 : NULL));
+      PetscCall(PffIOSourceRead(&src[5 + f], mt, info[f].ncomp > 1 ? (hsize_t)info[f].ncomp : 0, at, rows, dxpl,
+                                data ? data + info[f].size * (size_t)info[f].ncomp * (size_t)n0 : NULL));
     }
   }
+  for (PetscInt k = 0; k < 5 + nf; k++) PetscCall(PffIOSourceClose(&src[k]));
   PffCallHDF5(H5Gclose(group));
   PetscCall(PetscFree5(x, v, type, level, flags));
   PetscCall(PffParticlesMigrate(particles, NULL));

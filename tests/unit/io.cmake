@@ -9,11 +9,12 @@ endforeach()
 foreach(np 1 2 4)
   pff_add_unit(test_checkpoint RANKS ${np} ARGS -prefix test_checkpoint_np${np})
 endforeach()
-# The same with 1000 particles per collective transfer: many calls per dataset, not as many on every rank.
-foreach(np 2 4)
-  pff_add_unit(test_checkpoint RANKS ${np} NAME test_checkpoint_chunk ARGS -prefix test_checkpoint_chunk_np${np}
-               -particles_io_chunk 1000)
-endforeach()
+# The same with 1000 particles per collective transfer: many calls per dataset, not as many on every rank
+# (the option at 2 ranks, PffParticlesSetIOChunk at 4).
+pff_add_unit(test_checkpoint RANKS 2 NAME test_checkpoint_chunk ARGS -prefix test_checkpoint_chunk_np2
+             -particles_io_chunk 1000)
+pff_add_unit(test_checkpoint RANKS 4 NAME test_checkpoint_chunk ARGS -prefix test_checkpoint_chunk_np4
+             -api_io_chunk 1000)
 
 # The Python reader and the slice plot on the frame the 2-rank run wrote (Debian's python3 with
 # h5py, numpy and matplotlib; skipped when they are missing). --check also parses the XDMF sidecar

@@ -21,9 +21,10 @@
    - a particle row with an impossible type in the checkpoint's last rows fails the restart, naming the
      row (every chunk of the read is checked).
    Particles move -particles_io_chunk rows per collective call (default 2^20: one call here); the
-   ctest cases with -particles_io_chunk 1000 take many calls, a different number on each rank.
+   ctest cases with 1000 rows (the option at 2 ranks, PffParticlesSetIOChunk through -api_io_chunk at 4) take many
+   calls, a different number on each rank.
 
-   Sample run:  mpiexec -n 4 ./test_checkpoint -prefix /tmp/ckpt [-particles_io_chunk 1000]
+   Sample run:  mpiexec -n 4 ./test_checkpoint -prefix /tmp/ckpt [-particles_io_chunk 1000 | -api_io_chunk 1000]
    Prints (the same on any number of ranks): the particle counts, masses and checksums. */
 #include <inttypes.h>
 #include <math.h>
@@ -36,7 +37,8 @@
 
 static const char help[] = "Checkpoint and particle-frame round trips.\n"
                            "  -prefix <name>  prefix of the files written (default test_checkpoint)\n"
-                           "  -particles_io_chunk <rows>  particles per collective transfer\n";
+                           "  -particles_io_chunk <rows>  particles per collective transfer\n"
+                           "  -api_io_chunk <rows>  the same through PffParticlesSetIOChunk\n";
 
 static const PetscReal density[PFF_PARTICLE_NTYPES] = {1000.0, 1.0};
 
@@ -183,12 +185,22 @@ static PetscErrorCode SeedFn(const PetscReal x[3], PetscInt *type, PetscReal v[3
   return PETSC_SUCCESS;
 }
 
-/* An empty store that takes -particles_io_chunk. */
+/* An empty store that takes -particles_io_chunk, or -api_io_chunk through the setter. */
 static PetscErrorCode CreateParticles(PffGrid grid, PffParticles *p)
 {
+  PetscInt  rows, got;
+  PetscBool set;
+
   PetscFunctionBeginUser;
   PetscCall(PffParticlesCreate(grid, p));
   PetscCall(PffParticlesSetFromOptions(*p));
+  PetscCall(PetscOptionsGetInt(NULL, NULL, "-api_io_chunk", &rows, &set));
+  if (set) {
+    PetscCall(PffParticlesSetIOChunk(*p, rows));
+    PetscCall(PffParticlesGetIOChunk(*p, &got));
+    PetscCheck(got == rows, PETSC_COMM_SELF, PETSC_ERR_PLIB,
+               "PffParticlesSetIOChunk(%" PetscInt_FMT ") left %" PetscInt_FMT, rows, got);
+  }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
