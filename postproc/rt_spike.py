@@ -12,8 +12,15 @@ max_dev is the largest |simulated - reference| at the reference times t/t0 <= mi
 time) that the run covers, the simulated curve interpolated linearly; inside_band says whether every
 such point lies in the band; until=<t> appears when the run ended before t/t0 = 3.
 
+With --csv FILE the comparison also goes to a table, one row per run: its label, the spike tip at each
+reference time (empty after the run's end), max_dev, rms_dev (root mean square over the compared points),
+inside_band, compared_points, and the run's steps and wall seconds (the rows and the sum of the wall_s column
+of the diagnostics; empty when it has none); then one more line goes to stdout:
+
+    rt_spike: wrote <file>: <n> rows, largest rms_dev=<x>
+
     rt_spike.py out/rt3d/diag.csv -o rt.png
-    rt_spike.py a/diag.csv b/diag.csv -o rt.png --label "64^3" --label "128^3"
+    rt_spike.py a/diag.csv b/diag.csv -o rt.png --label "64^3" --label "128^3" --csv table.csv
 
 Needs numpy and matplotlib (Debian python3-matplotlib); uses the Agg backend, no display.
 Exit status 0, or 1 when a file cannot be read or lacks a column.
@@ -74,6 +81,20 @@ def compare(t, y, ref):
     return max_dev, inside and dev.size > 0, int(dev.size), float(t[-1])
 
 
+def table_row(label, t, y, wall, ref):
+    """The --csv row of one run: label, the tip at every reference time, max_dev, rms_dev, inside, points,
+    steps and wall seconds (wall: the per-step wall_s column or None)."""
+    max_dev, inside, k, last = compare(t, y, ref)
+    order = np.argsort(t, kind="stable")
+    tr = ref["t_over_t0"]
+    ys = np.interp(tr, t[order], y[order])
+    covered = (tr <= min(T_END, last) + TOL) & (tr >= t[order][0] - TOL)
+    rms = float(np.sqrt(np.mean((ys[covered] - ref["y_over_W_reference"][covered]) ** 2))) if k else float("nan")
+    return ([label] + [f"{v:.4f}" if c else "" for v, c in zip(ys, covered)]
+            + [f"{max_dev:.4f}", f"{rms:.4f}", "yes" if inside else "no", str(k)]
+            + ([str(int(np.count_nonzero(wall))), f"{wall.sum():.1f}"] if wall is not None else ["", ""])), rms
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description="Plot the RT spike tip against the De Rosis & Enan (2021) reference.")
     ap.add_argument("diag", nargs="+", help="diagnostics CSV with columns t_over_t0 and spike_over_W")
@@ -81,6 +102,7 @@ def main(argv=None):
     ap.add_argument("--label", action="append", default=[], help="legend label, once per file in order")
     ap.add_argument("--reference", default=REFERENCE, help="reference CSV (default data/reference/rt3d_derosis2021.csv)")
     ap.add_argument("--dpi", type=int, default=150)
+    ap.add_argument("--csv", help="table of the comparison to write, one row per run")
     args = ap.parse_args(argv)
     if len(args.label) > len(args.diag):
         print(f"rt_spike: {len(args.label)} labels for {len(args.diag)} files", file=sys.stderr)
@@ -94,7 +116,11 @@ def main(argv=None):
             d = read_columns(path, ["t_over_t0", "spike_over_W"])
             if d["t_over_t0"].size == 0:
                 raise InputError(f"{path}: no data rows")
-            runs.append((path, d["t_over_t0"], d["spike_over_W"]))
+            try:  # optional: the per-step wall time, for the table's run time beside the error
+                wall = read_columns(path, ["wall_s"])["wall_s"]
+            except InputError:
+                wall = None
+            runs.append((path, d["t_over_t0"], d["spike_over_W"], wall))
     except InputError as e:
         print(f"rt_spike: {e}", file=sys.stderr)
         return 1
@@ -103,7 +129,7 @@ def main(argv=None):
     ax.fill_between(ref["t_over_t0"], ref["band_min"], ref["band_max"], color="0.85",
                     label="range of 8 models (De Rosis & Enan 2021)")
     ax.plot(ref["t_over_t0"], ref["y_over_W_reference"], "ko--", ms=4, lw=1, label="reference")
-    for (path, t, y), label in zip(runs, labels):
+    for (path, t, y, _), label in zip(runs, labels):
         max_dev, inside, k, last = compare(t, y, ref)
         line = (f"rt_spike: {path} max_dev={max_dev:.4g} inside_band={'yes' if inside else 'no'} "
                 f"compared_points={k}")
@@ -123,6 +149,19 @@ def main(argv=None):
         print(f"rt_spike: cannot write {args.output}: {e.strerror}", file=sys.stderr)
         return 1
     plt.close(fig)
+    if args.csv:
+        header = (["run"] + [f"y_at_{t:g}" for t in ref["t_over_t0"]]
+                  + ["max_dev", "rms_dev", "inside_band", "compared_points", "steps", "wall_s"])
+        rows = [table_row(label, t, y, wall, ref) for (path, t, y, wall), label in zip(runs, labels)]
+        try:
+            with open(args.csv, "w", newline="") as fh:
+                w = csv.writer(fh)
+                w.writerow(header)
+                w.writerows(r for r, _ in rows)
+        except OSError as e:
+            print(f"rt_spike: cannot write {args.csv}: {e.strerror}", file=sys.stderr)
+            return 1
+        print(f"rt_spike: wrote {args.csv}: {len(rows)} rows, largest rms_dev={max(r for _, r in rows):.4g}")
     return 0
 
 
