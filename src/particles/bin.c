@@ -7,7 +7,8 @@
    No second copy of the store (issue 12): the sort computes each particle's destination (4 B per
    particle) and then moves the store one 4-byte lane at a time (x, y, z of x and v, the two halves of
    the id, the word) through a lane buffer of 4 B per particle. A store that is already in order is
-   left as it is. */
+   left as it is. Particles marked PFF_SORT_DROP (Migrate's leavers) are left out, so the store ends with
+   start[nlocal] particles. */
 #include "particlesimpl.h"
 #include <omp.h>
 
@@ -38,15 +39,18 @@ PetscErrorCode PffParticlesUpdateBlocks_Private(PffParticles p, PetscBool *chang
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Moves 4-byte lane `lane` of the records of `size` bytes at base to their destinations dst through
-   buf: lane by lane keeps the scratch at 4 B per particle. */
-static void PffBinScatterLane(void *base, size_t size, size_t lane, PetscInt n, const int32_t dst[], float *buf)
+/* Moves 4-byte lane `lane` of the n records of `size` bytes at base to their destinations dst through
+   buf, which leaves nout records (the dropped ones have no destination): lane by lane keeps the scratch at
+   4 B per particle. */
+static void PffBinScatterLane(void *base, size_t size, size_t lane, PetscInt n, PetscInt nout, const int32_t dst[],
+                              float *buf)
 {
   char *b = (char *)base + 4 * lane;
 #pragma omp parallel for schedule(static)
-  for (PetscInt i = 0; i < n; i++) memcpy(&buf[dst[i] & ~PFF_SORT_STAYS], b + size * (size_t)i, 4);
+  for (PetscInt i = 0; i < n; i++)
+    if (dst[i] != PFF_SORT_DROP) memcpy(&buf[dst[i] & ~PFF_SORT_STAYS], b + size * (size_t)i, 4);
 #pragma omp parallel for schedule(static)
-  for (PetscInt j = 0; j < n; j++) memcpy(b + size * (size_t)j, &buf[j], 4);
+  for (PetscInt j = 0; j < nout; j++) memcpy(b + size * (size_t)j, &buf[j], 4);
 }
 
 PetscErrorCode PffParticlesBin(PffParticles p)
@@ -87,8 +91,8 @@ PetscErrorCode PffParticlesBin(PffParticles p)
    PFF_SORT_STAYS keep their order, so their destinations increase with their places. The others (the
    movers) are packed into a buffer; the stayers that move left are moved in ascending order and those
    that move right in descending order, so none overwrites a stayer not yet moved (a place a stayer
-   moves to is a mover's or an already moved stayer's); then the movers are unpacked. One pass over
-   the store instead of two per 4-byte lane, and scratch for the movers only. */
+   moves to is a mover's, a dropped particle's or an already moved stayer's); then the movers are unpacked. One
+   pass over the store instead of two per 4-byte lane, and scratch for the movers only. */
 static PetscErrorCode PffParticlesSortInPlace(PffParticles p, PetscInt movers)
 {
   const PetscInt n   = p->n;
@@ -104,18 +108,18 @@ static PetscErrorCode PffParticlesSortInPlace(PffParticles p, PetscInt movers)
     buf = (char *)ptr;
   }
   for (PetscInt i = 0, m = 0; i < n; i++)
-    if (!(dst[i] & PFF_SORT_STAYS)) {
+    if (dst[i] != PFF_SORT_DROP && !(dst[i] & PFF_SORT_STAYS)) {
       PffParticlesPack_Private(&p->s, i, buf + rec * (size_t)m);
       memcpy(buf + rec * (size_t)m + PFF_PARTICLE_BYTES, &dst[i], sizeof(int32_t));
       m++;
     }
   for (PetscInt i = 0; i < n; i++) {
     const PetscInt d = dst[i] & ~PFF_SORT_STAYS;
-    if ((dst[i] & PFF_SORT_STAYS) && d < i) PffParticlesMove_Private(p, d, i);
+    if (dst[i] != PFF_SORT_DROP && (dst[i] & PFF_SORT_STAYS) && d < i) PffParticlesMove_Private(p, d, i);
   }
   for (PetscInt i = n - 1; i >= 0; i--) {
     const PetscInt d = dst[i] & ~PFF_SORT_STAYS;
-    if ((dst[i] & PFF_SORT_STAYS) && d > i) PffParticlesMove_Private(p, d, i);
+    if (dst[i] != PFF_SORT_DROP && (dst[i] & PFF_SORT_STAYS) && d > i) PffParticlesMove_Private(p, d, i);
   }
   for (PetscInt m = 0; m < movers; m++) {
     int32_t d;
@@ -154,27 +158,32 @@ PetscErrorCode PffParticlesSort_Private(PffParticles p)
   {
     const PetscInt th = omp_get_thread_num(), nth = omp_get_num_threads(), i0 = n * th / nth, i1 = n * (th + 1) / nth;
     PetscInt      *c = counts + (size_t)th * (size_t)(nl + 1);
-    for (PetscInt i = i0; i < i1; i++) c[dst[i] & ~PFF_SORT_STAYS]++;
+    for (PetscInt i = i0; i < i1; i++)
+      if (dst[i] != PFF_SORT_DROP) c[dst[i] & ~PFF_SORT_STAYS]++;
 #pragma omp barrier
-#pragma omp          single
+#pragma omp single
     {
       /* counts[th][lb] becomes the first slot of thread th's particles of block lb */
       PetscInt off = 0;
       for (PetscInt lb = 0; lb < nl; lb++) {
-                 start[lb] = off;
-                 for (PetscInt q = 0; q < nth; q++) {
-                   PetscInt *cq = counts + (size_t)q * (size_t)(nl + 1), m = cq[lb];
-                   cq[lb] = off;
-                   off += m;
+        start[lb] = off;
+        for (PetscInt q = 0; q < nth; q++) {
+          PetscInt *cq = counts + (size_t)q * (size_t)(nl + 1), m = cq[lb];
+          cq[lb] = off;
+          off += m;
         }
       }
       start[nl] = off;
     }
     for (PetscInt i = i0; i < i1; i++) {
-               const int32_t stays = dst[i] & PFF_SORT_STAYS, d = (int32_t)c[dst[i] & ~PFF_SORT_STAYS]++;
-               dst[i] = d | stays;
-               moved += d != i;
-               movers += !stays;
+      if (dst[i] == PFF_SORT_DROP) {
+        moved++;
+        continue;
+      }
+      const int32_t stays = dst[i] & PFF_SORT_STAYS, d = (int32_t)c[dst[i] & ~PFF_SORT_STAYS]++;
+      dst[i] = d | stays;
+      moved += d != i;
+      movers += !stays;
     }
   }
 
@@ -186,10 +195,12 @@ PetscErrorCode PffParticlesSort_Private(PffParticles p)
     float *buf;
     PetscCall(PffParticlesGetFloatWork_Private(p, (size_t)n + 1, &buf));
 #define PFF_PARTICLE_FIELD_SORT(name, type, k, f)                                                                      \
-  for (size_t l = 0; l < (k) * sizeof(type) / 4; l++) PffBinScatterLane(p->s.name, (k) * sizeof(type), l, n, dst, buf);
+  for (size_t l = 0; l < (k) * sizeof(type) / 4; l++)                                                                  \
+    PffBinScatterLane(p->s.name, (k) * sizeof(type), l, n, p->start[nl], dst, buf);
     PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_SORT)
 #undef PFF_PARTICLE_FIELD_SORT
   }
+  p->n      = p->start[nl]; /* without the dropped particles */
   p->binned = PETSC_TRUE;
   PetscCall(PffGridGetTopologyState(p->grid, &p->topology));
   PetscFunctionReturn(PETSC_SUCCESS);

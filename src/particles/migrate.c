@@ -3,8 +3,9 @@
    domain), then counts by destination are exchanged (MPI_Alltoall) and the particles themselves in
    one MPI_Alltoallv of packed records (the store's fields back to back, PFF_PARTICLE_BYTES). Kept particles stay in
    order, received ones are appended in rank order, then everything is binned by the local blocks found here (no second
-   locate). Nothing is created or lost: a particle in an inactive block is an error, so the global count and mass per
-   type are invariant. */
+   locate). The leavers stay in the store until the binning, which drops them (PFF_SORT_DROP): compacting the
+   stayers here moved every particle behind the first leaver, serially, before the sort moved them again. Nothing is
+   created or lost: a particle in an inactive block is an error, so the global count and mass per type are invariant. */
 #include "particlesimpl.h"
 #include <omp.h>
 
@@ -106,16 +107,12 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
     PetscMPIInt bytes; /* the byte totals must fit MPI counts */
     PetscCall(PetscMPIIntCast(ns * rec, &bytes));
     PetscCall(PetscMPIIntCast(nr * rec, &bytes));
-    /* pack the leavers and compact the stayers in place, keeping their order */
-    PetscInt m = 0;
-    for (PetscInt i = 0; i < n; i++) {
+    /* pack the leavers; the sort drops them */
+    for (PetscInt i = 0; i < n; i++)
       if (dest[i] < 0) {
         PffParticlesPack_Private(&p->s, i, sbuf + (size_t)rec * (size_t)fill[-2 - dest[i]]++);
-        continue;
+        dest[i] = PFF_SORT_DROP;
       }
-      if (m != i) PffParticlesMove_Private(p, m, i);
-      dest[m++] = dest[i];
-    }
     for (PetscMPIInt r = 0; r < p->size; r++) {
       sdispl[r] *= rec;
       rdispl[r] *= rec;
@@ -123,9 +120,8 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
       rcount[r] *= rec;
     }
     PetscCallMPI(MPI_Alltoallv(sbuf, scount, sdispl, MPI_BYTE, rbuf, rcount, rdispl, MPI_BYTE, p->comm));
-    p->n = m;
-    PetscCall(PffParticlesReserve_Private(p, m + (PetscInt)nr));
-    PetscCall(PffParticlesGrowIntWork_Private(p, (size_t)(m + nr) + 1, m, &dest));
+    PetscCall(PffParticlesReserve_Private(p, n + (PetscInt)nr));
+    PetscCall(PffParticlesGrowIntWork_Private(p, (size_t)(n + nr) + 1, n, &dest));
     for (PetscInt64 r = 0; r < nr; r++) {
       const PetscInt j = p->n++;
       PffParticlesUnpack_Private(&p->s, j, rbuf + (size_t)rec * (size_t)r);

@@ -189,6 +189,8 @@ PETSC_INTERN PetscErrorCode PffParticlesUpdateBlocks_Private(PffParticles, Petsc
 /* Flag in the sort's input: the particle is still in the block of the bin it sat in, so the stayers
    keep their order and the sort can move them in place (bin.c). */
 #define PFF_SORT_STAYS ((int32_t)1 << 30)
+/* a particle the sort removes (Migrate's leavers, packed and sent before the sort) */
+#define PFF_SORT_DROP ((int32_t)-1)
 PETSC_INTERN PetscErrorCode PffParticlesSort_Private(PffParticles);
 
 /* Block-batched sampling of face channels (G2P and advection; sample.c). A table built once per call
