@@ -239,40 +239,6 @@ PetscErrorCode PffParticlesCheckBinned_Private(PffParticles p, const char caller
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Periodic axes: the image in [0, cells), wrapped like PffGridLocate. Walled axes: clamped a millionth
-   of a finest cell inside at the lower wall and one float step inside at the upper one, so the point
-   lies strictly within the domain. */
-void PffParticlesWrapClamp_Private(PffParticles p, float g[3], PetscBool *wrapped, PetscBool *clamped)
-{
-  *wrapped = *clamped = PETSC_FALSE;
-  for (int d = 0; d < 3; d++) {
-    const float nc = (float)p->cells[d];
-    if (p->periodic[d]) {
-      if (g[d] >= 0 && g[d] < nc) continue;
-      float t = fmodf(g[d], nc); /* exact */
-      if (t < 0) t += nc;        /* may round up to nc */
-      if (!(t < nc)) t = 0;
-      g[d]     = t;
-      *wrapped = PETSC_TRUE;
-    } else {
-      /* nextafterf(nc, 0) for the positive normal nc, without a libm call per particle and axis */
-      uint32_t bits;
-      float    hi;
-      memcpy(&bits, &nc, sizeof(bits));
-      bits--;
-      memcpy(&hi, &bits, sizeof(hi));
-      const float lo = 1e-6f;
-      if (!(g[d] >= lo)) {
-        g[d]     = lo;
-        *clamped = PETSC_TRUE;
-      } else if (g[d] > hi) {
-        g[d]     = hi;
-        *clamped = PETSC_TRUE;
-      }
-    }
-  }
-}
-
 PetscErrorCode PffParticlesGetArrays(PffParticles p, PffParticleArrays *a)
 {
   PetscFunctionBeginUser;

@@ -181,7 +181,41 @@ PETSC_INTERN PetscErrorCode PffParticlesGrowIntWork_Private(PffParticles, size_t
    first-touch page faults, per step. */
 PETSC_INTERN PetscErrorCode PffParticlesGetFloatWork_Private(PffParticles, size_t n, float **);
 /* Wraps periodic axes and clamps walled axes of grid position g in place; returns what it did. */
-PETSC_INTERN void PffParticlesWrapClamp_Private(PffParticles, float g[3], PetscBool *wrapped, PetscBool *clamped);
+/* Periodic axes: the image in [0, cells), wrapped like PffGridLocate. Walled axes: clamped a millionth
+   of a finest cell inside at the lower wall and one float step inside at the upper one, so the point
+   lies strictly within the domain. Inline: Migrate calls it for every particle, and took 10 % less time inlined
+   (rt3d W = 64, docs/benchmarks.md). */
+static inline void PffParticlesWrapClamp_Private(PffParticles p, float g[3], PetscBool *wrapped, PetscBool *clamped)
+{
+  *wrapped = *clamped = PETSC_FALSE;
+  for (int d = 0; d < 3; d++) {
+    const float nc = (float)p->cells[d];
+    if (p->periodic[d]) {
+      if (g[d] >= 0 && g[d] < nc) continue;
+      float t = fmodf(g[d], nc); /* exact */
+      if (t < 0) t += nc;        /* may round up to nc */
+      if (!(t < nc)) t = 0;
+      g[d]     = t;
+      *wrapped = PETSC_TRUE;
+    } else {
+      /* nextafterf(nc, 0) for the positive normal nc, without a libm call per particle and axis */
+      uint32_t bits;
+      float    hi;
+      memcpy(&bits, &nc, sizeof(bits));
+      bits--;
+      memcpy(&hi, &bits, sizeof(hi));
+      const float lo = 1e-6f;
+      if (!(g[d] >= lo)) {
+        g[d]     = lo;
+        *clamped = PETSC_TRUE;
+      } else if (g[d] > hi) {
+        g[d]     = hi;
+        *clamped = PETSC_TRUE;
+      }
+    }
+  }
+}
+
 PETSC_INTERN PetscErrorCode PffParticlesCheckBinned_Private(PffParticles, const char[]);
 /* The binning in two parts: the owned-block tables (p->local, p->lgid, p->nlocal), and the stable sort
    by the local block of each particle that the int32 scratch holds (Migrate knows them already). */
