@@ -9,6 +9,27 @@
 #include "particlesimpl.h"
 #include <omp.h>
 
+/* Wraps or clamps particle i and sets dest[i] (see PffParticlesMigrate), counting into the caller's sums. */
+static inline void PffMigrateLocate(PffParticles p, PetscInt i, const PetscInt level[], const PetscMPIInt owner[],
+                                    const PetscInt local[], int32_t dest[], PetscInt64 *sent, PetscInt64 *wrapped,
+                                    PetscInt64 *clamped, PetscInt *nbad)
+{
+  PetscBool w, c;
+  PffParticlesWrapClamp_Private(p, &p->s.x[3 * i], &w, &c);
+  *wrapped += w;
+  *clamped += c;
+  const PetscInt gid = PffParticlesLocate_Private(p, &p->s.x[3 * i], level);
+  if (gid < 0) {
+    dest[i] = -1;
+    (*nbad)++;
+  } else if (owner[gid] == p->rank)
+    dest[i] = (int32_t)local[gid];
+  else {
+    dest[i] = -2 - (int32_t)owner[gid];
+    (*sent)++;
+  }
+}
+
 PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
 {
   const PetscInt    *level;
@@ -29,22 +50,29 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
   /* dest[i]: the local block of a particle that stays (the binning's input, so it locates nothing
      again), -2 - r for one that goes to rank r, -1 outside every active block */
   PetscInt64 sent = 0, wrapped = 0, clamped = 0;
-#pragma omp parallel for reduction(+ : sent, wrapped, clamped, nbad) schedule(static)
-  for (PetscInt i = 0; i < n; i++) {
-    PetscBool w, c;
-    PffParticlesWrapClamp_Private(p, &p->s.x[3 * i], &w, &c);
-    wrapped += w;
-    clamped += c;
-    const PetscInt gid = PffParticlesLocate_Private(p, &p->s.x[3 * i], level);
-    if (gid < 0) {
-      dest[i] = -1;
-      nbad++;
-    } else if (owner[gid] == p->rank)
-      dest[i] = (int32_t)local[gid];
-    else {
-      dest[i] = -2 - (int32_t)owner[gid];
-      sent++;
+  if (wasBinned && !changed && p->start[p->nlocal] == n) {
+    /* a particle still inside the raster cell of its bin's block (most of them after an advection step) is left
+       alone by the wrap and the clamp and stays in that block: a box test instead of both and the locate */
+#pragma omp parallel for reduction(+ : sent, wrapped, clamped, nbad) schedule(dynamic, 4)
+    for (PetscInt lb = 0; lb < p->nlocal; lb++) {
+      const PetscInt g = p->lgid[lb], ijk[3] = {g % nb[0], (g / nb[0]) % nb[1], g / (nb[0] * nb[1])};
+      float          lo[3], hi[3];
+      for (int a = 0; a < 3; a++) {
+        lo[a] = ijk[a] == 0 ? 1e-6f : (float)(ijk[a] * p->n0); /* the wall clamp's lower bound */
+        hi[a] = (float)((ijk[a] + 1) * p->n0);
+      }
+      for (PetscInt i = p->start[lb]; i < p->start[lb + 1]; i++) {
+        const float *x = &p->s.x[3 * i];
+        if (x[0] >= lo[0] && x[0] < hi[0] && x[1] >= lo[1] && x[1] < hi[1] && x[2] >= lo[2] && x[2] < hi[2])
+          dest[i] = (int32_t)lb;
+        else
+          PffMigrateLocate(p, i, level, owner, local, dest, &sent, &wrapped, &clamped, &nbad);
+      }
     }
+  } else {
+#pragma omp parallel for reduction(+ : sent, wrapped, clamped, nbad) schedule(static)
+    for (PetscInt i = 0; i < n; i++)
+      PffMigrateLocate(p, i, level, owner, local, dest, &sent, &wrapped, &clamped, &nbad);
   }
   loc[0] = sent;
   loc[1] = wrapped;
