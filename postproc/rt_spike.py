@@ -81,10 +81,10 @@ def compare(t, y, ref):
     return max_dev, inside and dev.size > 0, int(dev.size), float(t[-1])
 
 
-def table_row(label, t, y, wall, ref):
+def table_row(label, t, y, wall, result, ref):
     """The --csv row of one run: label, the tip at every reference time, max_dev, rms_dev, inside, points,
-    steps and wall seconds (wall: the per-step wall_s column or None)."""
-    max_dev, inside, k, last = compare(t, y, ref)
+    steps and wall seconds (wall: the per-step wall_s column or None; result: compare()'s of the run)."""
+    max_dev, inside, k, last = result
     order = np.argsort(t, kind="stable")
     tr = ref["t_over_t0"]
     ys = np.interp(tr, t[order], y[order])
@@ -129,8 +129,10 @@ def main(argv=None):
     ax.fill_between(ref["t_over_t0"], ref["band_min"], ref["band_max"], color="0.85",
                     label="range of 8 models (De Rosis & Enan 2021)")
     ax.plot(ref["t_over_t0"], ref["y_over_W_reference"], "ko--", ms=4, lw=1, label="reference")
+    results = []
     for (path, t, y, _), label in zip(runs, labels):
         max_dev, inside, k, last = compare(t, y, ref)
+        results.append((max_dev, inside, k, last))
         line = (f"rt_spike: {path} max_dev={max_dev:.4g} inside_band={'yes' if inside else 'no'} "
                 f"compared_points={k}")
         if last < T_END - TOL:
@@ -152,7 +154,8 @@ def main(argv=None):
     if args.csv:
         header = (["run"] + [f"y_at_{t:g}" for t in ref["t_over_t0"]]
                   + ["max_dev", "rms_dev", "inside_band", "compared_points", "steps", "wall_s"])
-        rows = [table_row(label, t, y, wall, ref) for (path, t, y, wall), label in zip(runs, labels)]
+        rows = [table_row(label, t, y, wall, res, ref)
+                for (path, t, y, wall), label, res in zip(runs, labels, results)]
         try:
             with open(args.csv, "w", newline="") as fh:
                 w = csv.writer(fh)

@@ -52,21 +52,25 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
   PetscInt64 sent = 0, wrapped = 0, clamped = 0;
   if (wasBinned && !changed && p->start[p->nlocal] == n) {
     /* a particle still inside the raster cell of its bin's block (most of them after an advection step) is left
-       alone by the wrap and the clamp and stays in that block: a box test instead of both and the locate */
+       alone by the wrap and the clamp and stays in that block: a box test instead of both and the locate. The
+       particles that stay in their bin's block are flagged for the one-thread sort, which moves them in place. */
+    const int32_t stays = omp_get_max_threads() == 1 ? PFF_SORT_STAYS : 0;
 #pragma omp parallel for reduction(+ : sent, wrapped, clamped, nbad) schedule(dynamic, 4)
     for (PetscInt lb = 0; lb < p->nlocal; lb++) {
       const PetscInt g = p->lgid[lb], ijk[3] = {g % nb[0], (g / nb[0]) % nb[1], g / (nb[0] * nb[1])};
       float          lo[3], hi[3];
       for (int a = 0; a < 3; a++) {
-        lo[a] = ijk[a] == 0 ? 1e-6f : (float)(ijk[a] * p->n0); /* the wall clamp's lower bound */
+        lo[a] = ijk[a] == 0 ? PFF_PARTICLE_WALL_LO : (float)(ijk[a] * p->n0);
         hi[a] = (float)((ijk[a] + 1) * p->n0);
       }
       for (PetscInt i = p->start[lb]; i < p->start[lb + 1]; i++) {
         const float *x = &p->s.x[3 * i];
         if (x[0] >= lo[0] && x[0] < hi[0] && x[1] >= lo[1] && x[1] < hi[1] && x[2] >= lo[2] && x[2] < hi[2])
-          dest[i] = (int32_t)lb;
-        else
+          dest[i] = (int32_t)lb | stays;
+        else {
           PffMigrateLocate(p, i, level, owner, local, dest, &sent, &wrapped, &clamped, &nbad);
+          if (dest[i] == (int32_t)lb) dest[i] |= stays;
+        }
       }
     }
   } else {
@@ -77,13 +81,6 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
   loc[0] = sent;
   loc[1] = wrapped;
   loc[2] = clamped;
-  /* the particles still in the block of their (unchanged) bin: the sort moves them in place */
-  if (wasBinned && !changed && omp_get_max_threads() == 1) { /* only the one-thread sort uses them */
-#pragma omp parallel for schedule(dynamic, 16)
-    for (PetscInt lb = 0; lb < p->nlocal; lb++)
-      for (PetscInt i = p->start[lb]; i < p->start[lb + 1]; i++)
-        if (dest[i] == (int32_t)lb) dest[i] |= PFF_SORT_STAYS;
-  }
   if (nbad > 0) {
     PetscInt i = 0;
     while (dest[i] != -1) i++;

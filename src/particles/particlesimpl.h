@@ -181,6 +181,9 @@ PETSC_INTERN PetscErrorCode PffParticlesGrowIntWork_Private(PffParticles, size_t
    first-touch page faults, per step. */
 PETSC_INTERN PetscErrorCode PffParticlesGetFloatWork_Private(PffParticles, size_t n, float **);
 /* Wraps periodic axes and clamps walled axes of grid position g in place; returns what it did. */
+/* The lower wall's clamp, in finest cells (Migrate's box test keeps particles below it out of its fast path). */
+#define PFF_PARTICLE_WALL_LO 1e-6f
+
 /* Periodic axes: the image in [0, cells), wrapped like PffGridLocate. Walled axes: clamped a millionth
    of a finest cell inside at the lower wall and one float step inside at the upper one, so the point
    lies strictly within the domain. Inline: Migrate calls it for every particle, and took 10 % less time inlined
@@ -204,7 +207,7 @@ static inline void PffParticlesWrapClamp_Private(PffParticles p, float g[3], Pet
       memcpy(&bits, &nc, sizeof(bits));
       bits--;
       memcpy(&hi, &bits, sizeof(hi));
-      const float lo = 1e-6f;
+      const float lo = PFF_PARTICLE_WALL_LO;
       if (!(g[d] >= lo)) {
         g[d]     = lo;
         *clamped = PETSC_TRUE;
