@@ -342,7 +342,8 @@ PetscErrorCode PffIOReadParticles_Private(PffParticles particles, PffGrid grid, 
   hid_t                group;
   PffIORows            io;
   PffIOSource          src[5 + PFF_IO_MAX_FILE_FIELDS]; /* x, v, type, level, flags, then the file fields */
-  const char          *own[5] = {"x", "v", "type", "level", "flags"};
+  const char          *names[5 + PFF_IO_MAX_FILE_FIELDS];
+  PetscInt             ncol[5 + PFF_IO_MAX_FILE_FIELDS], nd;
   PffParticleArrays    a;
   PffParticleFieldInfo info[PFF_IO_MAX_FILE_FIELDS];
 
@@ -375,8 +376,9 @@ PetscErrorCode PffIOReadParticles_Private(PffParticles particles, PffGrid grid, 
     PetscCall(PetscMalloc5(3 * rows, &x, 3 * rows, &v, rows, &type, rows, &level, rows, &flags));
   }
   PetscCall(PffParticlesGetFileFields(&nf, info));
-  for (PetscInt k = 0; k < 5 + nf; k++) src[k].dset = src[k].space = H5I_INVALID_HID;
-  for (PetscInt k = 0; k < 5 + nf; k++) PetscCall(PffIOSourceOpen(group, k < 5 ? own[k] : info[k - 5].name, &src[k]));
+  PetscCall(PffParticleDatasets(&nd, names, ncol)); /* the same order: the five of the store, then info[] */
+  for (PetscInt k = 0; k < nd; k++) src[k].dset = src[k].space = H5I_INVALID_HID;
+  for (PetscInt k = 0; k < nd; k++) PetscCall(PffIOSourceOpen(group, names[k], &src[k]));
   for (PetscInt64 c = 0; c < io.nchunks; c++) {
     PetscInt64 i0, m;
     PetscInt   n0;
@@ -394,7 +396,7 @@ PetscErrorCode PffIOReadParticles_Private(PffParticles particles, PffGrid grid, 
     if (bad < 0) bad = INT64_MAX;
     PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &bad, 1, MPIU_INT64, MPI_MIN, comm));
     if (bad != INT64_MAX) {
-      for (PetscInt k = 0; k < 5 + nf; k++) PetscCall(PffIOSourceClose(&src[k]));
+      for (PetscInt k = 0; k < nd; k++) PetscCall(PffIOSourceClose(&src[k]));
       PffCallHDF5(H5Gclose(group));
       PetscCall(PetscFree5(x, v, type, level, flags));
       SETERRQ(comm, PETSC_ERR_FILE_UNEXPECTED,
@@ -416,7 +418,7 @@ PetscErrorCode PffIOReadParticles_Private(PffParticles particles, PffGrid grid, 
                                 data ? data + info[f].size * (size_t)info[f].ncomp * (size_t)n0 : NULL));
     }
   }
-  for (PetscInt k = 0; k < 5 + nf; k++) PetscCall(PffIOSourceClose(&src[k]));
+  for (PetscInt k = 0; k < nd; k++) PetscCall(PffIOSourceClose(&src[k]));
   PffCallHDF5(H5Gclose(group));
   PetscCall(PetscFree5(x, v, type, level, flags));
   PetscCall(PffParticlesMigrate(particles, NULL));
