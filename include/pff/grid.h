@@ -319,6 +319,13 @@ PETSC_EXTERN PetscErrorCode PffGridApplyLaplacian(PffGrid grid, PetscInt src, Pe
 /* Pure helpers on a raster of nb blocks (x fastest), exposed for tests and tools. */
 /* Refines (never coarsens) level[] so that active 26-neighbours differ by at most one level. */
 PETSC_EXTERN PetscErrorCode PffGradeLevels(const PetscInt nb[3], const PetscBool periodic[3], PetscInt level[]);
+/* Raster coordinates of block gid (x fastest). */
+static inline void PffRasterCoordinates(const PetscInt nb[3], PetscInt gid, PetscInt ijk[3])
+{
+  ijk[0] = gid % nb[0];
+  ijk[1] = (gid / nb[0]) % nb[1];
+  ijk[2] = gid / (nb[0] * nb[1]);
+}
 /* Global index of the neighbour of block (i,j,k) in direction d[3] in {-1,0,1}^3, or -1 across a wall. */
 PETSC_EXTERN PetscInt PffRasterNeighbour(const PetscInt nb[3], const PetscBool periodic[3], const PetscInt ijk[3],
                                          const PetscInt d[3]);

@@ -427,8 +427,9 @@ static PetscErrorCode TargetsAndMap(PffFlow f, PetscBool counters, PetscInt map[
      refine a block forced coarse beside a finer one) */
   if (a->nbox + a->nsphere > 0)
     for (PetscInt b = 0; b < nblocks; b++) {
-      const PetscInt ijk[3] = {b % nb[0], (b / nb[0]) % nb[1], b / (nb[0] * nb[1])};
-      const PetscInt l      = a->base[b] < 0 ? -1 : BlockRegionLevel(a, ijk);
+      PetscInt ijk[3];
+      PffRasterCoordinates(nb, b, ijk);
+      const PetscInt l = a->base[b] < 0 ? -1 : BlockRegionLevel(a, ijk);
       if (l >= 0) map[b] = l;
     }
   PetscFunctionReturn(PETSC_SUCCESS);

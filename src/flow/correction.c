@@ -116,7 +116,8 @@ static void PffDilate(const PetscInt nb[3], const PetscBool periodic[3], const P
   for (PetscInt b = 0; b < nblocks; b++) out[b] = in[b];
   for (PetscInt b = 0; b < nblocks; b++) {
     if (!in[b]) continue;
-    const PetscInt ijk[3] = {b % nb[0], (b / nb[0]) % nb[1], b / (nb[0] * nb[1])};
+    PetscInt ijk[3];
+    PffRasterCoordinates(nb, b, ijk);
     for (PetscInt r = 0; r < 27; r++) {
       PetscInt d[3];
       PffRegionDirection(r, d);

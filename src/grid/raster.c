@@ -31,7 +31,8 @@ PetscErrorCode PffGradeLevels(const PetscInt nb[3], const PetscBool periodic[3],
   for (PetscInt l = 0; l < maxl; l++) {
     for (PetscInt b = 0; b < nblocks; b++) {
       if (level[b] != l) continue;
-      const PetscInt ijk[3] = {b % nb[0], (b / nb[0]) % nb[1], b / (nb[0] * nb[1])};
+      PetscInt ijk[3];
+      PffRasterCoordinates(nb, b, ijk);
       for (PetscInt dz = -1; dz <= 1; dz++)
         for (PetscInt dy = -1; dy <= 1; dy++)
           for (PetscInt dx = -1; dx <= 1; dx++) {

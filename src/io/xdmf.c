@@ -67,8 +67,9 @@ PetscErrorCode PffIOWriteXdmf_Private(PffGrid grid, const PffFrameLayout *L, con
   fprintf(fp, "   <Time Value=\"%.17g\"/>\n", (double)time);
   for (PetscInt p = 0; p < L->nactive; p++) {
     const PetscInt gid = L->order[p], l = level[gid], n = n0 >> l;
-    const PetscInt ijk[3] = {gid % nb[0], (gid / nb[0]) % nb[1], gid / (nb[0] * nb[1])};
-    PetscReal      lo[3];
+    PetscInt       ijk[3];
+    PffRasterCoordinates(nb, gid, ijk);
+    PetscReal lo[3];
     /* The same arithmetic as PffGridGetBlockInfo, so sidecar and /blocks/origin agree to the bit. */
     for (int d = 0; d < 3; d++) lo[d] = origin[d] + (PetscReal)(ijk[d] * n0) * h0;
     const double h = (double)(h0 * (PetscReal)((PetscInt)1 << l));

@@ -139,19 +139,15 @@ static void PffAdvectChunkComponent(const PffSampleBlock *b, int d, PetscInt m, 
     PffAdvectAxis(py[j] - off[1], gw, n, &ci[1][j], &ti[1][j]);
     PffAdvectAxis(pz[j] - off[2], gw, n, &ci[2][j], &ti[2][j]);
   }
-  if (b->hole) {
-    const int32_t *c[3] = {ci[0], ci[1], ci[2]};
-    const float   *t[3] = {ti[0], ti[1], ti[2]};
-    int32_t        cc[3][PFF_CHUNK];
-    float          tc[3][PFF_CHUNK];
-    PffChunkClamp_Private(b, m, d, c, t, cc, tc);
-    memcpy(ci, cc, sizeof(ci));
-    memcpy(ti, tc, sizeof(ti));
-  }
+  const int32_t *c[3] = {ci[0], ci[1], ci[2]};
+  const float   *t[3] = {ti[0], ti[1], ti[2]};
+  int32_t        cc[3][PFF_CHUNK];
+  float          tc[3][PFF_CHUNK];
+  PffChunkClampHoles_Private(b, m, d, c, t, cc, tc);
   int32_t o[PFF_CHUNK];
-  for (PetscInt j = 0; j < m; j++) o[j] = (ci[0][j] + gw) + mm * ((ci[1][j] + gw) + mm * (ci[2][j] + gw)) + koff[j];
-  for (PetscInt j = PffTrilinearChunk16_Private(tile, o, st, ti[0], ti[1], ti[2], m, val); j < m; j++)
-    val[j] = PffTrilinear_Private(tile, o[j], st, ti[0][j], ti[1][j], ti[2][j]);
+  PffChunkOffsets_Private(mm, gw, c, m, o);
+  for (PetscInt j = 0; j < m; j++) o[j] += koff[j];
+  PffTrilinearChunk_Private(tile, o, st, t[0], t[1], t[2], m, val);
   for (PetscInt j = 0; j < m; j++) od[j] = scale * val[j];
 }
 

@@ -33,20 +33,11 @@ PetscErrorCode PffParticlesInterpolateCell(PffParticles p, PetscInt ch, PffParti
       const float   *tt[3] = {L.th[0], L.th[1], L.th[2]};
       int32_t        cc[3][PFF_CHUNK];
       float          tc[3][PFF_CHUNK];
-      if (b->hole) { /* the grid's clamping at walls and holes */
-        PffChunkClamp_Private(b, m, -1, c, tt, cc, tc);
-        for (int e = 0; e < 3; e++) {
-          c[e]  = cc[e];
-          tt[e] = tc[e];
-        }
-      }
-      const int32_t *restrict cx = c[0], *restrict cy = c[1], *restrict cz = c[2];
-      const float *restrict tx = tt[0], *restrict ty = tt[1], *restrict tz = tt[2], *t = b->tile[0][0];
+      PffChunkClampHoles_Private(b, m, -1, c, tt, cc, tc); /* the grid's clamping at walls and holes */
       float   w[PFF_CHUNK]; /* val's address goes to fn: gathers into it would not vectorise */
       int32_t o[PFF_CHUNK];
-      for (PetscInt j = 0; j < m; j++) o[j] = (cx[j] + 1) + (int32_t)mm * ((cy[j] + 1) + (int32_t)mm * (cz[j] + 1));
-      for (PetscInt j = PffTrilinearChunk16_Private(t, o, st, tx, ty, tz, m, w); j < m; j++)
-        w[j] = PffTrilinear_Private(t, o[j], st, tx[j], ty[j], tz[j]);
+      PffChunkOffsets_Private((int32_t)mm, 1, c, m, o);
+      PffTrilinearChunk_Private(b->tile[0][0], o, st, tt[0], tt[1], tt[2], m, w);
       memcpy(val, w, sizeof(float) * (size_t)m);
       fn(j0, m, val, ctx);
     }

@@ -50,18 +50,11 @@ PetscErrorCode PffParticlesG2P(PffParticles p, PetscInt chU, PetscInt chDU, cons
         int32_t        cc[3][PFF_CHUNK];
         float          tc[3][PFF_CHUNK];
         PffChunkLatticeOf_Private(&L, d, c, t);
-        if (b->hole) { /* the grid's clamping at walls and holes */
-          PffChunkClamp_Private(b, m, d, c, t, cc, tc);
-          for (int e = 0; e < 3; e++) {
-            c[e] = cc[e];
-            t[e] = tc[e];
-          }
-        }
-        const int32_t *restrict cx = c[0], *restrict cy = c[1], *restrict cz = c[2];
-        const float *restrict tx = t[0], *restrict ty = t[1], *restrict tz = t[2];
+        PffChunkClampHoles_Private(b, m, d, c, t, cc, tc); /* the grid's clamping at walls and holes */
         float   ur[PFF_CHUNK], dr[PFF_CHUNK];
         int32_t o[PFF_CHUNK];
-        for (PetscInt j = 0; j < m; j++) o[j] = (cx[j] + 1) + (int32_t)mm * ((cy[j] + 1) + (int32_t)mm * (cz[j] + 1));
+        PffChunkOffsets_Private((int32_t)mm, 1, c, m, o);
+        const float *restrict tx = t[0], *restrict ty = t[1], *restrict tz = t[2];
         const PetscInt j16 = PffTrilinearChunk16_Private(tu, o, st, tx, ty, tz, m, ur);
         PffTrilinearChunk16_Private(tdu, o, st, tx, ty, tz, m, dr);
         for (PetscInt j = j16; j < m; j++) {

@@ -57,8 +57,9 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
     const int32_t stays = omp_get_max_threads() == 1 ? PFF_SORT_STAYS : 0;
 #pragma omp parallel for reduction(+ : sent, wrapped, clamped, nbad) schedule(dynamic, 4)
     for (PetscInt lb = 0; lb < p->nlocal; lb++) {
-      const PetscInt g = p->lgid[lb], ijk[3] = {g % nb[0], (g / nb[0]) % nb[1], g / (nb[0] * nb[1])};
-      float          lo[3], hi[3];
+      PetscInt ijk[3];
+      PffRasterCoordinates(nb, p->lgid[lb], ijk);
+      float lo[3], hi[3];
       for (int a = 0; a < 3; a++) {
         lo[a] = ijk[a] == 0 ? PFF_PARTICLE_WALL_LO : (float)(ijk[a] * p->n0);
         hi[a] = (float)((ijk[a] + 1) * p->n0);

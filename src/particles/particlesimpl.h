@@ -321,6 +321,19 @@ static inline void PffChunkClamp_Private(const PffSampleBlock *b, PetscInt m, in
   }
 }
 
+/* PffChunkClamp_Private where the block has walls or holes: c and t then point to the clamped cc and tc. */
+static inline __attribute__((always_inline)) void
+PffChunkClampHoles_Private(const PffSampleBlock *b, PetscInt m, int normal, const int32_t *c[3], const float *t[3],
+                           int32_t cc[3][PFF_CHUNK], float tc[3][PFF_CHUNK])
+{
+  if (!b->hole) return;
+  PffChunkClamp_Private(b, m, normal, c, t, cc, tc);
+  for (int a = 0; a < 3; a++) {
+    c[a] = cc[a];
+    t[a] = tc[a];
+  }
+}
+
 /* Trilinear interpolation of the 2 x 2 x 2 values at t + o + st[q] (st: the corner offsets in a tile)
    with fractions (x1, y1, z1), axis by axis; inlined into loops the compiler vectorises. */
 static inline float PffTrilinear_Private(const float *restrict t, int32_t o, const int32_t st[8], float x1, float y1,
@@ -371,8 +384,7 @@ static inline __attribute__((always_inline)) PffV16 PffTrilinear16_Private(const
 #endif
 
 /* PffTrilinear_Private of the first 16 k <= m points of a chunk into out (o: offsets in the tile, t*: fractions);
-   returns 16 k, the points done (0 without AVX-512). The callers finish the rest with their own loops, which the
-   compiler vectorises where there is no AVX-512. */
+   returns 16 k, the points done (0 without AVX-512). */
 static inline PetscInt PffTrilinearChunk16_Private(const float *t, const int32_t *o, const int32_t st[8],
                                                    const float *tx, const float *ty, const float *tz, PetscInt m,
                                                    float *out)
@@ -387,6 +399,26 @@ static inline PetscInt PffTrilinearChunk16_Private(const float *t, const int32_t
   (void)t, (void)o, (void)st, (void)tx, (void)ty, (void)tz, (void)m, (void)out;
 #endif
   return j;
+}
+
+/* All m points of a chunk: the rest after PffTrilinearChunk16_Private (all of them without AVX-512) in a loop the
+   compiler vectorises. G2P keeps its own loop for the rest, which interpolates u and du together: two calls of this
+   were 12-17 % slower there (pff-bench-particles, 2026-12-05). */
+static inline __attribute__((always_inline)) void PffTrilinearChunk_Private(const float *t, const int32_t *o,
+                                                                            const int32_t st[8], const float *tx,
+                                                                            const float *ty, const float *tz,
+                                                                            PetscInt m, float *out)
+{
+  for (PetscInt j = PffTrilinearChunk16_Private(t, o, st, tx, ty, tz, m, out); j < m; j++)
+    out[j] = PffTrilinear_Private(t, o[j], st, tx[j], ty[j], tz[j]);
+}
+
+/* Offsets in a tile of mm^3 values with gw ghost layers of the stencils whose lower corners are the cells c. */
+static inline __attribute__((always_inline)) void
+PffChunkOffsets_Private(int32_t mm, int32_t gw, const int32_t *const c[3], PetscInt m, int32_t *restrict o)
+{
+  const int32_t *restrict cx = c[0], *restrict cy = c[1], *restrict cz = c[2];
+  for (PetscInt j = 0; j < m; j++) o[j] = (cx[j] + gw) + mm * ((cy[j] + gw) + mm * (cz[j] + gw));
 }
 
 /* Corner offsets of a 2 x 2 x 2 stencil in a tile of m^3 values. */

@@ -165,7 +165,9 @@ static PetscErrorCode BuildGroups(PffMG *mg, PetscInt k, PffMGGroups *g, PffMGLe
   PetscCall(PetscMalloc3(nactive, &gowner, size + 1, &count, nactive, &ord));
   PetscCall(PetscArrayzero(count, size + 1));
   for (PetscInt q = 0; q < nactive; q++) {
-    const PetscInt gid = gids[q], ijk[3] = {gid % nb[0], (gid / nb[0]) % nb[1], gid / (nb[0] * nb[1])};
+    const PetscInt gid = gids[q];
+    PetscInt       ijk[3];
+    PffRasterCoordinates(nb, gid, ijk);
     const uint64_t key = PffMortonEncode((uint32_t)(ijk[0] >> k), (uint32_t)(ijk[1] >> k), (uint32_t)(ijk[2] >> k));
     if (ns > 0 && g->key[ns - 1] == key) continue;
     PetscCheck(ns == 0 || key > g->key[ns - 1], PETSC_COMM_SELF, PETSC_ERR_PLIB,
