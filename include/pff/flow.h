@@ -16,7 +16,7 @@ typedef struct _n_PffFlow *PffFlow;
 #define PFF_FLOW_FLIP_DEFAULT 0.99     /* -flow_flip: FLIP ratio where no viscosity is given */
 #define PFF_FLOW_VOLCORR_DEFAULT 0.5   /* -flow_volume_correction: kappa, share of the volume error removed per step */
 #define PFF_FLOW_VOLCORR_MAXDISP_DEFAULT 0.5       /* -flow_volume_correction_max_displacement, in cells */
-#define PFF_FLOW_VOLCORR_RTOL_DEFAULT 1e-3         /* -flow_volume_correction_rtol of its solve */
+#define PFF_FLOW_VOLCORR_RTOL_DEFAULT 1e-1         /* -flow_volume_correction_rtol of its solve */
 #define PFF_FLOW_VOLCONTROL_DEFAULT 1.0            /* -flow_volume_control: gain of the liquid volume's control */
 #define PFF_FLOW_EXTRAPOLATE_LAYERS_DEFAULT 3      /* -flow_extrapolate_layers: the paper's "a few cells" (Sec. 3.7) */
 #define PFF_FLOW_ADAPT_BAND_DEFAULT 1.0            /* -adapt_band: beta_bw of Sec. 5.4 step 6 */

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Issue 10's volume and still-water goals, one row per run, into $PFF_BENCH_DIR/volume.csv (default
 # output/bench): liquid and gas volume drift (final and max |drift| over the run, from the conservation
-# line), peak max|u| on the grid, steps and wall time, the load average before the run.
+# line), peak max|u| on the grid, steps and wall time, the load average before the run, and the shares of
+# the step that the pressure and the correction's solve take (the summary line, max over ranks).
 #   PFF_BENCH_RANKS  MPI ranks (default 2)     PFF_BENCH_EXE  the pfflip binary (default build/bin/pfflip)
 #   PFF_BENCH_CASES  names of the cases to run (default all, see below)
 #   PFF_BENCH_EXTRA  options appended to every case (e.g. -flow_volume_correction_interface closed), also in the
@@ -40,7 +41,7 @@ declare -A CASES=(
   [drop_pool_2lev]="drop_pool_2lev.yaml"
 )
 ORDER=${PFF_BENCH_CASES:-"still_small_1e5 dam_break_small_cfl3 dam_break_small_cfl1 dam_break_small_cfl0.1 dam_break_small_cfl0.01 dam_break_small_dtmax1e-6 bubbles_small_003 still_water_2lev still_water_3lev rt3d_small_2lev rt3d_small_3lev dam_break drop_pool rt3d_w32 dam_break_2lev dam_break_3lev drop_pool_2lev still_1e3_1000 still_1e4_1000 still_1e3_1000_band0 still_1e4_1000_band0 still_lattice_1000 still_lattice_1e4_1000"}
-[ -f "$CSV" ] || echo "case,options,ranks,steps,wall_s,liquid_drift,liquid_max_drift,gas_drift,gas_max_drift,peak_umax_grid,load_before,status" > "$CSV"
+[ -f "$CSV" ] || echo "case,options,ranks,steps,wall_s,liquid_drift,liquid_max_drift,gas_drift,gas_max_drift,peak_umax_grid,load_before,status,pressure_share,correction_share" > "$CSV"
 for c in $ORDER; do
   set -- ${CASES[$c]} ${PFF_BENCH_EXTRA:-}
   yaml=$1; shift
@@ -55,5 +56,7 @@ for c in $ORDER; do
   steps=$(sed -n 's/^summary: \([0-9]*\) steps .*wall \([0-9.]*\) s.*/\1,\2/p' <<<"$log")
   diag=$(ls "$dir"/*_diag.csv 2>/dev/null | head -1)
   peak=$(awk -F, 'NR==1{for(i=1;i<=NF;i++) if($i=="umax_grid") k=i} NR>1 && k && $k+0>m{m=$k+0} END{printf "%.4e", m}' "$diag" 2>/dev/null || echo nan)
-  echo "$c,\"$yaml $*\",$NP,${steps:-,},${liq:-,},${gas:-,},$peak,$load,$status" | tee -a "$CSV"
+  share() { sed -n "s/^summary: stage shares.* $1 \([0-9.]*\)%.*/\1/p" <<<"$log"; }
+  echo "$c,\"$yaml $*\",$NP,${steps:-,},${liq:-,},${gas:-,},$peak,$load,$status,$(share Pressure),$(share Correction)" |
+    tee -a "$CSV"
 done
