@@ -131,7 +131,8 @@ PETSC_EXTERN PetscErrorCode PffFlowGetDensities(PffFlow flow, PetscReal rho[PFF_
 /* Whether escaped gas particles are deleted (-flow_delete_bubbles); without deletion the
    bubblesDeleted of PffFlowStepStats counts the candidates only. Not collective. */
 PETSC_EXTERN PetscErrorCode PffFlowGetDeleteBubbles(PffFlow flow, PetscBool *del);
-/* Channel indices: phi (cell), p (cell), u (face), vort (cell vorticity magnitude). */
+/* Channel indices: phi (cell), p (cell; -1 under a prescribed field, which has no projection), u (face), vort (cell
+   vorticity magnitude). */
 PETSC_EXTERN PetscErrorCode PffFlowGetChannels(PffFlow flow, PetscInt *phi, PetscInt *p, PetscInt *u, PetscInt *vort);
 /* Max |u| over the faces and the liquid volume (that of PffFlowGetPhaseVolumes), each only when its
    pointer is not NULL (the same on every rank). Collective. */

@@ -275,10 +275,11 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
   PetscCall(PffGridAddChannel(f->grid, "velocity", PFF_CHANNEL_FACE, width, &f->chU));
   PetscCall(PffGridAddChannel(f->grid, "phi_face", PFF_CHANNEL_FACE, 1, &f->chPhiF));
   PetscCall(PffGridAddChannel(f->grid, "mass_ref", PFF_CHANNEL_FACE, 1, &f->chMassRef));
-  PetscCall(PffGridAddChannel(f->grid, "beta", PFF_CHANNEL_FACE, 1, &f->chBeta));
+  /* a prescribed field has no projection: no coefficients and no pressure (16 B per cell) */
+  if (!f->prescribed) PetscCall(PffGridAddChannel(f->grid, "beta", PFF_CHANNEL_FACE, 1, &f->chBeta));
   PetscCall(PffGridAddChannel(f->grid, "open", PFF_CHANNEL_FACE, 1, &f->chOpen));
   PetscCall(PffGridAddChannel(f->grid, "phi", PFF_CHANNEL_CELL, 1, &f->chPhi));
-  PetscCall(PffGridAddChannel(f->grid, "p", PFF_CHANNEL_CELL, 1, &f->chP));
+  if (!f->prescribed) PetscCall(PffGridAddChannel(f->grid, "p", PFF_CHANNEL_CELL, 1, &f->chP));
   PetscCall(PffGridAddChannel(f->grid, "vorticity", PFF_CHANNEL_CELL, 1, &f->chVort));
   if (f->prescribedAmp) {
     PetscCall(PffGridAddChannel(f->grid, "velocity_shape", PFF_CHANNEL_FACE, 1, &f->chShape));
@@ -347,7 +348,7 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
   /* working channels stay out of frames (checkpoints keep everything) */
   const PetscInt hidden[] = {f->chMass, f->chMassRef, f->chUt, f->chPhiF, f->chBeta, f->chOpen};
   for (size_t k = 0; k < PETSC_STATIC_ARRAY_LENGTH(hidden); k++)
-    PetscCall(PffGridSetChannelOutput(f->grid, hidden[k], PETSC_FALSE));
+    if (hidden[k] >= 0) PetscCall(PffGridSetChannelOutput(f->grid, hidden[k], PETSC_FALSE));
   /* what an adapt need not move: every step recomputes it from the particles, or PffFlowReset does */
   /* (mass_ref and volume_ref move: a reset makes them again only where the levels changed) */
   const PetscInt scratch[] = {f->chMass, f->chUt,   f->chPhiF, f->chBeta,   f->chOpen,

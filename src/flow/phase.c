@@ -113,9 +113,9 @@ PetscErrorCode PffFlowPhaseField_Private(PffFlow f)
     PetscCall(PffGridGetBlockViews(f->grid, f->chPhi, lb, 0, &vcell));
     const PetscInt n = info.n;
     for (PetscInt d = 0; d < 3; d++) {
-      float *phi, *beta, *open;
+      float *phi, *beta = NULL, *open;
       PetscCall(PffGridGetBlockData(f->grid, f->chPhiF, lb, d, &phi));
-      PetscCall(PffGridGetBlockData(f->grid, f->chBeta, lb, d, &beta));
+      if (f->chBeta >= 0) PetscCall(PffGridGetBlockData(f->grid, f->chBeta, lb, d, &beta));
       PetscCall(PffGridGetBlockData(f->grid, f->chOpen, lb, d, &open));
       for (PetscInt k = 0; k < n; k++)
         for (PetscInt j = 0; j < n; j++)
@@ -129,7 +129,7 @@ PetscErrorCode PffFlowPhaseField_Private(PffFlow f)
               phi[c] = 1;
             else if (!mine && !other)
               phi[c] = 0;
-            beta[c] = (float)(1.0 / (f->rho[1] + (PetscReal)phi[c] * (f->rho[0] - f->rho[1])));
+            if (beta) beta[c] = (float)(1.0 / (f->rho[1] + (PetscReal)phi[c] * (f->rho[0] - f->rho[1])));
           }
     }
   }

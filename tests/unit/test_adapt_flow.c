@@ -120,7 +120,7 @@ static PetscErrorCode ZeroPressure(PffGrid grid, PffFlow flow)
 
   PetscFunctionBeginUser;
   PetscCall(PffFlowGetChannels(flow, NULL, &chP, NULL, NULL));
-  PetscCall(PffGridFillChannel(grid, chP, Zero, NULL));
+  if (chP >= 0) PetscCall(PffGridFillChannel(grid, chP, Zero, NULL)); /* a prescribed field has none */
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
