@@ -12,7 +12,7 @@
 #define PFF_PARTICLES_MAX_SUBSTEPS 16
 
 /* Purposes of the counter-based RNG (the third key besides the seed and the particle id). */
-enum { PFF_RNG_SEED_JITTER = 1, PFF_RNG_SPLIT = 2, PFF_RNG_COARSEN = 3 };
+enum { PFF_RNG_SEED_JITTER = 1, PFF_RNG_SPLIT = 2, PFF_RNG_COARSEN = 3, PFF_RNG_COARSEN_GROUP = 4 };
 
 /* The particle fields, declared once: X(name, C type, values per particle, files). Growth, compaction, the
    binning's lane sort, the migration record and, for fields whose last entry is FILE, the frames and

@@ -10,7 +10,8 @@
    - coarsening: level-0 particles asked for level 1 (and level 2) are kept through delay - 1 calls, during
      which PffParticlesAdaptCounters has them hold the grid at their own level, then removed with
      probability 7/8 (63/64): the survivors' count within 5 sigma of the expectation, their
-     level the target, and the volume per type within 5 sigma of its expectation (reported as the drift);
+     level the target, and the volume per type within 5 sigma of its expectation (reported as the drift) and,
+     since the coarsening is stratified per block, within one coarse particle per block of it;
    - hysteresis: a call with target <= l_p resets the counter, so the next delay - 1 calls remove nothing;
    - independence of the partition: the ids that survive, hashed together, and the count equal those of
      the same run on one rank (PETSC_COMM_SELF on rank 0), also with threads.
@@ -238,6 +239,12 @@ static PetscErrorCode CaseCoarsen(MPI_Comm comm, PetscInt to)
                     sd    = PetscSqrtReal((1 - q) / (q * 0.5 * (PetscReal)n));
     PetscCheck(PetscAbsReal(drift) <= 5 * sd, comm, PETSC_ERR_PLIB, "type %d: volume drift %.4f beyond 5 sigma (%.4f)",
                t, (double)drift, (double)sd);
+    /* stratified: each of the (at most 8) blocks of a type misses its volume by less than one coarse particle,
+       where independent draws would miss by about sigma (30-40 coarse particles here) */
+    const PetscReal vt = (PetscReal)((PetscInt64)1 << (3 * to));
+    PetscCheck(PetscAbsReal(st.volumeAfter[t] - st.volumeBefore[t]) < 8 * vt, comm, PETSC_ERR_PLIB,
+               "type %d: the survivors miss the volume by %g, beyond one coarse particle per block (%g)", t,
+               (double)(st.volumeAfter[t] - st.volumeBefore[t]), (double)vt);
     PetscCall(PetscPrintf(comm, "coarsen to level %" PetscInt_FMT ": %s volume drift %+.4f (sigma %.4f)\n", to,
                           PffParticleTypes[t], (double)drift, (double)sd));
   }
