@@ -23,34 +23,30 @@
 #include "particlesimpl.h"
 #include <omp.h>
 
-/* A splitting particle: its group (l, t, cell of level l in its block) and id, for the sort. */
+/* A particle of a split or coarsening group, for the sort: the group (split: l, t and the cell of level l in the
+   block; coarsening: type, l and t), its draw (coarsening; 0 for a split), its id and its index. Sorted by group, then
+   draw, then id. */
 typedef struct {
   PetscInt64 group;
+  PetscReal  u;
   uint64_t   id;
   PetscInt   i;
-} PffSplitItem;
+} PffAdaptItem;
 
-static int PffSplitItemCompare(const void *pa, const void *pb)
+static int PffAdaptItemCompare(const void *pa, const void *pb)
 {
-  const PffSplitItem *a = (const PffSplitItem *)pa, *b = (const PffSplitItem *)pb;
-  if (a->group != b->group) return a->group < b->group ? -1 : 1;
-  return a->id < b->id ? -1 : (a->id > b->id ? 1 : 0);
-}
-
-/* A coarsening candidate: its group (type, l, t), its draw and id (the order), and its index. */
-typedef struct {
-  PetscInt  group;
-  PetscReal u;
-  uint64_t  id;
-  PetscInt  i;
-} PffCoarsenItem;
-
-static int PffCoarsenItemCompare(const void *pa, const void *pb)
-{
-  const PffCoarsenItem *a = (const PffCoarsenItem *)pa, *b = (const PffCoarsenItem *)pb;
+  const PffAdaptItem *a = (const PffAdaptItem *)pa, *b = (const PffAdaptItem *)pb;
   if (a->group != b->group) return a->group < b->group ? -1 : 1;
   if (a->u != b->u) return a->u < b->u ? -1 : 1;
   return a->id < b->id ? -1 : (a->id > b->id ? 1 : 0);
+}
+
+/* The end of the group that starts at g0 in the sorted items [0, n). */
+static inline PetscInt PffAdaptGroupEnd(const PffAdaptItem *it, PetscInt g0, PetscInt n)
+{
+  PetscInt g1 = g0 + 1;
+  while (g1 < n && it[g1].group == it[g0].group) g1++;
+  return g1;
 }
 
 static inline PetscBool PffCoarsenCandidate(uint32_t w, PetscInt t, PetscInt delay)
@@ -61,7 +57,7 @@ static inline PetscBool PffCoarsenCandidate(uint32_t w, PetscInt t, PetscInt del
 /* The stratified coarsening of the candidates [i0, i1) of block gid (see the top of the file): survivors take level t,
    the others the removal flag; counts and volume changes per type into the sums. it is scratch for i1 - i0 items. */
 static void PffCoarsenBlock(PffParticles p, const int8_t target[], PetscInt delay, uint64_t key, PetscInt gid,
-                            PetscInt i0, PetscInt i1, PffCoarsenItem *it, PetscInt64 *removed, PetscReal dv[2])
+                            PetscInt i0, PetscInt i1, PffAdaptItem *it, PetscInt64 *removed, PetscReal dv[2])
 {
   const PetscInt lmax = p->nlevels - 1;
   const uint32_t rm   = PffParticleWordSetFlags(0, PFF_PARTICLE_FLAG_REMOVE, PETSC_TRUE);
@@ -72,12 +68,11 @@ static void PffCoarsenBlock(PffParticles p, const int8_t target[], PetscInt dela
     if (!PffCoarsenCandidate(w, t, delay)) continue;
     const PetscInt group =
         (PffParticleWordType(w) * PFF_GRID_MAX_LEVELS + PffParticleWordLevel(w)) * PFF_GRID_MAX_LEVELS + t;
-    it[m++] = (PffCoarsenItem){group, PffRandom01_Private(p->seed, p->s.id[i], PFF_RNG_COARSEN, key), p->s.id[i], i};
+    it[m++] = (PffAdaptItem){group, PffRandom01_Private(p->seed, p->s.id[i], PFF_RNG_COARSEN, key), p->s.id[i], i};
   }
-  qsort(it, (size_t)m, sizeof(PffCoarsenItem), PffCoarsenItemCompare);
+  qsort(it, (size_t)m, sizeof(PffAdaptItem), PffAdaptItemCompare);
   for (PetscInt g0 = 0, g1; g0 < m; g0 = g1) {
-    for (g1 = g0 + 1; g1 < m && it[g1].group == it[g0].group; g1++) {
-    }
+    g1                   = PffAdaptGroupEnd(it, g0, m);
     const PetscInt t     = it[g0].group % PFF_GRID_MAX_LEVELS,
                    l     = (it[g0].group / PFF_GRID_MAX_LEVELS) % PFF_GRID_MAX_LEVELS;
     const PetscInt  type = it[g0].group / (PFF_GRID_MAX_LEVELS * PFF_GRID_MAX_LEVELS);
@@ -120,7 +115,7 @@ static inline PetscInt CellOfLevel(PffParticles p, float x, PetscInt l, float *l
    the octant of C (a cell of level l - 1) with the fewest children so far, the least used sub-cell in it,
    the nearest to the parent among those; so every finer cell in C gets its share (no hole while C has 8
    parents, an even density below that) and each child stays near its parent. */
-static void AssignSubCells(PffParticles p, const PffSplitItem *item, PetscInt g0, PetscInt g1, const float lo[3],
+static void AssignSubCells(PffParticles p, const PffAdaptItem *item, PetscInt g0, PetscInt g1, const float lo[3],
                            PetscReal q1, PetscInt slot[])
 {
   PetscInt used[64] = {0}, octUsed[8] = {0};
@@ -240,8 +235,8 @@ PetscErrorCode PffParticlesAdaptLevels(PffParticles p, const int8_t target[], Pe
                "PffParticlesAdaptLevels: coarsening needs binned particles");
     PetscInt mmax = 0;
     for (PetscInt lb = 0; lb < p->nlocal; lb++) mmax = PetscMax(mmax, p->start[lb + 1] - p->start[lb]);
-    const PetscInt  nth = PetscMax(omp_get_max_threads(), 1);
-    PffCoarsenItem *items;
+    const PetscInt nth = PetscMax(omp_get_max_threads(), 1);
+    PffAdaptItem  *items;
     PetscCall(PetscMalloc1((size_t)nth * (size_t)PetscMax(mmax, 1), &items));
 #pragma omp parallel for reduction(+ : removed, dl, da) schedule(dynamic, 1)
     for (PetscInt lb = 0; lb < p->nlocal; lb++) {
@@ -259,7 +254,7 @@ PetscErrorCode PffParticlesAdaptLevels(PffParticles p, const int8_t target[], Pe
     int32_t         *dst = NULL;
     PetscInt         m = n, nb = 0, ns = 0;
     PetscObjectState state;
-    PffSplitItem    *item;
+    PffAdaptItem    *item;
     PetscInt        *slot;
     /* binned on the current raster: the children's bins are their parents', so the sort needs no locate */
     PetscCall(PffGridGetTopologyState(p->grid, &state));
@@ -279,12 +274,11 @@ PetscErrorCode PffParticlesAdaptLevels(PffParticles p, const int8_t target[], Pe
         if (t >= l) continue;
         PetscInt64 cell = 0;
         for (int a = 2; a >= 0; a--) cell = cell * (p->n0 >> l) + CellOfLevel(p, p->s.x[3 * i + a], l, NULL);
-        item[ns++] = (PffSplitItem){(cell * PFF_GRID_MAX_LEVELS + l) * PFF_GRID_MAX_LEVELS + t, p->s.id[i], i};
+        item[ns++] = (PffAdaptItem){(cell * PFF_GRID_MAX_LEVELS + l) * PFF_GRID_MAX_LEVELS + t, 0, p->s.id[i], i};
       }
-      qsort(item + k0, (size_t)(ns - k0), sizeof(PffSplitItem), PffSplitItemCompare);
+      qsort(item + k0, (size_t)(ns - k0), sizeof(PffAdaptItem), PffAdaptItemCompare);
       for (PetscInt g0 = k0, g1; g0 < ns; g0 = g1) {
-        for (g1 = g0 + 1; g1 < ns && item[g1].group == item[g0].group; g1++) {
-        }
+        g1                 = PffAdaptGroupEnd(item, g0, ns);
         const PetscInt  ip = item[g0].i, l = PffParticleWordLevel(p->s.word[ip]);
         const PetscInt  t  = PetscClipInterval((PetscInt)target[ip], 0, lmax);
         const PetscReal q1 = 0.25 * (PetscReal)((PetscInt)1 << l); /* first-level sub-cells: 4 per axis of C */

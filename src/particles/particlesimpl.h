@@ -180,11 +180,11 @@ PETSC_INTERN PetscErrorCode PffParticlesGrowIntWork_Private(PffParticles, size_t
 /* A float scratch of at least n values, kept between calls (grown by half): no allocation, and no
    first-touch page faults, per step. */
 PETSC_INTERN PetscErrorCode PffParticlesGetFloatWork_Private(PffParticles, size_t n, float **);
-/* Wraps periodic axes and clamps walled axes of grid position g in place; returns what it did. */
 /* The lower wall's clamp, in finest cells (Migrate's box test keeps particles below it out of its fast path). */
 #define PFF_PARTICLE_WALL_LO 1e-6f
 
-/* Periodic axes: the image in [0, cells), wrapped like PffGridLocate. Walled axes: clamped a millionth
+/* Wraps periodic axes and clamps walled axes of grid position g in place; returns what it did. Periodic axes: the
+   image in [0, cells), wrapped like PffGridLocate. Walled axes: clamped a millionth
    of a finest cell inside at the lower wall and one float step inside at the upper one, so the point
    lies strictly within the domain. Inline: Migrate calls it for every particle, and took 10 % less time inlined
    (rt3d W = 64, docs/benchmarks.md). */
@@ -402,8 +402,8 @@ static inline PetscInt PffTrilinearChunk16_Private(const float *t, const int32_t
 }
 
 /* All m points of a chunk: the rest after PffTrilinearChunk16_Private (all of them without AVX-512) in a loop the
-   compiler vectorises. G2P keeps its own loop for the rest, which interpolates u and du together: two calls of this
-   were 12-17 % slower there (pff-bench-particles, 2026-12-05). */
+   compiler vectorises. G2P keeps its own loop for the rest, which interpolates u and du together: a variant of G2P
+   with two calls of this, not kept, was 12-17 % slower (pff-bench-particles, 2026-12-05). */
 static inline __attribute__((always_inline)) void PffTrilinearChunk_Private(const float *t, const int32_t *o,
                                                                             const int32_t st[8], const float *tx,
                                                                             const float *ty, const float *tz,
