@@ -429,6 +429,32 @@ static PetscErrorCode PffFlowSceneDiagRow(PffFlowScene *fs, PetscInt step, Petsc
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* With -info: one line per rank and step with the step's wall time, each stage's, and the minor page faults since
+   the previous line (*minflt; first touch of fresh memory), for per-rank and first-step breakdowns
+   (docs/benchmarks.md). Not collective. */
+static PetscErrorCode PffFlowSceneInfoStep(PetscInt step, PetscLogDouble wall, const PffFlowStepStats *st, long *minflt)
+{
+  PetscBool     on;
+  struct rusage ru;
+  char          line[512];
+  size_t        len = 0;
+
+  PetscFunctionBeginUser;
+  PetscCall(PetscInfoEnabled(PETSC_SMALLEST_CLASSID, &on)); /* the class of PetscInfo(NULL, ...) */
+  if (!on) PetscFunctionReturn(PETSC_SUCCESS);
+  const long now = getrusage(RUSAGE_SELF, &ru) == 0 ? ru.ru_minflt : *minflt;
+  line[0]        = 0;
+  for (PetscInt k = 0; k < PFF_FLOW_NSTAGES; k++) {
+    PetscCall(
+        PetscSNPrintf(line + len, sizeof(line) - len, " %s %.4f", PffFlowStageNames[k], (double)st->stageTime[k]));
+    PetscCall(PetscStrlen(line, &len));
+  }
+  PetscCall(PetscInfo(NULL, "step %" PetscInt_FMT " wall %.4f s, minor page faults %ld, stages (s):%s\n", step,
+                      (double)wall, now - *minflt, line));
+  *minflt = now;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 static PetscErrorCode PffFlowSceneRun(PffScene s)
 {
   PffFlowScene    *fs = (PffFlowScene *)s->data;
@@ -439,6 +465,7 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
   PetscInt         step, frame = 0;
   PetscLogDouble   total[PFF_FLOW_NSTAGES] = {0}, stepTime = 0, tstart, tnow;
   PetscBool        deleteBubbles;
+  long             minflt = 0;
   PffBodies        bodies;
 
   PetscFunctionBeginUser;
@@ -486,6 +513,10 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
   }
   PetscCall(PffProgressStart(&prog, t, tEnd, step, fs->maxSteps));
   PetscCall(PetscTime(&tstart));
+  {
+    struct rusage ru; /* the first step's page faults count from here */
+    if (getrusage(RUSAGE_SELF, &ru) == 0) minflt = ru.ru_minflt;
+  }
   while (t < tEnd * (1 - 1e-12) && (!fs->maxSteps || step < fs->maxSteps)) {
     PetscLogDouble t0, t1;
     char           extra[512];
@@ -495,6 +526,7 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
     PetscCall(PffFlowGetTime(fs->flow, &t, &step));
     for (PetscInt k = 0; k < PFF_FLOW_NSTAGES; k++) total[k] += st.stageTime[k];
     stepTime += t1 - t0;
+    PetscCall(PffFlowSceneInfoStep(step, t1 - t0, &st, &minflt));
     if (deleteBubbles) fs->bubblesDeletedRun += st.bubblesDeleted;
     fs->bandDeletedRun += st.bandDeleted;
     fs->bandSeededRun += st.bandSeeded;
