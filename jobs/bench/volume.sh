@@ -42,6 +42,8 @@ declare -A CASES=(
 )
 ORDER=${PFF_BENCH_CASES:-"still_small_1e5 dam_break_small_cfl3 dam_break_small_cfl1 dam_break_small_cfl0.1 dam_break_small_cfl0.01 dam_break_small_dtmax1e-6 bubbles_small_003 still_water_2lev still_water_3lev rt3d_small_2lev rt3d_small_3lev dam_break drop_pool rt3d_w32 dam_break_2lev dam_break_3lev drop_pool_2lev still_1e3_1000 still_1e4_1000 still_1e3_1000_band0 still_1e4_1000_band0 still_lattice_1000 still_lattice_1e4_1000"}
 [ -f "$CSV" ] || echo "case,options,ranks,steps,wall_s,liquid_drift,liquid_max_drift,gas_drift,gas_max_drift,peak_umax_grid,load_before,status,pressure_share,correction_share" > "$CSV"
+# the share of stage $1 in the summary line of $log
+share() { sed -n "s/^summary: stage shares.* $1 \([0-9.]*\)%.*/\1/p" <<<"$log"; }
 for c in $ORDER; do
   set -- ${CASES[$c]} ${PFF_BENCH_EXTRA:-}
   yaml=$1; shift
@@ -56,7 +58,6 @@ for c in $ORDER; do
   steps=$(sed -n 's/^summary: \([0-9]*\) steps .*wall \([0-9.]*\) s.*/\1,\2/p' <<<"$log")
   diag=$(ls "$dir"/*_diag.csv 2>/dev/null | head -1)
   peak=$(awk -F, 'NR==1{for(i=1;i<=NF;i++) if($i=="umax_grid") k=i} NR>1 && k && $k+0>m{m=$k+0} END{printf "%.4e", m}' "$diag" 2>/dev/null || echo nan)
-  share() { sed -n "s/^summary: stage shares.* $1 \([0-9.]*\)%.*/\1/p" <<<"$log"; }
   echo "$c,\"$yaml $*\",$NP,${steps:-,},${liq:-,},${gas:-,},$peak,$load,$status,$(share Pressure),$(share Correction)" |
     tee -a "$CSV"
 done
