@@ -21,59 +21,79 @@
 #include <malloc.h>
 #endif
 
-/* The reference lattice's seeding: the blocks r1 whose reference is made, and the raster to find a point's block. */
+/* The part of the raster whose reference is made: depth[27 b + r] is, for raster block b and its neighbour region r
+   (PffRegionDirection; PFF_REGION_SELF the block itself), the depth in b's own cells of b's slab toward that
+   neighbour (0: none). A depth along PFF_REGION_SELF means the whole block. */
+#define PFF_REGION_SELF 13
+
+/* A box of finest-cell units relative to a block's lower corner: [lo, hi) per axis */
 typedef struct {
-  PffFlow          f;
-  const PetscBool *r1;
-  const PetscInt  *level;
-  PetscInt         nb[3];
-  PetscBool        periodic[3];
-  PetscReal        origin[3], h0, blen;
-} PffReferenceCtx;
+  PetscInt lo[3], hi[3];
+} PffRefBox;
 
-/* Whether a block of r1 lies within 1.5 cells (of x's own block) of x: a lattice particle splats into its block
-   and the ghost layer one cell of its level wide around it, so one farther away adds nothing to r1's faces, and
-   the neighbour blocks of r1 seeded whole (a block wider than needed) made most of the lattice that the bodies'
-   reference seeds at every step. */
-static PetscBool PffReferenceReaches(const PffReferenceCtx *c, const PetscReal x[3])
+/* The boxes of raster block q's regions (depth dep[27]), shifted by shift[] (finest units) into
+   another block's frame. Returns their number (at most 27). */
+static PetscInt RegionBoxes(const PetscInt dep[27], PetscInt n0, PetscInt level, const PetscInt shift[3],
+                            PffRefBox box[])
 {
-  PetscInt lo[3], hi[3], b0[3], d[3];
+  const PetscInt s = (PetscInt)1 << level;
+  PetscInt       m = 0;
 
-  for (PetscInt a = 0; a < 3; a++)
-    b0[a] = PetscMax(0, PetscMin(c->nb[a] - 1, (PetscInt)PetscFloorReal((x[a] - c->origin[a]) / c->blen)));
-  const PetscReal reach = 1.5 * c->h0 * (PetscReal)(1 << c->level[b0[0] + c->nb[0] * (b0[1] + c->nb[1] * b0[2])]);
-  for (PetscInt a = 0; a < 3; a++) { /* reach is under a block: the neighbours are one block away at most */
-    lo[a] = (PetscInt)PetscFloorReal((x[a] - reach - c->origin[a]) / c->blen) - b0[a];
-    hi[a] = (PetscInt)PetscFloorReal((x[a] + reach - c->origin[a]) / c->blen) - b0[a];
+  for (PetscInt r = 0; r < 27; r++) {
+    PetscInt d[3];
+    if (!dep[r]) continue;
+    PffRegionDirection(r, d);
+    for (PetscInt a = 0; a < 3; a++) {
+      const PetscInt w = r == PFF_REGION_SELF ? n0 : PetscMin(n0, dep[r] * s);
+      box[m].lo[a]     = shift[a] + (d[a] > 0 ? n0 - w : 0);
+      box[m].hi[a]     = shift[a] + (d[a] < 0 ? w : n0);
+    }
+    m++;
+    if (r == PFF_REGION_SELF) return 1; /* the whole block holds the others */
   }
-  for (d[2] = lo[2]; d[2] <= hi[2]; d[2]++)
-    for (d[1] = lo[1]; d[1] <= hi[1]; d[1]++)
-      for (d[0] = lo[0]; d[0] <= hi[0]; d[0]++) {
-        const PetscInt q = PffRasterNeighbour(c->nb, c->periodic, b0, d);
-        if (q >= 0 && c->r1[q]) return PETSC_TRUE;
-      }
-  return PETSC_FALSE;
+  return m;
 }
 
+static inline PetscInt FloorDiv(PetscInt a, PetscInt b)
+{
+  return a >= 0 ? a / b : -((-a + b - 1) / b);
+}
+
+/* mask[c] = true for the cells c of a block at level l (n cells per axis) that lie within reach finest units of one
+   of the boxes (reach 0: inside one) */
+static void MarkCells(const PffRefBox *box, PetscInt nbox, PetscInt n, PetscInt l, PetscInt reach, PetscBool mask[])
+{
+  const PetscInt s = (PetscInt)1 << l;
+
+  for (PetscInt q = 0; q < nbox; q++) {
+    PetscInt lo[3], hi[3];
+    for (PetscInt a = 0; a < 3; a++) { /* cells c with c s - reach < hi and (c + 1) s + reach > lo */
+      lo[a] = PetscMax(0, FloorDiv(box[q].lo[a] - reach, s));
+      hi[a] = PetscMin(n, FloorDiv(box[q].hi[a] + reach + s - 1, s));
+    }
+    for (PetscInt k = lo[2]; k < hi[2]; k++)
+      for (PetscInt j = lo[1]; j < hi[1]; j++)
+        for (PetscInt i = lo[0]; i < hi[0]; i++) mask[i + n * (j + n * k)] = PETSC_TRUE;
+  }
+}
+
+/* The lattice points of the cells ReferenceLattice lists, except those inside a solid: the scenes seed nothing there
+   (distance < 0); with bodies only the sign of their distance counts, and most lattice points lie outside every
+   body's bounding box. */
 static PetscErrorCode PffReferenceSeed(const PetscReal x[3], PetscInt *type, PetscReal v[3], void *ctx)
 {
-  const PffReferenceCtx *c = (const PffReferenceCtx *)ctx;
-  const PffFlow          f = c->f;
-  PetscReal              grad[3];
-  PetscBool              inside;
+  const PffFlow f = (PffFlow)ctx;
+  PetscReal     grad[3];
+  PetscBool     inside;
 
   PetscFunctionBeginUser;
   v[0] = v[1] = v[2] = 0;
-  *type              = -1;
-  if (!PffReferenceReaches(c, x)) PetscFunctionReturn(PETSC_SUCCESS);
-  /* the scenes seed nothing inside a solid (distance < 0); with bodies only the sign of their distance counts, and
-     most lattice points lie outside every body's bounding box */
   if (f->bodies)
     inside = (PetscBool)((f->staticSolid && f->staticSolid(x, grad, f->staticSolidCtx) < 0) ||
                          PffBodiesContain(f->bodies, x));
   else
     inside = (PetscBool)(f->solid && f->solid(x, grad, f->solidCtx) < 0);
-  if (!inside) *type = PFF_PARTICLE_LIQUID;
+  *type = inside ? -1 : PFF_PARTICLE_LIQUID;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -84,27 +104,19 @@ static PetscErrorCode PffReferenceSeed(const PetscReal x[3], PetscInt *type, Pet
    instead of 531; the extra batches cost about 1 % of its time, docs/benchmarks.md). */
 #define PFF_REFERENCE_BATCH ((PetscInt64)1 << 20)
 
-/* owned values of src copied (add = false) or added to dst on the local blocks with mask[lb] (face channels
-   of one component) */
-static PetscErrorCode PffCopyFaceChannel(PffGrid grid, PetscInt src, PetscInt dst, const PetscBool mask[],
+/* Owned values of src copied (add = false) or added to dst on the cells of local block lb that mask marks, or on
+   all of them for mask NULL (face channels of one component: a cell owns its lower faces) */
+static PetscErrorCode PffCopyFaceChannel(PffGrid grid, PetscInt lb, PetscInt src, PetscInt dst, const PetscBool mask[],
                                          PetscBool add)
 {
-  PetscInt nlocal;
-
   PetscFunctionBeginUser;
-  PetscCall(PffGridGetLocalBlocks(grid, &nlocal));
-  for (PetscInt lb = 0; lb < nlocal; lb++) {
-    if (!mask[lb]) continue;
-    for (PetscInt d = 0; d < 3; d++) {
-      float   *s, *t;
-      PetscInt n3 = 0;
-      PetscCall(PffFlowGridBlockData_Private(grid, lb, d, 1, &src, &s, &n3));
-      PetscCall(PffFlowGridBlockData_Private(grid, lb, d, 1, &dst, &t, NULL));
-      if (add)
-        for (PetscInt c = 0; c < n3; c++) t[c] += s[c];
-      else
-        PetscCall(PetscArraycpy(t, s, n3));
-    }
+  for (PetscInt d = 0; d < 3; d++) {
+    float   *s, *t;
+    PetscInt n3 = 0;
+    PetscCall(PffFlowGridBlockData_Private(grid, lb, d, 1, &src, &s, &n3));
+    PetscCall(PffFlowGridBlockData_Private(grid, lb, d, 1, &dst, &t, NULL));
+    for (PetscInt c = 0; c < n3; c++)
+      if (!mask || mask[c]) t[c] = add ? t[c] + s[c] : s[c];
   }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -127,92 +139,134 @@ static void PffDilate(const PetscInt nb[3], const PetscBool periodic[3], const P
   }
 }
 
-/* The reference of Eq. 6-7 and of the volume correction on the raster blocks r1 (a mask, the same on every rank):
-   the P2G of a lattice of 8 particles per cell, seeded in r1 and its neighbours (a face's value depends on the
-   lattice within one cell of it), copied into mass_ref and volume_ref on the blocks of r1 only. Collective. */
-static PetscErrorCode ReferenceLattice(PffFlow f, const PetscBool r1[], PetscBool trim)
+/* The regions of depth (the same on every rank) that lie within reach of local block lb's cells, as boxes in lb's
+   frame: its own and its 26 neighbours' */
+static PetscErrorCode NeighbourBoxes(PffFlow f, const PetscInt depth[], const PffBlockInfo *info, PffRefBox box[],
+                                     PetscInt *nbox)
 {
-  PffReferenceCtx rc;
-  PffParticles    ref;
-  const PetscReal one[PFF_PARTICLE_NTYPES] = {1, 1};
-  PetscInt        nlocal, nbatch, nb[3], nblocks, lb0 = 0, n0;
-  PetscInt64      cells = 0, done = 0, nchanged = 0;
-  PetscBool       periodic[3], *seed, *keep, *s2;
+  PetscInt        nb[3], n0;
+  const PetscInt *level;
+  PetscBool       periodic[3];
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridGetRaster(f->grid, nb, &rc.level, NULL));
-  PetscCall(PffGridGetSizes(f->grid, &n0, NULL, rc.origin, &rc.h0, periodic));
-  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
-  nblocks = nb[0] * nb[1] * nb[2];
-  for (PetscInt b = 0; b < nblocks; b++) nchanged += r1[b];
-  rc.f    = f;
-  rc.r1   = r1;
-  rc.blen = (PetscReal)n0 * rc.h0;
-  for (PetscInt a = 0; a < 3; a++) {
-    rc.nb[a]       = nb[a];
-    rc.periodic[a] = periodic[a];
+  PetscCall(PffGridGetRaster(f->grid, nb, &level, NULL));
+  PetscCall(PffGridGetSizes(f->grid, &n0, NULL, NULL, NULL, periodic));
+  *nbox = 0;
+  for (PetscInt r = 0; r < 27; r++) {
+    PetscInt d[3], shift[3];
+    PffRegionDirection(r, d);
+    const PetscInt q = PffRasterNeighbour(nb, periodic, info->ijk, d);
+    if (q < 0) continue;
+    for (PetscInt a = 0; a < 3; a++) shift[a] = d[a] * n0;
+    *nbox += RegionBoxes(&depth[27 * q], n0, level[q], shift, box + *nbox);
   }
-  PetscCall(PetscMalloc3(nblocks, &s2, PetscMax(nlocal, 1), &seed, PetscMax(nlocal, 1), &keep));
-  PffDilate(nb, periodic, r1, s2);
-  for (PetscInt lb = 0; lb < nlocal; lb++) {
-    PffBlockInfo info;
-    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
-    keep[lb] = r1[info.gid];
-    seed[lb] = s2[info.gid];
-    if (seed[lb]) cells += (PetscInt64)info.n * info.n * info.n;
-  }
-  {
-    PetscInt64 nbt = (8 * cells + PFF_REFERENCE_BATCH - 1) / PFF_REFERENCE_BATCH;
-    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nbt, 1, MPIU_INT64, MPI_MAX, f->comm)); /* P2G is collective */
-    nbatch = (PetscInt)PetscMax(nbt, 1);
-    PetscCall(PffParticlesCreate(f->grid, &ref));
-    PetscCall(PffParticlesSetJitter(ref, 0));
-    for (PetscInt k = 0; k < nbatch; k++) {
-      /* seeded blocks up to the k+1-th share of their cells */
-      PetscInt lb1 = lb0;
-      while (lb1 < nlocal && (k == nbatch - 1 || done * nbatch < cells * (k + 1))) {
-        if (seed[lb1]) {
-          PffBlockInfo info;
-          PetscCall(PffGridGetBlockInfo(f->grid, lb1, &info));
-          done += (PetscInt64)info.n * info.n * info.n;
-        }
-        lb1++;
-      }
-      PetscCall(PffParticlesClear(ref));
-      PetscCall(PffParticlesSeedBlocks(ref, PffReferenceSeed, &rc, lb0, lb1, seed));
-      /* the kernel sum of Eq. 6 for the same lattice normalises Eq. 7 (phase.c); mass, momentum and volume
-         land in working channels that every step overwrites */
-      PetscCall(PffParticlesP2G(ref, one, f->chMass, f->chUt, f->chVol));
-      PetscCall(PffCopyFaceChannel(f->grid, f->chMass, f->chMassRef, keep, (PetscBool)(k > 0)));
-      if (f->chVolRef >= 0) PetscCall(PffCopyFaceChannel(f->grid, f->chVol, f->chVolRef, keep, (PetscBool)(k > 0)));
-      lb0 = lb1;
-    }
-    PetscCall(PffParticlesDestroy(&ref));
-#if defined(__GLIBC__)
-    /* glibc keeps freed heap pages resident until they are trimmed: the lattice's store and scratch (160 MB per rank
-       in rt3d W = 64) stayed resident, and the seed reused only part of them (20 MB per rank of the peak); the bodies'
-       reference, made at every step, keeps them (trimmed, their pages were faulted in again at every step) */
-    if (trim) malloc_trim(0);
-#else
-    (void)trim;
-#endif
-  }
-  PetscCall(PetscFree3(s2, seed, keep));
-  PetscCall(PetscInfo(NULL, "reference lattice made again on %" PetscInt64_FMT " blocks\n", nchanged));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* The lattice on the blocks of r1 when there are any, then volume_ref's halo in any case: a re-partition moves
+/* The reference of Eq. 6-7 and of the volume correction on the regions of depth (see PFF_REGION_SELF): the P2G of a
+   lattice of 8 particles per cell, seeded in every cell within two cells of its own level of a region (a lattice
+   particle splats into its block and a ghost layer one cell of its level wide around it, so one farther away adds
+   nothing there), copied into mass_ref and volume_ref on the regions' cells only. Collective. */
+static PetscErrorCode ReferenceLattice(PffFlow f, const PetscInt depth[], PetscBool trim)
+{
+  PffParticles    ref;
+  const PetscReal one[PFF_PARTICLE_NTYPES] = {1, 1};
+  PetscInt        nlocal, nbatch, n0, ncells = 0, cap = 0, *cells = NULL, nregion = 0;
+  PetscBool     **copy;
+  PffRefBox       box[27 * 27];
+
+  PetscFunctionBeginUser;
+  PetscCall(PffGridGetSizes(f->grid, &n0, NULL, NULL, NULL, NULL));
+  PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
+  PetscCall(PetscCalloc1(PetscMax(nlocal, 1), &copy));
+  /* the cells to seed (block, cell) and those to copy, per local block */
+  for (PetscInt lb = 0; lb < nlocal; lb++) {
+    PffBlockInfo info;
+    PetscInt     nbox = 0, n3, zero[3] = {0, 0, 0};
+    PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
+    n3 = info.n * info.n * info.n;
+    PetscCall(NeighbourBoxes(f, depth, &info, box, &nbox));
+    if (!nbox) continue;
+    PetscBool *mask;
+    PetscCall(PetscCalloc1(n3, &mask));
+    MarkCells(box, nbox, info.n, info.level, 2 << info.level, mask);
+    PetscCall(PetscIntMultError(2, ncells + n3, NULL)); /* the list's size fits PetscInt */
+    if (2 * (ncells + n3) > cap) {
+      cap = PetscMax(2 * cap, 2 * (ncells + n3));
+      PetscCall(PetscRealloc(sizeof(PetscInt) * cap, &cells));
+    }
+    for (PetscInt c = 0; c < n3; c++)
+      if (mask[c]) {
+        cells[2 * ncells]     = lb;
+        cells[2 * ncells + 1] = c;
+        ncells++;
+      }
+    const PetscInt *dep = &depth[27 * info.gid];
+    nbox                = RegionBoxes(dep, n0, info.level, zero, box);
+    if (nbox && !dep[PFF_REGION_SELF]) {
+      PetscCall(PetscArrayzero(mask, n3));
+      MarkCells(box, nbox, info.n, info.level, 0, mask);
+      copy[lb] = mask;
+    } else
+      PetscCall(PetscFree(mask));
+    if (nbox) nregion++;
+    if (nbox && dep[PFF_REGION_SELF]) copy[lb] = (PetscBool *)&copy[lb]; /* any non-NULL marker: the whole block */
+  }
+  {
+    PetscInt64 nbt = (8 * (PetscInt64)ncells + PFF_REFERENCE_BATCH - 1) / PFF_REFERENCE_BATCH;
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nbt, 1, MPIU_INT64, MPI_MAX, f->comm)); /* P2G is collective */
+    nbatch = (PetscInt)PetscMax(nbt, 1);
+  }
+  PetscCall(PffParticlesCreate(f->grid, &ref));
+  PetscCall(PffParticlesSetJitter(ref, 0));
+  for (PetscInt k = 0, c0 = 0; k < nbatch; k++) {
+    /* a batch ends with the block in which its share of the cells ends, so that a block's cells splat together */
+    PetscInt c1 = (PetscInt)((PetscInt64)ncells * (k + 1) / nbatch);
+    while (c1 > 0 && c1 < ncells && cells[2 * c1] == cells[2 * (c1 - 1)]) c1++;
+    c1 = PetscMax(c1, c0);
+    PetscCall(PffParticlesClear(ref));
+    PetscCall(PffParticlesSeedCells(ref, PffReferenceSeed, f, c1 - c0, cells ? cells + 2 * c0 : NULL, 1));
+    c0 = c1;
+    /* the kernel sum of Eq. 6 for the same lattice normalises Eq. 7 (phase.c); mass, momentum and volume land in
+       working channels that every step overwrites */
+    PetscCall(PffParticlesP2G(ref, one, f->chMass, f->chUt, f->chVol));
+    for (PetscInt lb = 0; lb < nlocal; lb++) {
+      if (!copy[lb]) continue;
+      const PetscBool *mask = copy[lb] == (PetscBool *)&copy[lb] ? NULL : copy[lb];
+      PetscCall(PffCopyFaceChannel(f->grid, lb, f->chMass, f->chMassRef, mask, (PetscBool)(k > 0)));
+      if (f->chVolRef >= 0) PetscCall(PffCopyFaceChannel(f->grid, lb, f->chVol, f->chVolRef, mask, (PetscBool)(k > 0)));
+    }
+  }
+  PetscCall(PffParticlesDestroy(&ref));
+  for (PetscInt lb = 0; lb < nlocal; lb++)
+    if (copy[lb] != (PetscBool *)&copy[lb]) PetscCall(PetscFree(copy[lb]));
+  PetscCall(PetscFree(copy));
+  PetscCall(PetscFree(cells));
+#if defined(__GLIBC__)
+  /* glibc keeps freed heap pages resident until they are trimmed: the lattice's store and scratch (160 MB per rank
+     in rt3d W = 64) stayed resident, and the seed reused only part of them (20 MB per rank of the peak); the bodies'
+     reference, made at every step, keeps them (trimmed, their pages were faulted in again at every step) */
+  if (trim) malloc_trim(0);
+#else
+  (void)trim;
+#endif
+  PetscCall(PetscInfo(
+      NULL, "reference lattice made again on %" PetscInt_FMT " local blocks, %" PetscInt_FMT " cells seeded\n", nregion,
+      ncells));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+/* The lattice on the regions of depth when there are any, then volume_ref's halo in any case: a re-partition moves
    blocks without changing their levels. Collective. */
-static PetscErrorCode ReferenceBlocks(PffFlow f, const PetscBool r1[], PetscBool trim)
+static PetscErrorCode ReferenceRegions(PffFlow f, const PetscInt depth[], PetscBool trim)
 {
   PetscInt  nb[3];
   PetscBool any = PETSC_FALSE;
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetRaster(f->grid, nb, NULL, NULL));
-  for (PetscInt b = 0; b < nb[0] * nb[1] * nb[2] && !any; b++) any = r1[b];
-  if (any) PetscCall(ReferenceLattice(f, r1, trim));
+  for (PetscInt b = 0; b < 27 * nb[0] * nb[1] * nb[2] && !any; b++) any = (PetscBool)(depth[b] > 0);
+  if (any) PetscCall(ReferenceLattice(f, depth, trim));
   if (f->chVolRef >= 0) {
     PetscCall(PffGridHaloBegin(f->grid, f->chVolRef));
     PetscCall(PffGridHaloEnd(f->grid, f->chVolRef));
@@ -220,27 +274,51 @@ static PetscErrorCode ReferenceBlocks(PffFlow f, const PetscBool r1[], PetscBool
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* The reference depends on its block's and its 26 neighbours' levels, walls and solids only. After a topology
-   change (refLevel: the raster levels it was last made for) only the blocks whose level changed and their
-   neighbours are made again; the others kept theirs through PffGridAdapt (a copy: their level did not change).
-   Without refLevel everything is made. */
+/* The reference depends on the levels of its block and its 26 neighbours, walls and solids only. After a topology
+   change (refLevel: the raster levels it was last made for) a block whose level changed is made again whole, and a
+   block beside one is made again in a slab toward it: as deep as a lattice particle of the changed block at its
+   coarser level (before or after) reaches, one cell of that level and its ghost layer, and a cell more. The
+   rest kept its values through PffGridAdapt (a copy: the level did not change). Without refLevel everything is
+   made. */
 PetscErrorCode PffFlowReferenceVolume_Private(PffFlow f)
 {
   const PetscInt *level;
-  PetscInt        nb[3], nblocks;
-  PetscBool       periodic[3], *changed, *r1;
+  PetscInt        nb[3], nblocks, n0, *depth;
+  PetscBool       periodic[3], *changed;
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetRaster(f->grid, nb, &level, NULL));
-  PetscCall(PffGridGetSizes(f->grid, NULL, NULL, NULL, NULL, periodic));
+  PetscCall(PffGridGetSizes(f->grid, &n0, NULL, NULL, NULL, periodic));
   nblocks = nb[0] * nb[1] * nb[2];
-  PetscCall(PetscMalloc2(nblocks, &changed, nblocks, &r1));
+  PetscCall(PetscMalloc1(nblocks, &changed));
+  PetscCall(PetscCalloc1(27 * nblocks, &depth));
   for (PetscInt b = 0; b < nblocks; b++) changed[b] = (PetscBool)(!f->refLevel || f->refLevel[b] != level[b]);
-  PffDilate(nb, periodic, changed, r1);
-  if (!f->refLevel) PetscCall(PetscMalloc1(nblocks, &f->refLevel));
+  for (PetscInt b = 0; b < nblocks; b++) {
+    PetscInt ijk[3];
+    if (changed[b]) {
+      depth[27 * b + PFF_REGION_SELF] = 1;
+      continue;
+    }
+    PffRasterCoordinates(nb, b, ijk);
+    for (PetscInt r = 0; r < 27; r++) {
+      PetscInt d[3];
+      PffRegionDirection(r, d);
+      const PetscInt q = PffRasterNeighbour(nb, periodic, ijk, d);
+      if (q < 0 || !changed[q]) continue;
+      const PetscInt lq = PetscMax(level[q], f->refLevel[q]), n = n0 >> level[b];
+      /* one cell of q's coarser level and its ghost layer, in b's cells, and a cell more (test_adapt_reference
+         passes with a cell less and fails with slabs one cell deep) */
+      const PetscInt reach = lq >= level[b] ? (PetscInt)2 << (lq - level[b]) : 1;
+      depth[27 * b + r]    = PetscMin(n, reach + 1);
+    }
+  }
+  /* a full build trims the lattice's pages; after an adapt the step trims once at its end (step.c) */
+  const PetscBool full = (PetscBool)!f->refLevel;
+  if (full) PetscCall(PetscMalloc1(nblocks, &f->refLevel));
   PetscCall(PetscArraycpy(f->refLevel, level, nblocks));
-  PetscCall(ReferenceBlocks(f, r1, PETSC_TRUE));
-  PetscCall(PetscFree2(changed, r1));
+  PetscCall(ReferenceRegions(f, depth, full));
+  PetscCall(PetscFree(changed));
+  PetscCall(PetscFree(depth));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -271,7 +349,13 @@ PetscErrorCode PffFlowReferenceBodies_Private(PffFlow f)
     PffDilate(nb, periodic, r1, f->refBody);
   }
   PffFlowBlocksSince_Private(nblocks, r1, f->refBody);
-  PetscCall(ReferenceBlocks(f, r1, PETSC_FALSE));
+  {
+    PetscInt *depth;
+    PetscCall(PetscCalloc1(27 * nblocks, &depth));
+    for (PetscInt b = 0; b < nblocks; b++) depth[27 * b + PFF_REGION_SELF] = r1[b];
+    PetscCall(ReferenceRegions(f, depth, PETSC_FALSE));
+    PetscCall(PetscFree(depth));
+  }
   PetscCall(PetscFree(r1));
   PetscCall(PetscLogEventEnd(PFF_FlowRefBodies, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);

@@ -191,9 +191,11 @@ PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
   PetscCheck(f->setupcalled, f->comm, PETSC_ERR_ORDER, "PffFlowSetUp() must come before PffFlowStep()");
   PetscCall(PffFlowRegisterStages());
   PetscCall(PetscMemzero(st, sizeof(*st)));
+  /* the flow's own reset after a grid change (open faces, the reference lattice) is part of the adaptation */
   if (f->adapt.levels > 0 && f->step % f->adapt.interval == 0) {
     PetscCall(PffStageBegin(PFF_STAGE_ADAPT, &t0));
     PetscCall(PffFlowAdapt_Private(f, &st->adapt));
+    PetscCall(PffFlowCheckTopology_Private(f));
     PetscCall(PffStageEnd(st, PFF_STAGE_ADAPT, t0));
   }
   if (f->model == PFF_FLOW_LIQUID && f->step > 0) {
@@ -203,6 +205,7 @@ PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
     if (every > 0 && nlevels > 1 && f->step % every == 0) {
       PetscCall(PffStageBegin(PFF_STAGE_ADAPT, &t0));
       PetscCall(PffFlowLiquidQuadtreeStep_Private(f, &st->adapt));
+      PetscCall(PffFlowCheckTopology_Private(f));
       PetscCall(PffStageEnd(st, PFF_STAGE_ADAPT, t0));
     }
   }
@@ -292,7 +295,11 @@ PetscErrorCode PffFlowStep(PffFlow f, PetscReal dtmax, PffFlowStepStats *st)
 #if defined(__GLIBC__)
   /* after a grid change the pressure, pffmg and the particles' scratch were made again on the new grid
      in this step; glibc keeps the pages of the old ones resident until it is told to trim */
-  if (st->adapt.adapted) malloc_trim(0);
+  if (st->adapt.adapted) {
+    PetscCall(PffStageBegin(PFF_STAGE_ADAPT, &t0));
+    malloc_trim(0);
+    PetscCall(PffStageEnd(st, PFF_STAGE_ADAPT, t0));
+  }
 #endif
   PetscCall(PffParticlesGetTotals(f->part, f->rho, count, mass));
   st->particles = count[0] + count[1];

@@ -123,22 +123,30 @@ static void AssignSubCells(PffParticles p, const PffAdaptItem *item, PetscInt g0
   for (PetscInt c = 0; c < 8; c++)
     for (PetscInt g = g0; g < g1; g++) {
       const float *x    = &p->s.x[3 * item[g].i];
-      PetscInt     best = -1, bo = 0;
-      PetscReal    bd = PETSC_MAX_REAL;
-      for (PetscInt k = 0; k < 64; k++) {
-        const PetscInt o = ((k >> 1) & 1) | ((k >> 2) & 2) | ((k >> 3) & 4); /* octant of sub-cell k */
-        if (best >= 0 && (octUsed[o] > octUsed[bo] || (octUsed[o] == octUsed[bo] && used[k] > used[best]))) continue;
-        PetscReal d2 = 0;
-        for (int a = 0; a < 3; a++) {
-          const PetscReal e = (PetscReal)lo[a] + q1 * ((PetscReal)((k >> (2 * a)) & 3) + 0.5) - (PetscReal)x[a];
-          d2 += e * e;
+      PetscInt     best = 0;
+      PetscReal    bd   = PETSC_MAX_REAL, sq[3][4];
+      /* the squared distances along each axis to the 4 sub-cell centres: a sub-cell's distance is their sum */
+      for (int a = 0; a < 3; a++)
+        for (PetscInt j = 0; j < 4; j++) {
+          const PetscReal e = (PetscReal)lo[a] + q1 * ((PetscReal)j + 0.5) - (PetscReal)x[a];
+          sq[a][j]          = e * e;
         }
-        if (best < 0 || octUsed[o] < octUsed[bo] || used[k] < used[best] || d2 < bd) {
+      /* the least filled octant first, then the least used sub-cell in it, then the nearest, then the lowest k: the
+         smallest (octant count, sub-cell count) key, and among its sub-cells the nearest (a branch-free first pass) */
+      PetscInt64 key[64], kmin = INT64_MAX;
+      for (PetscInt k = 0; k < 64; k++) {
+        key[k] = ((PetscInt64)octUsed[((k >> 1) & 1) | ((k >> 2) & 2) | ((k >> 3) & 4)] << 32) | (PetscInt64)used[k];
+        kmin   = PetscMin(kmin, key[k]);
+      }
+      for (PetscInt k = 0; k < 64; k++) {
+        if (key[k] != kmin) continue;
+        const PetscReal d2 = sq[0][k & 3] + sq[1][(k >> 2) & 3] + sq[2][(k >> 4) & 3];
+        if (d2 < bd) {
           best = k;
-          bo   = o;
           bd   = d2;
         }
       }
+      const PetscInt bo = ((best >> 1) & 1) | ((best >> 2) & 2) | ((best >> 3) & 4);
       used[best]++;
       octUsed[bo]++;
       slot[(g - g0) * 8 + c] = best;

@@ -36,25 +36,31 @@ static PetscErrorCode SeedCell(PffParticles p, const PffBlockInfo *info, PetscIn
   const PetscInt  n     = info->n;
   const PetscReal scale = (PetscReal)((PetscInt)1 << info->level);
   const uint64_t  cell  = (uint64_t)(i + n * (j + n * k));
+  const uint64_t  hkey  = key ? PffHash64_Private(key) : 0;
+  const PetscInt  c[3]  = {i, j, k};
+  PetscReal       lo[3];
+  float           top[3];
 
   PetscFunctionBeginUser;
+  for (int a = 0; a < 3; a++) {
+    lo[a] = (PetscReal)(info->ijk[a] * p->n0) + (PetscReal)c[a] * scale;
+    /* rounding to float must not carry the particle into the next cell (or block, or rank) */
+    top[a] = nextafterf((float)(lo[a] + scale), 0);
+  }
   for (PetscInt sub = 0; sub < 8; sub++) {
-    uint64_t       id   = ((uint64_t)info->gid * (uint64_t)(p->n0 * p->n0 * p->n0) + cell) * 8 + (uint64_t)sub;
-    const PetscInt c[3] = {i, j, k};
-    PetscReal      x[3], v[3] = {0, 0, 0};
-    float          g[3];
-    PetscInt       type = -1;
-    if (key) id = PffHash64_Private(id ^ PffHash64_Private(key)) | (UINT64_C(1) << 63);
+    uint64_t  id = ((uint64_t)info->gid * (uint64_t)(p->n0 * p->n0 * p->n0) + cell) * 8 + (uint64_t)sub;
+    PetscReal x[3], v[3] = {0, 0, 0};
+    float     g[3];
+    PetscInt  type = -1;
+    if (key) id = PffHash64_Private(id ^ hkey) | (UINT64_C(1) << 63);
     /* the callback sees the world point of the stored float position */
     for (int a = 0; a < 3; a++) {
       /* no hash for an unjittered lattice (the reference lattice is seeded at every step with bodies):
          0 (u - 1/2) adds a zero either way */
-      const PetscReal u  = jitter != 0 ? PffRandom01_Private(p->seed, id, PFF_RNG_SEED_JITTER, (uint64_t)a) : 0.5;
-      const PetscReal s  = 0.25 + 0.5 * (PetscReal)((sub >> a) & 1) + jitter * (u - 0.5) * 0.5;
-      const PetscReal lo = (PetscReal)(info->ijk[a] * p->n0) + (PetscReal)c[a] * scale;
-      /* rounding to float must not carry the particle into the next cell (or block, or rank) */
-      g[a] = PetscMin((float)(lo + s * scale), nextafterf((float)(lo + scale), 0));
-      x[a] = p->origin[a] + p->h0 * (PetscReal)g[a];
+      const PetscReal u = jitter != 0 ? PffRandom01_Private(p->seed, id, PFF_RNG_SEED_JITTER, (uint64_t)a) : 0.5;
+      const PetscReal s = 0.25 + 0.5 * (PetscReal)((sub >> a) & 1) + jitter * (u - 0.5) * 0.5;
+      g[a]              = PetscMin((float)(lo[a] + s * scale), top[a]);
+      x[a]              = p->origin[a] + p->h0 * (PetscReal)g[a];
     }
     PetscCall(fn(x, &type, v, ctx));
     if (type < 0) continue;

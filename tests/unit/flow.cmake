@@ -10,6 +10,9 @@ pff_add_unit(test_flow_volumes RANKS 1 2 4)
 # map; also threaded.
 pff_add_unit(test_adapt_flow RANKS 1 2 4)
 pff_add_unit(test_adapt_flow RANKS 2 THREADS 2)
+# flow: the reference lattice made again after an adapt (changed blocks and slabs of their neighbours) equals the
+# reference of a flow set up on the new map, in a closed box with a solid and periodic.
+pff_add_unit(test_adapt_reference RANKS 1 2 4)
 # flow: user regions force their level on blocks and particles, the vorticity criterion refines a spinning ball of
 # air (issue 14); also threaded.
 pff_add_unit(test_adapt_regions RANKS 1 2 4)
