@@ -262,6 +262,7 @@ PetscErrorCode PffParticlesAdaptLevels(PffParticles p, const int8_t target[], Pe
     int32_t         *dst = NULL;
     PetscInt         m = n, nb = 0, ns = 0;
     PetscObjectState state;
+    const uint32_t   rm = PffParticleWordSetFlags(0, PFF_PARTICLE_FLAG_REMOVE, PETSC_TRUE);
     PffAdaptItem    *item;
     PetscInt        *slot;
     /* binned on the current raster: the children's bins are their parents', so the sort needs no locate */
@@ -276,8 +277,9 @@ PetscErrorCode PffParticlesAdaptLevels(PffParticles p, const int8_t target[], Pe
       const PetscInt i0 = p->start[lb], i1 = p->start[lb + 1];
       PetscInt       k0 = ns;
       for (PetscInt i = i0; i < i1; i++) {
-        dst[i]           = (int32_t)lb | PFF_SORT_STAYS;
         const uint32_t w = p->s.word[i];
+        /* the sort leaves out the particles that coarsening removed */
+        dst[i]           = (w & rm) ? PFF_SORT_DROP : (int32_t)lb | PFF_SORT_STAYS;
         const PetscInt l = PffParticleWordLevel(w), t = PetscClipInterval((PetscInt)target[i], 0, lmax);
         if (t >= l) continue;
         PetscInt64 cell = 0;
@@ -302,8 +304,8 @@ PetscErrorCode PffParticlesAdaptLevels(PffParticles p, const int8_t target[], Pe
     PetscCall(PffParticlesSort_Private(p)); /* bins again (the children are the movers) */
   }
 
-  /* a store that only changed levels keeps its bins */
-  if (removed) PetscCall(PffParticlesRemove(p));
+  /* a store that only changed levels keeps its bins; after a split the sort dropped the removed particles */
+  if (removed && !nsplit) PetscCall(PffParticlesRemove(p));
   if (!p->binned) PetscCall(PffParticlesBin(p));
   {
     PetscReal v[4] = {vl0, va0, dl, da};
