@@ -44,6 +44,13 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
   PetscCall(PffGridGetRaster(p->grid, nb, &level, &owner));
   const PetscBool wasBinned = p->binned;
   PetscBool       changed;
+  PetscInt        nold = 0, *oldStart = NULL, *oldGid = NULL;
+  if (wasBinned && p->start) { /* the bins of the raster before a topology change (PffParticlesReset keeps them) */
+    nold = p->nlocal;
+    PetscCall(PetscMalloc2(nold + 1, &oldStart, PetscMax(nold, 1), &oldGid));
+    PetscCall(PetscArraycpy(oldStart, p->start, nold + 1));
+    PetscCall(PetscArraycpy(oldGid, p->lgid, nold));
+  }
   PetscCall(PffParticlesUpdateBlocks_Private(p, &changed));
   PetscCall(PffParticlesGetIntWork_Private(p, (size_t)n + 1, &dest));
   const PetscInt *local = p->local;
@@ -74,11 +81,39 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
         }
       }
     }
+  } else if (wasBinned && oldStart[nold] == n) {
+    /* after a topology change: a bin's particles lie in its block's raster cell, which kept its place whatever its
+       level or owner now, so they go where that block went, without a locate. With one thread they are flagged for
+       the in-place sort when the blocks that stay here kept their order (their destinations then grow with their
+       places): most of the store then stays where it is. */
+    PetscBool monotone = PETSC_TRUE;
+    for (PetscInt lb = 0, last = -1; lb < nold; lb++) {
+      const PetscInt gid = oldGid[lb];
+      if (level[gid] < 0 || owner[gid] != p->rank) continue;
+      if (local[gid] < last) monotone = PETSC_FALSE;
+      last = local[gid];
+    }
+    const int32_t stays = omp_get_max_threads() == 1 && monotone ? PFF_SORT_STAYS : 0;
+#pragma omp parallel for reduction(+ : sent, wrapped, clamped, nbad) schedule(dynamic, 4)
+    for (PetscInt lb = 0; lb < nold; lb++) {
+      const PetscInt gid = oldGid[lb];
+      for (PetscInt i = oldStart[lb]; i < oldStart[lb + 1]; i++) {
+        if (level[gid] < 0) /* the block is gone: the locate reports its particles */
+          PffMigrateLocate(p, i, level, owner, local, dest, &sent, &wrapped, &clamped, &nbad);
+        else if (owner[gid] == p->rank)
+          dest[i] = (int32_t)local[gid] | stays;
+        else {
+          dest[i] = -2 - (int32_t)owner[gid];
+          sent++;
+        }
+      }
+    }
   } else {
 #pragma omp parallel for reduction(+ : sent, wrapped, clamped, nbad) schedule(static)
     for (PetscInt i = 0; i < n; i++)
       PffMigrateLocate(p, i, level, owner, local, dest, &sent, &wrapped, &clamped, &nbad);
   }
+  PetscCall(PetscFree2(oldStart, oldGid));
   loc[0] = sent;
   loc[1] = wrapped;
   loc[2] = clamped;

@@ -219,7 +219,7 @@ PetscErrorCode PffParticlesGetFloatWork_Private(PffParticles p, size_t n, float 
 PetscErrorCode PffParticlesReset(PffParticles p)
 {
   PetscFunctionBeginUser;
-  p->binned = PETSC_FALSE;
+  /* the bins of the old raster stay: the migration reads the particles' blocks from them */
   PetscCall(PffParticlesMigrate(p, NULL));
   PetscCall(PetscInfo(NULL, "particles: rebinned after a grid topology change\n"));
   PetscFunctionReturn(PETSC_SUCCESS);
