@@ -22,8 +22,7 @@ typedef struct {
 typedef struct {
   PffChannelKind kind;
   PetscInt       width, ncomp;
-  PetscInt64     nhalo;  /* floats in the halo buffer: ghost boxes, then source boxes */
-  PetscInt64     nghost; /* of which ghost boxes */
+  PetscInt64     nhalo;  /* floats in the halo buffer: the SF's leaves, then the ghost boxes no exchange writes */
   PetscInt64    *goff;   /* [nlocal][ncomp][27] ghost box offset, -1 for a direct (same rank, same level) view */
   PetscInt       nxfer;
   PffHaloXfer   *xfer;

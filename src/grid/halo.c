@@ -60,49 +60,55 @@ static inline PetscInt PffFineCover(PetscInt i, PetscReal o, PetscInt shift, Pet
   return o > 0.25 ? 2 : 1;
 }
 
+/* The halo buffer holds the SF's leaves first, in the order of the transfers (a same-level ghost box from another
+   rank, or a cross-level source box), so that they are contiguous and the SF needs no leaf indices (PETSc then packs
+   and unpacks them as one block); then the ghost boxes that no exchange writes: the cross-level ones (filled from
+   their sources) and those across walls or towards inactive blocks. */
 static PetscErrorCode PffHaloPlanBuild(PffGrid g, PffHaloPlan *p)
 {
   const PetscInt w = p->width, nc = p->ncomp;
-  PetscInt64     nghost = 0, nsource = 0;
-  PetscInt       nxfer = 0, cap = 64, nleaves = 0;
-  PetscInt      *ilocal;
+  PetscInt64     nfloat = 0;
+  PetscInt       nxfer = 0, cap = 64, nwall = 0, wcap = 64, *wall;
   PetscSFNode   *iremote;
 
   PetscFunctionBeginUser;
   PetscCall(PetscMalloc1(g->nlocal * nc * 27, &p->goff));
   PetscCall(PetscMalloc1(cap, &p->xfer));
+  PetscCall(PetscMalloc1(wcap, &wall)); /* goff entries of the ghost boxes across walls, and their sizes */
   for (PetscInt lb = 0; lb < g->nlocal; lb++) {
     const PetscInt gid = g->lgid[lb], n = PffGridBlockN_Private(g, gid);
     for (PetscInt comp = 0; comp < nc; comp++) {
       for (PetscInt r = 0; r < 27; r++) {
-        PetscInt    d[3];
-        PetscInt64 *go = &p->goff[(lb * nc + comp) * 27 + r];
-        *go            = -1;
+        PetscInt       d[3];
+        const PetscInt e = (lb * nc + comp) * 27 + r;
+        p->goff[e]       = -1;
         if (r == 13) continue;
         PffRegionDirection(r, d);
         const PetscInt  nbr    = PffGridActiveNeighbour_Private(g, gid, r);
         const PetscBool active = (PetscBool)(nbr >= 0);
         if (active && g->level[nbr] == g->level[gid] && g->owner[nbr] == g->rank) continue;
-        PffHaloXfer x  = {0};
-        x.lb           = lb;
-        x.comp         = comp;
-        x.region       = r;
-        x.nbgid        = active ? nbr : -1;
-        x.rel          = active ? g->level[nbr] - g->level[gid] : 0;
-        PetscInt64 gsz = 1;
+        PffHaloXfer x = {0};
+        x.lb          = lb;
+        x.comp        = comp;
+        x.region      = r;
+        x.nbgid       = active ? nbr : -1;
+        x.rel         = active ? g->level[nbr] - g->level[gid] : 0;
         for (int a = 0; a < 3; a++) {
           x.glo[a] = d[a] < 0 ? -w : (d[a] > 0 ? n : 0);
           x.gn[a]  = d[a] ? w : n;
-          gsz *= x.gn[a];
           PetscAssert(x.gn[a] <= PFF_HALO_MAX_EXTENT, PETSC_COMM_SELF, PETSC_ERR_PLIB, "ghost box wider than a block");
         }
-        x.goff = nghost;
-        *go    = nghost;
-        nghost += gsz;
-        if (!active) continue;
+        if (!active) {
+          if (nwall + 2 > wcap) {
+            PetscCall(PetscRealloc(sizeof(PetscInt) * 2 * wcap, &wall));
+            wcap *= 2;
+          }
+          wall[nwall++] = e;
+          wall[nwall++] = x.gn[0] * x.gn[1] * x.gn[2];
+          continue;
+        }
         PetscAssert(PetscAbsInt(x.rel) <= 1, PETSC_COMM_SELF, PETSC_ERR_PLIB, "grading violated");
         if (x.rel != 0) {
-          PetscInt64 ssz = 1;
           for (int a = 0; a < 3; a++) {
             const PetscReal o     = PffChannelOffset_Private(p->kind, comp, a);
             const PetscInt  shift = d[a] * n;
@@ -125,10 +131,7 @@ static PetscErrorCode PffHaloPlanBuild(PffGrid g, PffHaloPlan *p)
             }
             x.slo[a] = lo;
             x.sn[a]  = hi - lo + 1;
-            ssz *= x.sn[a];
           }
-          x.soff = nsource;
-          nsource += ssz;
         }
         if (nxfer == cap) {
           PffHaloXfer *nx;
@@ -142,48 +145,62 @@ static PetscErrorCode PffHaloPlanBuild(PffGrid g, PffHaloPlan *p)
       }
     }
   }
-  p->nxfer  = nxfer;
-  p->nghost = nghost;
-  p->nhalo  = nghost + nsource;
+  /* the leaves, then the boxes that no exchange writes */
+  for (PetscInt e = 0; e < nxfer; e++) {
+    PffHaloXfer *x = &p->xfer[e];
+    if (x->rel == 0) {
+      x->goff = nfloat;
+      nfloat += x->gn[0] * x->gn[1] * x->gn[2];
+    } else {
+      x->soff = nfloat;
+      nfloat += x->sn[0] * x->sn[1] * x->sn[2];
+    }
+  }
+  const PetscInt64 nleaves = nfloat;
+  for (PetscInt e = 0; e < nxfer; e++) {
+    PffHaloXfer *x = &p->xfer[e];
+    if (x->rel != 0) {
+      x->goff = nfloat;
+      nfloat += x->gn[0] * x->gn[1] * x->gn[2];
+    }
+    p->goff[(x->lb * nc + x->comp) * 27 + x->region] = x->goff;
+  }
+  for (PetscInt q = 0; q < nwall; q += 2) {
+    p->goff[wall[q]] = nfloat;
+    nfloat += wall[q + 1];
+  }
+  PetscCall(PetscFree(wall));
+  p->nxfer = nxfer;
+  p->nhalo = nfloat;
   PetscCheck(p->nhalo < PETSC_MAX_INT && nc * g->ncells < PETSC_MAX_INT, PETSC_COMM_SELF, PETSC_ERR_SUP,
              "more halo or owned values on one rank than PetscInt holds: use more ranks");
 
-  /* leaves: same-level ghost cells and cross-level source cells, each naming its owner's cell */
-  for (PetscInt e = 0; e < nxfer; e++) {
-    const PffHaloXfer *x = &p->xfer[e];
-    if (x->nbgid < 0) continue;
-    nleaves += x->rel == 0 ? x->gn[0] * x->gn[1] * x->gn[2] : x->sn[0] * x->sn[1] * x->sn[2];
-  }
-  PetscCall(PetscMalloc1(nleaves, &ilocal));
+  /* each leaf names its owner's cell */
   PetscCall(PetscMalloc1(nleaves, &iremote));
   p->recvRemote = 0;
   for (PetscInt e = 0, l = 0; e < nxfer; e++) {
     const PffHaloXfer *x = &p->xfer[e];
-    if (x->nbgid < 0) continue;
-    const PetscInt n = PffGridBlockN_Private(g, g->lgid[x->lb]), nn = PffGridBlockN_Private(g, x->nbgid);
-    PetscInt       d[3];
+    const PetscInt     n = PffGridBlockN_Private(g, g->lgid[x->lb]), nn = PffGridBlockN_Private(g, x->nbgid);
+    PetscInt           d[3];
     PffRegionDirection(x->region, d);
     const PetscInt64 base = nc * g->offset[x->nbgid] + (PetscInt64)x->comp * nn * nn * nn;
     const PetscInt  *lo = x->rel == 0 ? x->glo : x->slo, *ext = x->rel == 0 ? x->gn : x->sn;
-    const PetscInt64 boff = x->rel == 0 ? x->goff : p->nghost + x->soff;
-    PetscInt64       m    = 0;
     if (g->owner[x->nbgid] != g->rank) p->recvRemote += ext[0] * ext[1] * ext[2];
     for (PetscInt k = 0; k < ext[2]; k++)
       for (PetscInt j = 0; j < ext[1]; j++)
-        for (PetscInt i = 0; i < ext[0]; i++, m++, l++) {
+        for (PetscInt i = 0; i < ext[0]; i++, l++) {
           /* same level: ghost coordinates shift by one block into the neighbour */
           const PetscInt ii = lo[0] + i - (x->rel == 0 ? d[0] * n : 0);
           const PetscInt jj = lo[1] + j - (x->rel == 0 ? d[1] * n : 0);
           const PetscInt kk = lo[2] + k - (x->rel == 0 ? d[2] * n : 0);
           PetscAssert(ii >= 0 && ii < nn && jj >= 0 && jj < nn && kk >= 0 && kk < nn, PETSC_COMM_SELF, PETSC_ERR_PLIB,
                       "halo source outside the neighbour block");
-          ilocal[l]        = (PetscInt)(boff + m);
           iremote[l].rank  = g->owner[x->nbgid];
           iremote[l].index = (PetscInt)(base + ii + nn * (jj + nn * (PetscInt64)kk));
         }
   }
   PetscCall(PetscSFCreate(g->comm, &p->sf));
-  PetscCall(PetscSFSetGraph(p->sf, (PetscInt)(nc * g->ncells), nleaves, ilocal, PETSC_OWN_POINTER, iremote,
+  PetscCall(PetscSFSetGraph(p->sf, (PetscInt)(nc * g->ncells), (PetscInt)nleaves, NULL, PETSC_OWN_POINTER, iremote,
                             PETSC_OWN_POINTER));
   PetscCall(PetscSFSetUp(p->sf));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -243,7 +260,7 @@ static void PffHaloFillCrossLevel(PffGrid g, const PffHaloPlan *p, const PffHalo
   const PetscInt n = PffGridBlockN_Private(g, g->lgid[x->lb]), nn = PffGridBlockN_Private(g, x->nbgid);
   PetscInt       d[3];
   PffRegionDirection(x->region, d);
-  const float   *src = halo + p->nghost + x->soff;
+  const float   *src = halo + x->soff;
   float         *gh  = halo + x->goff;
   const PetscInt sy = x->sn[0], sz = x->sn[0] * x->sn[1], step[3] = {1, sy, sz};
   /* the stencils are separable: one per ghost row of each axis (a ghost box is at most a block wide), not one per
@@ -305,7 +322,7 @@ static void PffHaloSpreadCrossLevel(PffGrid g, const PffHaloPlan *p, const PffHa
   const PetscInt n = PffGridBlockN_Private(g, g->lgid[x->lb]), nn = PffGridBlockN_Private(g, x->nbgid);
   PetscInt       d[3];
   PffRegionDirection(x->region, d);
-  float       *src = halo + p->nghost + x->soff;
+  float       *src = halo + x->soff;
   const float *gh  = halo + x->goff;
   PetscReal    o[3];
   for (int a = 0; a < 3; a++) o[a] = PffChannelOffset_Private(p->kind, x->comp, a);

@@ -194,7 +194,7 @@ PetscErrorCode PffGridZeroChannel(PffGrid g, PetscInt ch)
   PetscFunctionBeginUser;
   PetscCall(PffGridGetChannel_Private(g, ch, &c));
   PffZeroFloats_Private(c->data, c->ncomp * g->ncells);
-  PffZeroFloats_Private(c->halo, c->plan->nghost);
+  PffZeroFloats_Private(c->halo, c->plan->nhalo);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
