@@ -22,8 +22,8 @@ typedef struct {
 typedef struct {
   PffChannelKind kind;
   PetscInt       width, ncomp;
-  PetscInt64     nhalo;  /* floats in the halo buffer: the SF's leaves, then the ghost boxes no exchange writes */
-  PetscInt64    *goff;   /* [nlocal][ncomp][27] ghost box offset, -1 for a direct (same rank, same level) view */
+  PetscInt64     nhalo; /* floats in the halo buffer: the SF's leaves, then the ghost boxes no exchange writes */
+  PetscInt64    *goff;  /* [nlocal][ncomp][27] ghost box offset, -1 for a direct (same rank, same level) view */
   PetscInt       nxfer;
   PffHaloXfer   *xfer;
   PetscSF        sf;         /* roots: channel data; leaves: halo buffer */
