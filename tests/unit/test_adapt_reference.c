@@ -12,7 +12,7 @@
 
    Sample run:  mpiexec -n 4 ./test_adapt_reference
    Prints one line per case. */
-#include <pff.h>
+#include "pfftest.h"
 
 static const char help[] = "The reference lattice made again after an adapt equals a fresh one.\n";
 
@@ -46,19 +46,14 @@ static void Maps(PetscInt a[], PetscInt b[])
 
 static PetscErrorCode CreateFlow(MPI_Comm comm, const PetscInt map[], PetscBool periodic, PffGrid *grid, PffFlow *flow)
 {
-  const PetscInt  cells[3]  = {8 * NB, 8 * NB, 8 * NB};
+  const PetscInt  nb[3]     = {NB, NB, NB};
   const PetscBool per[3]    = {periodic, PETSC_FALSE, periodic};
   const PetscReal origin[3] = {0, 0, 0};
+  PffTestCtx      tc;
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridCreate(comm, grid));
-  PetscCall(PffGridSetCells(*grid, cells));
-  PetscCall(PffGridSetBlockSize(*grid, 8));
-  PetscCall(PffGridSetLevels(*grid, 3));
-  PetscCall(PffGridSetDomain(*grid, origin, 1.0 / 32));
-  PetscCall(PffGridSetPeriodic(*grid, per));
-  PetscCall(PffGridSetRefinementMap(*grid, map));
-  PetscCall(PffGridSetUp(*grid));
+  PetscCall(PffTestCreateGridFromMap(comm, nb, per, origin, 1.0 / (8 * NB), 8, 3, map, &tc));
+  *grid = tc.grid;
   PetscCall(PffFlowCreate(*grid, flow));
   PetscCall(PffFlowSetFromOptions(*flow));
   if (!periodic) PetscCall(PffFlowSetSolid(*flow, Sphere, NULL));
