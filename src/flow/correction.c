@@ -172,13 +172,13 @@ static PetscErrorCode ReferenceLattice(PffFlow f, const PetscInt depth[], PetscB
   PffParticles    ref;
   const PetscReal one[PFF_PARTICLE_NTYPES] = {1, 1};
   PetscInt        nlocal, nbatch, n0, ncells = 0, cap = 0, *cells = NULL, nregion = 0;
-  PetscBool     **copy;
+  PetscBool     **copy, *whole; /* per local block: the cells whose faces are copied, or the whole block */
   PffRefBox       box[27 * 27];
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetSizes(f->grid, &n0, NULL, NULL, NULL, NULL));
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
-  PetscCall(PetscCalloc1(PetscMax(nlocal, 1), &copy));
+  PetscCall(PetscCalloc2(PetscMax(nlocal, 1), &copy, PetscMax(nlocal, 1), &whole));
   /* the cells to seed (block, cell) and those to copy, per local block */
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo info;
@@ -210,7 +210,7 @@ static PetscErrorCode ReferenceLattice(PffFlow f, const PetscInt depth[], PetscB
     } else
       PetscCall(PetscFree(mask));
     if (nbox) nregion++;
-    if (nbox && dep[PFF_REGION_SELF]) copy[lb] = (PetscBool *)&copy[lb]; /* any non-NULL marker: the whole block */
+    whole[lb] = (PetscBool)(nbox && dep[PFF_REGION_SELF]);
   }
   {
     PetscInt64 nbt = (8 * (PetscInt64)ncells + PFF_REFERENCE_BATCH - 1) / PFF_REFERENCE_BATCH;
@@ -231,16 +231,15 @@ static PetscErrorCode ReferenceLattice(PffFlow f, const PetscInt depth[], PetscB
        working channels that every step overwrites */
     PetscCall(PffParticlesP2G(ref, one, f->chMass, f->chUt, f->chVol));
     for (PetscInt lb = 0; lb < nlocal; lb++) {
-      if (!copy[lb]) continue;
-      const PetscBool *mask = copy[lb] == (PetscBool *)&copy[lb] ? NULL : copy[lb];
-      PetscCall(PffCopyFaceChannel(f->grid, lb, f->chMass, f->chMassRef, mask, (PetscBool)(k > 0)));
-      if (f->chVolRef >= 0) PetscCall(PffCopyFaceChannel(f->grid, lb, f->chVol, f->chVolRef, mask, (PetscBool)(k > 0)));
+      if (!whole[lb] && !copy[lb]) continue;
+      PetscCall(PffCopyFaceChannel(f->grid, lb, f->chMass, f->chMassRef, copy[lb], (PetscBool)(k > 0)));
+      if (f->chVolRef >= 0)
+        PetscCall(PffCopyFaceChannel(f->grid, lb, f->chVol, f->chVolRef, copy[lb], (PetscBool)(k > 0)));
     }
   }
   PetscCall(PffParticlesDestroy(&ref));
-  for (PetscInt lb = 0; lb < nlocal; lb++)
-    if (copy[lb] != (PetscBool *)&copy[lb]) PetscCall(PetscFree(copy[lb]));
-  PetscCall(PetscFree(copy));
+  for (PetscInt lb = 0; lb < nlocal; lb++) PetscCall(PetscFree(copy[lb]));
+  PetscCall(PetscFree2(copy, whole));
   PetscCall(PetscFree(cells));
 #if defined(__GLIBC__)
   /* glibc keeps freed heap pages resident until they are trimmed: the lattice's store and scratch (160 MB per rank
