@@ -23,7 +23,8 @@
 
 /* The part of the raster whose reference is made: depth[27 b + r] is, for raster block b and its neighbour region r
    (PffRegionDirection; PFF_REGION_SELF the block itself), the depth in b's own cells of b's slab toward that
-   neighbour (0: none). A depth along PFF_REGION_SELF means the whole block. */
+   neighbour (0: none; at most a block's 64 cells, so a byte: the raster may hold millions of blocks). A depth along
+   PFF_REGION_SELF means the whole block. */
 #define PFF_REGION_SELF 13
 
 /* A box of finest-cell units relative to a block's lower corner: [lo, hi) per axis */
@@ -33,7 +34,7 @@ typedef struct {
 
 /* The boxes of raster block q's regions (depth dep[27]), shifted by shift[] (finest units) into
    another block's frame. Returns their number (at most 27). */
-static PetscInt RegionBoxes(const PetscInt dep[27], PetscInt n0, PetscInt level, const PetscInt shift[3],
+static PetscInt RegionBoxes(const uint8_t dep[27], PetscInt n0, PetscInt level, const PetscInt shift[3],
                             PffRefBox box[])
 {
   const PetscInt s = (PetscInt)1 << level;
@@ -115,8 +116,11 @@ static PetscErrorCode PffCopyFaceChannel(PffGrid grid, PetscInt lb, PetscInt src
     PetscInt n3 = 0;
     PetscCall(PffFlowGridBlockData_Private(grid, lb, d, 1, &src, &s, &n3));
     PetscCall(PffFlowGridBlockData_Private(grid, lb, d, 1, &dst, &t, NULL));
-    for (PetscInt c = 0; c < n3; c++)
-      if (!mask || mask[c]) t[c] = add ? t[c] + s[c] : s[c];
+    if (!mask && !add)
+      PetscCall(PetscArraycpy(t, s, n3));
+    else
+      for (PetscInt c = 0; c < n3; c++)
+        if (!mask || mask[c]) t[c] = add ? t[c] + s[c] : s[c];
   }
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -141,7 +145,7 @@ static void PffDilate(const PetscInt nb[3], const PetscBool periodic[3], const P
 
 /* The regions of depth (the same on every rank) that lie within reach of local block lb's cells, as boxes in lb's
    frame: its own and its 26 neighbours' */
-static PetscErrorCode NeighbourBoxes(PffFlow f, const PetscInt depth[], const PffBlockInfo *info, PffRefBox box[],
+static PetscErrorCode NeighbourBoxes(PffFlow f, const uint8_t depth[], const PffBlockInfo *info, PffRefBox box[],
                                      PetscInt *nbox)
 {
   PetscInt        nb[3], n0;
@@ -167,7 +171,7 @@ static PetscErrorCode NeighbourBoxes(PffFlow f, const PetscInt depth[], const Pf
    lattice of 8 particles per cell, seeded in every cell within two cells of its own level of a region (a lattice
    particle splats into its block and a ghost layer one cell of its level wide around it, so one farther away adds
    nothing there), copied into mass_ref and volume_ref on the regions' cells only. Collective. */
-static PetscErrorCode ReferenceLattice(PffFlow f, const PetscInt depth[], PetscBool trim)
+static PetscErrorCode ReferenceLattice(PffFlow f, const uint8_t depth[], PetscBool trim)
 {
   PffParticles    ref;
   const PetscReal one[PFF_PARTICLE_NTYPES] = {1, 1};
@@ -201,8 +205,8 @@ static PetscErrorCode ReferenceLattice(PffFlow f, const PetscInt depth[], PetscB
         cells[2 * ncells + 1] = c;
         ncells++;
       }
-    const PetscInt *dep = &depth[27 * info.gid];
-    nbox                = RegionBoxes(dep, n0, info.level, zero, box);
+    const uint8_t *dep = &depth[27 * info.gid];
+    nbox               = RegionBoxes(dep, n0, info.level, zero, box);
     if (nbox && !dep[PFF_REGION_SELF]) {
       PetscCall(PetscArrayzero(mask, n3));
       MarkCells(box, nbox, info.n, info.level, 0, mask);
@@ -257,7 +261,7 @@ static PetscErrorCode ReferenceLattice(PffFlow f, const PetscInt depth[], PetscB
 
 /* The lattice on the regions of depth when there are any, then volume_ref's halo in any case: a re-partition moves
    blocks without changing their levels. Collective. */
-static PetscErrorCode ReferenceRegions(PffFlow f, const PetscInt depth[], PetscBool trim)
+static PetscErrorCode ReferenceRegions(PffFlow f, const uint8_t depth[], PetscBool trim)
 {
   PetscInt  nb[3];
   PetscBool any = PETSC_FALSE;
@@ -282,7 +286,8 @@ static PetscErrorCode ReferenceRegions(PffFlow f, const PetscInt depth[], PetscB
 PetscErrorCode PffFlowReferenceVolume_Private(PffFlow f)
 {
   const PetscInt *level;
-  PetscInt        nb[3], nblocks, n0, *depth;
+  PetscInt        nb[3], nblocks, n0;
+  uint8_t        *depth;
   PetscBool       periodic[3], *changed;
 
   PetscFunctionBeginUser;
@@ -308,7 +313,7 @@ PetscErrorCode PffFlowReferenceVolume_Private(PffFlow f)
       /* one cell of q's coarser level and its ghost layer, in b's cells, and a cell more (test_adapt_reference
          passes with a cell less and fails with slabs one cell deep) */
       const PetscInt reach = lq >= level[b] ? (PetscInt)2 << (lq - level[b]) : 1;
-      depth[27 * b + r]    = PetscMin(n, reach + 1);
+      depth[27 * b + r]    = (uint8_t)PetscMin(n, reach + 1);
     }
   }
   /* a full build trims the lattice's pages; after an adapt the step trims once at its end (step.c) */
@@ -349,9 +354,9 @@ PetscErrorCode PffFlowReferenceBodies_Private(PffFlow f)
   }
   PffFlowBlocksSince_Private(nblocks, r1, f->refBody);
   {
-    PetscInt *depth;
+    uint8_t *depth;
     PetscCall(PetscCalloc1(27 * nblocks, &depth));
-    for (PetscInt b = 0; b < nblocks; b++) depth[27 * b + PFF_REGION_SELF] = r1[b];
+    for (PetscInt b = 0; b < nblocks; b++) depth[27 * b + PFF_REGION_SELF] = (uint8_t)r1[b];
     PetscCall(ReferenceRegions(f, depth, PETSC_FALSE));
     PetscCall(PetscFree(depth));
   }

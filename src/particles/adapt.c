@@ -115,6 +115,12 @@ static inline PetscInt CellOfLevel(PffParticles p, float x, PetscInt l, float *l
    the octant of C (a cell of level l - 1) with the fewest children so far, the least used sub-cell in it,
    the nearest to the parent among those; so every finer cell in C gets its share (no hole while C has 8
    parents, an even density below that) and each child stays near its parent. */
+/* The octant of C (a cell of level l - 1) that first-level sub-cell k (2 bits per axis) lies in */
+static inline PetscInt SubCellOctant(PetscInt k)
+{
+  return ((k >> 1) & 1) | ((k >> 2) & 2) | ((k >> 3) & 4);
+}
+
 static void AssignSubCells(PffParticles p, const PffAdaptItem *item, PetscInt g0, PetscInt g1, const float lo[3],
                            PetscReal q1, PetscInt slot[])
 {
@@ -135,7 +141,7 @@ static void AssignSubCells(PffParticles p, const PffAdaptItem *item, PetscInt g0
          smallest (octant count, sub-cell count) key, and among its sub-cells the nearest (a branch-free first pass) */
       PetscInt64 key[64], kmin = INT64_MAX;
       for (PetscInt k = 0; k < 64; k++) {
-        key[k] = ((PetscInt64)octUsed[((k >> 1) & 1) | ((k >> 2) & 2) | ((k >> 3) & 4)] << 32) | (PetscInt64)used[k];
+        key[k] = ((PetscInt64)octUsed[SubCellOctant(k)] << 32) | (PetscInt64)used[k];
         kmin   = PetscMin(kmin, key[k]);
       }
       for (PetscInt k = 0; k < 64; k++) {
@@ -146,9 +152,8 @@ static void AssignSubCells(PffParticles p, const PffAdaptItem *item, PetscInt g0
           bd   = d2;
         }
       }
-      const PetscInt bo = ((best >> 1) & 1) | ((best >> 2) & 2) | ((best >> 3) & 4);
       used[best]++;
-      octUsed[bo]++;
+      octUsed[SubCellOctant(best)]++;
       slot[(g - g0) * 8 + c] = best;
     }
 }

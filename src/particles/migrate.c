@@ -42,10 +42,12 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
   PetscFunctionBeginUser;
   PetscCall(PetscLogEventBegin(PFF_PartMigrate, 0, 0, 0, 0));
   PetscCall(PffGridGetRaster(p->grid, nb, &level, &owner));
-  const PetscBool wasBinned = p->binned;
-  PetscBool       changed;
-  PetscInt        nold = 0, *oldStart = NULL, *oldGid = NULL;
-  if (wasBinned && p->start) { /* the bins of the raster before a topology change (PffParticlesReset keeps them) */
+  const PetscBool  wasBinned = p->binned;
+  PetscBool        changed;
+  PetscInt         nold = 0, *oldStart = NULL, *oldGid = NULL;
+  PetscObjectState state;
+  PetscCall(PffGridGetTopologyState(p->grid, &state));
+  if (wasBinned && p->topology != state) { /* the bins of the raster before the change (PffParticlesReset keeps them) */
     nold = p->nlocal;
     PetscCall(PetscMalloc2(nold + 1, &oldStart, PetscMax(nold, 1), &oldGid));
     PetscCall(PetscArraycpy(oldStart, p->start, nold + 1));
@@ -81,7 +83,7 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
         }
       }
     }
-  } else if (wasBinned && oldStart[nold] == n) {
+  } else if (oldStart && oldStart[nold] == n) {
     /* after a topology change: a bin's particles lie in its block's raster cell, which kept its place whatever its
        level or owner now, so they go where that block went, without a locate. With one thread they are flagged for
        the in-place sort when the blocks that stay here kept their order (their destinations then grow with their
@@ -96,16 +98,15 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
     const int32_t stays = omp_get_max_threads() == 1 && monotone ? PFF_SORT_STAYS : 0;
 #pragma omp parallel for reduction(+ : sent, wrapped, clamped, nbad) schedule(dynamic, 4)
     for (PetscInt lb = 0; lb < nold; lb++) {
-      const PetscInt gid = oldGid[lb];
-      for (PetscInt i = oldStart[lb]; i < oldStart[lb + 1]; i++) {
-        if (level[gid] < 0) /* the block is gone: the locate reports its particles */
+      const PetscInt gid = oldGid[lb], i0 = oldStart[lb], i1 = oldStart[lb + 1];
+      if (level[gid] < 0) /* the block is gone: the locate reports its particles */
+        for (PetscInt i = i0; i < i1; i++)
           PffMigrateLocate(p, i, level, owner, local, dest, &sent, &wrapped, &clamped, &nbad);
-        else if (owner[gid] == p->rank)
-          dest[i] = (int32_t)local[gid] | stays;
-        else {
-          dest[i] = -2 - (int32_t)owner[gid];
-          sent++;
-        }
+      else if (owner[gid] == p->rank)
+        for (PetscInt i = i0; i < i1; i++) dest[i] = (int32_t)local[gid] | stays;
+      else {
+        for (PetscInt i = i0; i < i1; i++) dest[i] = -2 - (int32_t)owner[gid];
+        sent += i1 - i0;
       }
     }
   } else {
