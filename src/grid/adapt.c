@@ -130,30 +130,36 @@ typedef struct {
   PetscInt64 *start, nleaf, remote;
 } Transfer;
 
-/* Moves one channel to the new raster: new storage, views and halo buffer; old values resampled. */
+/* Moves one channel to the new raster: views and halo buffer for it; old values resampled. The old blocks come
+   into recv (*nrecv floats, grown as needed and shared by the channels of one adapt), so the storage itself can be
+   reused when the new one fits in it. */
 static PetscErrorCode TransferChannel(PffGrid g, PffChannel *c, const OldRaster *old, PetscInt unit,
-                                      MPI_Datatype unitType, float *scratch, Transfer *tr, PetscInt64 *bytesMoved)
+                                      MPI_Datatype unitType, float *scratch, Transfer *tr, float **recv, size_t *nrecv,
+                                      PetscInt64 *bytesMoved)
 {
-  float *oldAlloc = c->alloc, *oldData = c->data, *recv = NULL;
-
   PetscFunctionBeginUser;
-  PetscCall(PetscFree(c->halo));
   PetscCall(PetscFree(c->views));
   PetscCall(PetscFree(c->faces));
-  c->alloc = c->data = NULL;
-  /* zeroed here only where nothing is transferred: blocks that were inactive, or every block */
-  PetscCall(PffGridAllocateChannel_Private(g, c, (PetscBool)(c->transfer == PFF_TRANSFER_NONE)));
   if (c->transfer != PFF_TRANSFER_NONE) {
     if (!tr->sf) {
       PetscCall(PetscMalloc1(g->nlocal, &tr->start));
       PetscCall(TransferSF(g, old, c->ncomp, unit, &tr->sf, tr->start, &tr->nleaf, &tr->remote));
     }
-    const PetscInt64 *start = tr->start;
-    PetscCall(PetscMalloc1(PetscMax(tr->nleaf, 1), &recv));
-    PetscCall(PetscSFBcastBegin(tr->sf, unitType, oldData, recv, MPI_REPLACE));
-    PetscCall(PetscSFBcastEnd(tr->sf, unitType, oldData, recv, MPI_REPLACE));
+    if ((size_t)tr->nleaf > *nrecv) {
+      PetscCall(PetscFree(*recv));
+      *nrecv = (size_t)tr->nleaf;
+      PetscCall(PetscMalloc1(*nrecv, recv));
+    }
+    PetscCall(PetscSFBcastBegin(tr->sf, unitType, c->data, *recv, MPI_REPLACE));
+    PetscCall(PetscSFBcastEnd(tr->sf, unitType, c->data, *recv, MPI_REPLACE));
     *bytesMoved += (PetscInt64)sizeof(float) * tr->remote;
-    const PetscInt n0 = g->n0;
+  }
+  /* zeroed here only where nothing is transferred: blocks that were inactive, or every block */
+  PetscCall(PffGridAllocateChannel_Private(g, c, (PetscBool)(c->transfer == PFF_TRANSFER_NONE)));
+  if (c->transfer != PFF_TRANSFER_NONE) {
+    const PetscInt64 *start = tr->start;
+    const float      *in    = *recv;
+    const PetscInt    n0    = g->n0;
 #pragma omp parallel for schedule(dynamic, 1)
     for (PetscInt lb = 0; lb < g->nlocal; lb++) {
       if (start[lb] < 0) {
@@ -164,12 +170,10 @@ static PetscErrorCode TransferChannel(PffGrid g, PffChannel *c, const OldRaster 
       const PetscInt gid = g->lgid[lb], no = n0 >> old->level[gid], nn = n0 >> g->level[gid];
       float         *t0 = scratch + (size_t)2 * n0 * n0 * n0 * (size_t)omp_get_thread_num(), *t1 = t0 + n0 * n0 * n0;
       for (PetscInt comp = 0; comp < c->ncomp; comp++)
-        ResampleBlock(c->kind, comp, c->transfer, no, recv + start[lb] + comp * no * no * no, nn,
+        ResampleBlock(c->kind, comp, c->transfer, no, in + start[lb] + comp * no * no * no, nn,
                       c->data + c->ncomp * g->loff[lb] + comp * nn * nn * nn, t0, t1);
     }
-    PetscCall(PetscFree(recv));
   }
-  PetscCall(PetscFree(oldAlloc));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -236,9 +240,12 @@ PetscErrorCode PffGridAdapt(PffGrid g, const PetscInt level[])
   PetscCall(PetscMalloc1((size_t)2 * g->n0 * g->n0 * g->n0 * (size_t)omp_get_max_threads(), &scratch));
   {
     Transfer tr[2] = {{NULL, NULL, 0, 0}, {NULL, NULL, 0, 0}}; /* cell channels, face channels */
+    float   *recv  = NULL;
+    size_t   nrecv = 0;
     for (PetscInt c = 0; c < g->nch; c++)
-      PetscCall(
-          TransferChannel(g, g->ch[c], &old, unit, unitType, scratch, &tr[g->ch[c]->ncomp == 3], &info.bytesMoved));
+      PetscCall(TransferChannel(g, g->ch[c], &old, unit, unitType, scratch, &tr[g->ch[c]->ncomp == 3], &recv, &nrecv,
+                                &info.bytesMoved));
+    PetscCall(PetscFree(recv));
     for (int k = 0; k < 2; k++) {
       PetscCall(PetscSFDestroy(&tr[k].sf));
       PetscCall(PetscFree(tr[k].start));

@@ -45,14 +45,15 @@ typedef struct {
   char            name[64];
   PffChannelKind  kind;
   PetscInt        ncomp, width;
-  float          *data;     /* owned values, [local block][comp][n^3] */
-  float          *alloc;    /* data - PFF_CHANNEL_PAD: row kernels may read one value past either end */
-  float          *halo;     /* ghost and source boxes of the plan */
-  PffView        *views;    /* [nlocal][ncomp][27] */
-  PffFaceViews   *faces;    /* [nlocal], cell channels only (NULL otherwise) */
-  PffHaloPlan    *plan;     /* borrowed from the grid */
-  PetscBool       output;   /* written to frames (PffGridSetChannelOutput); checkpoints write every channel */
-  PffTransferType transfer; /* how the values follow an adapt (PffGridSetChannelTransfer) */
+  float          *data;               /* owned values, [local block][comp][n^3] */
+  float          *alloc;              /* data - PFF_CHANNEL_PAD: row kernels may read one value past either end */
+  float          *halo;               /* ghost and source boxes of the plan */
+  size_t          nalloc, nhaloAlloc; /* floats allocated at alloc and halo (an adapt reuses them when they fit) */
+  PffView        *views;              /* [nlocal][ncomp][27] */
+  PffFaceViews   *faces;              /* [nlocal], cell channels only (NULL otherwise) */
+  PffHaloPlan    *plan;               /* borrowed from the grid */
+  PetscBool       output;             /* written to frames (PffGridSetChannelOutput); checkpoints write every channel */
+  PffTransferType transfer;           /* how the values follow an adapt (PffGridSetChannelTransfer) */
 } PffChannel;
 
 struct _n_PffGrid {
