@@ -104,6 +104,7 @@ int main(int argc, char **argv)
   char     which[32] = "all";
 
   PetscCall(PetscInitialize(&argc, &argv, NULL, "pff-bench-grid: MSBG Laplacian vs streaming copy\n"));
+  PetscCall(PffHugePagesSetFromOptions(PETSC_COMM_WORLD));
   PetscCall(PffInitializePackage());
   PetscOptionsBegin(PETSC_COMM_WORLD, NULL, "Grid benchmark", NULL);
   PetscCall(PetscOptionsInt("-bench_n", "Finest cells per axis", NULL, n, &n, NULL));

@@ -54,6 +54,7 @@ int main(int argc, char **argv)
   PetscInt64   count[2];
 
   PetscCall(PetscInitialize(&argc, &argv, NULL, help));
+  PetscCall(PffHugePagesSetFromOptions(PETSC_COMM_WORLD));
   PetscCall(PffInitializePackage());
   PetscCall(PetscOptionsGetInt(NULL, NULL, "-bench_n", &n, NULL));
   PetscCall(PetscOptionsGetInt(NULL, NULL, "-bench_reps", &reps, NULL));

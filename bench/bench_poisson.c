@@ -532,6 +532,7 @@ int main(int argc, char **argv)
   PetscInt      nfail = 0;
 
   PetscCall(PetscInitialize(&argc, &argv, NULL, "pff-bench-poisson: preconditioners on the bubbly Poisson problem\n"));
+  PetscCall(PffHugePagesSetFromOptions(PETSC_COMM_WORLD));
   PetscCall(PffInitializePackage());
   PetscCall(ProcessOptions(PETSC_COMM_WORLD, &o));
   PetscCall(PetscLogStageRegister("Bench uniform", &stages[0]));

@@ -141,6 +141,7 @@ int main(int argc, char **argv)
   char           scene[32] = "drop";
 
   PetscCall(PetscInitialize(&argc, &argv, NULL, help));
+  PetscCall(PffHugePagesSetFromOptions(PETSC_COMM_WORLD));
   PetscCall(PffInitializePackage());
   PetscOptionsBegin(PETSC_COMM_WORLD, NULL, "pff-bench-tall", NULL);
   PetscCall(PffOptionsBoundedInt("-bench_n", "Finest cells per axis (a multiple of 32)", NULL, n, &n, NULL, 32));

@@ -25,6 +25,13 @@ PETSC_EXTERN PetscLogEvent PFF_MGLevel[PFF_MG_LOG_LEVELS];
 /* Registers the class id and every log event. Not collective; idempotent. */
 PETSC_EXTERN PetscErrorCode PffInitializePackage(void);
 
+/* Large arrays on transparent huge pages (src/core/memory.c): PffAdviseHugePages(p, bytes) advises the whole 2 MiB
+   pages inside an array of at least 4 MiB, if -sim_huge_pages (default true, read by
+   PffHugePagesSetFromOptions(), collective) is on. Call it before the array is first written. */
+PETSC_EXTERN void           PffAdviseHugePages(void *p, size_t bytes);
+PETSC_EXTERN PetscErrorCode PffHugePagesSetFromOptions(MPI_Comm comm);
+PETSC_EXTERN PetscBool      PffHugePagesEnabled(void);
+
 /* Fails with one message naming the first option that no object read (a misspelt or
    unknown key). Collective. Call once all SetFromOptions() have run. */
 PETSC_EXTERN PetscErrorCode PffOptionsCheckUnused(MPI_Comm comm);

@@ -245,7 +245,8 @@ int main(int argc, char **argv)
   PetscCall(PetscInitialize(&argc, &argv, NULL, usage));
   PetscCall(PetscPushErrorHandler(PffErrorHandler, &errstate));
   PetscCall(PetscOptionsHasName(NULL, NULL, "-help", &help));
-  ierr = PffSceneCreate(PETSC_COMM_WORLD, &scene);
+  ierr = PffHugePagesSetFromOptions(PETSC_COMM_WORLD);
+  if (!ierr) ierr = PffSceneCreate(PETSC_COMM_WORLD, &scene);
   if (!ierr) ierr = PffSceneSetFromOptions(scene);
   if (!ierr) ierr = PffOptionsCheckUnused(PETSC_COMM_WORLD);
   if (!ierr && !help) ierr = PffSceneRun(scene);

@@ -29,7 +29,8 @@ PetscErrorCode PffGridAddChannel(PffGrid g, const char name[], PffChannelKind ki
 
 /* Storage of n floats at *buf (capacity *cap), zeroed if zero: kept when it fits without wasting more than a
    quarter of it. An adapt reallocates every channel; fresh pages cost a page fault each on their first touch (and
-   PetscCalloc's zeroing touches them all), which took about a quarter of an adaptive run's grid changes. */
+   zeroing touches them all), which took about a quarter of an adaptive run's grid changes. New storage goes onto huge
+   pages (PffAdviseHugePages). */
 static PetscErrorCode ReuseFloats(size_t n, PetscBool zero, float **buf, size_t *cap)
 {
   PetscFunctionBeginUser;
@@ -38,10 +39,9 @@ static PetscErrorCode ReuseFloats(size_t n, PetscBool zero, float **buf, size_t 
     PetscFunctionReturn(PETSC_SUCCESS);
   }
   PetscCall(PetscFree(*buf));
-  if (zero)
-    PetscCall(PetscCalloc1(n, buf));
-  else
-    PetscCall(PetscMalloc1(n, buf));
+  PetscCall(PetscMalloc1(n, buf));
+  PffAdviseHugePages(*buf, sizeof(float) * n); /* before the first write */
+  if (zero) PetscCall(PetscArrayzero(*buf, n));
   *cap = n;
   PetscFunctionReturn(PETSC_SUCCESS);
 }

@@ -119,12 +119,14 @@ PetscErrorCode PffParticlesDestroy(PffParticles *part)
 
 /* Grows one array set to capacity cap, keeping its entries. In place, field by field: glibc's realloc
    moves a large block by remapping its pages, so a growth does not hold the old and the new store at once (a
-   split of many particles during a run would otherwise add a whole store to the peak). */
+   split of many particles during a run would otherwise add a whole store to the peak). The pages not yet written go
+   onto huge pages (PffAdviseHugePages). */
 static PetscErrorCode PffParticleSoAGrow(PffParticleSoA *s, PetscInt cap)
 {
   PetscFunctionBeginUser;
 #define PFF_PARTICLE_FIELD_GROW(name, type, k, f)                                                                      \
-  PetscCall(PetscRealloc(sizeof(type) * (size_t)(k) * (size_t)cap, &s->name));
+  PetscCall(PetscRealloc(sizeof(type) * (size_t)(k) * (size_t)cap, &s->name));                                         \
+  PffAdviseHugePages(s->name, sizeof(type) * (size_t)(k) * (size_t)cap);
   PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_GROW)
 #undef PFF_PARTICLE_FIELD_GROW
   PetscFunctionReturn(PETSC_SUCCESS);
