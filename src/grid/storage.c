@@ -29,7 +29,7 @@ PetscErrorCode PffGridAddChannel(PffGrid g, const char name[], PffChannelKind ki
 
 /* Storage of n floats at *buf (capacity *cap), zeroed if zero: kept when it fits without wasting more than a
    quarter of it. An adapt reallocates every channel; fresh pages cost a page fault each on their first touch (and
-   zeroing touches them all), which took about a quarter of an adaptive run's grid changes. New storage goes onto huge
+   zeroing touches them all), about 30 % of GridAdapt in a profile of an adaptive run. New storage goes onto huge
    pages (PffAdviseHugePages). */
 static PetscErrorCode ReuseFloats(size_t n, PetscBool zero, float **buf, size_t *cap)
 {
