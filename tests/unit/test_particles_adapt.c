@@ -2,16 +2,18 @@
 
    A closed 16^3 box of 8^3 blocks with three levels, liquid below y = 1/2 and air above, each particle
    with a velocity of its own. Checks:
-   - split: particles of level 2 in x < 1/2, each at a random place in its level-2 cell (as after
-     advection), asked for level 0 split into 64 children each; the volume (mass) per type is exact, the
-     momentum per type to 1e-12, every sub-cell of level 0 (half a finest cell) in the split region holds
-     exactly one particle (no hole where no parent sat), the rest is untouched, and every particle lies in
-     the block of its bin (the store bins again without a locate);
+   - split: particles of level 2 in x < 1/2 (all of them, then three quarters drawn by id), each at a random
+     place in its level-2 cell (as after advection), asked for level 0 split into 64 children each; the volume
+     (mass) per type is exact, the momentum per type to 1e-12, every sub-cell of level 0 (half a finest cell)
+     holds at most one particle and every finest cell as many as its level-2 cell had splitting parents (no
+     hole where no parent sat, also with fewer than 8 parents), the rest is untouched, and every particle lies
+     in the block of its bin (the store bins again without a locate);
    - coarsening: level-0 particles asked for level 1 (and level 2) are kept through delay - 1 calls, during
      which PffParticlesAdaptCounters has them hold the grid at their own level, then removed with
      probability 7/8 (63/64): the survivors' count within 5 sigma of the expectation, their
-     level the target, and the volume per type within 5 sigma of its expectation (reported as the drift) and,
-     since the coarsening is stratified per block, within one coarse particle per block of it;
+     level the target, exactly 8 in every cell of the target level (the coarsening is stratified per such
+     cell), and the volume per type within 5 sigma of its expectation (reported as the drift) and within one
+     coarse particle per block of it;
    - hysteresis: a call with target <= l_p resets the counter, so the next delay - 1 calls remove nothing;
    - independence of the partition: the ids that survive, hashed together, and the count equal those of
      the same run on one rank (PETSC_COMM_SELF on rank 0), also with threads.
@@ -82,7 +84,8 @@ static PetscErrorCode Momentum(MPI_Comm comm, PffParticles p, PetscReal mom[2][3
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-static PetscErrorCode CaseSplit(MPI_Comm comm)
+/* share: the fraction of the level-2 parents in x < 1/2 that split (by a draw from the id), the others stay */
+static PetscErrorCode CaseSplit(MPI_Comm comm, PetscReal share)
 {
   PffGrid               grid;
   PffParticles          p;
@@ -90,7 +93,7 @@ static PetscErrorCode CaseSplit(MPI_Comm comm)
   PffParticleAdaptStats st;
   PetscReal             mom0[2][3], mom1[2][3];
   int8_t               *target;
-  PetscInt             *count, nsplit = 0, nbad = 0;
+  PetscInt             *count, *sub, nsplit = 0, nbad = 0, parents[64] = {0};
   PetscInt64            n0, n1;
 
   PetscFunctionBeginUser;
@@ -106,9 +109,13 @@ static PetscErrorCode CaseSplit(MPI_Comm comm)
   PetscCall(Momentum(comm, p, mom0));
   PetscCall(PetscMalloc1(a.n + 1, &target));
   for (PetscInt i = 0; i < a.n; i++) {
-    target[i] = (int8_t)(a.x[3 * i] < 8 ? 0 : 2);
-    nsplit += a.x[3 * i] < 8;
+    const PetscBool split = (PetscBool)(a.x[3 * i] < 8 && PffTestUniform01(PffTestKey(a.id[i], 3, 0, 0)) < share);
+    target[i]             = (int8_t)(split ? 0 : 2);
+    nsplit += split;
+    if (split)
+      parents[(PetscInt)(a.x[3 * i] / 4) + 4 * ((PetscInt)(a.x[3 * i + 1] / 4) + 4 * (PetscInt)(a.x[3 * i + 2] / 4))]++;
   }
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, parents, 64, MPIU_INT, MPI_SUM, comm));
   n0 = a.n;
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &n0, 1, MPIU_INT64, MPI_SUM, comm));
   PetscCall(PffParticlesAdaptLevels(p, target, DELAY, 1, &st));
@@ -128,15 +135,19 @@ static PetscErrorCode CaseSplit(MPI_Comm comm)
       PetscCheck(PetscAbsReal(mom1[t][d] - mom0[t][d]) <= 1e-12 * st.volumeBefore[t], comm, PETSC_ERR_PLIB,
                  "type %d: momentum %d %.17g -> %.17g", t, d, (double)mom0[t][d], (double)mom1[t][d]);
   }
-  /* one particle per level-0 sub-cell (32^3 sub-cells over the box) in the split half; levels */
-  PetscCall(PetscCalloc1(32 * 32 * 32, &count));
+  /* every finest cell of a level-2 cell C gets as many children as C had splitting parents, at most one per level-0
+     sub-cell (32^3 over the box): no hole where no parent sat, also when C had fewer than 8; levels (a level-2
+     particle in x < 1/2 did not split, nor lies in a sub-cell of its own) */
+  PetscCall(PetscCalloc2(16 * 16 * 16, &count, 32 * 32 * 32, &sub));
   for (PetscInt i = 0; i < a.n; i++) {
-    const PetscInt l = PffParticleWordLevel(a.word[i]), inSplit = a.x[3 * i] < 8;
-    if (l != (inSplit ? 0 : 2)) nbad++;
-    if (!inSplit) continue;
+    const PetscInt l = PffParticleWordLevel(a.word[i]);
+    if (l != 0 && l != 2) nbad++;
+    if (l == 0 && a.x[3 * i] >= 8) nbad++;
+    if (l != 0) continue;
     PetscInt s[3];
     for (int d = 0; d < 3; d++) s[d] = (PetscInt)PetscFloorReal(2 * (PetscReal)a.x[3 * i + d]);
-    count[s[0] + 32 * (s[1] + 32 * s[2])]++;
+    sub[s[0] + 32 * (s[1] + 32 * s[2])]++;
+    count[s[0] / 2 + 16 * (s[1] / 2 + 16 * (s[2] / 2))]++;
   }
   /* the bins after the split: every particle in the block of its bin */
   {
@@ -152,17 +163,25 @@ static PetscErrorCode CaseSplit(MPI_Comm comm)
                      "particle %" PetscInt_FMT " lies outside the block of its bin %" PetscInt_FMT, i, lb);
     }
   }
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, count, 32 * 32 * 32, MPIU_INT, MPI_SUM, comm));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, count, 16 * 16 * 16, MPIU_INT, MPI_SUM, comm));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, sub, 32 * 32 * 32, MPIU_INT, MPI_SUM, comm));
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, &nbad, 1, MPIU_INT, MPI_SUM, comm));
   PetscCheck(nbad == 0, comm, PETSC_ERR_PLIB, "%" PetscInt_FMT " particles with the wrong level", nbad);
   for (PetscInt c = 0; c < 32 * 32 * 32; c++)
-    PetscCheck(count[c] == (c % 32 < 16 ? 1 : 0), comm, PETSC_ERR_PLIB,
-               "sub-cell %" PetscInt_FMT " holds %" PetscInt_FMT " particles", c, count[c]);
-  PetscCall(PetscFree(count));
+    PetscCheck(sub[c] <= 1, comm, PETSC_ERR_PLIB, "sub-cell %" PetscInt_FMT " holds %" PetscInt_FMT " particles", c,
+               sub[c]);
+  for (PetscInt c = 0; c < 16 * 16 * 16; c++) {
+    const PetscInt i = c % 16, j = (c / 16) % 16, k = c / 256, nc = parents[i / 4 + 4 * (j / 4 + 4 * (k / 4))];
+    PetscCheck(count[c] == nc, comm, PETSC_ERR_PLIB,
+               "finest cell (%" PetscInt_FMT ", %" PetscInt_FMT ", %" PetscInt_FMT ") holds %" PetscInt_FMT
+               " children, its level-2 cell had %" PetscInt_FMT " parents",
+               i, j, k, count[c], nc);
+  }
+  PetscCall(PetscFree2(count, sub));
   PetscCall(PetscPrintf(comm,
-                        "split: %" PetscInt64_FMT " particles into %" PetscInt64_FMT ", %" PetscInt64_FMT
-                        " particles; volume and momentum per type kept\n",
-                        st.split, st.children, n1));
+                        "split (share %g): %" PetscInt64_FMT " particles into %" PetscInt64_FMT ", %" PetscInt64_FMT
+                        " particles; volume and momentum per type kept, every finest cell as many as its parents\n",
+                        (double)share, st.split, st.children, n1));
   PetscCall(Destroy(&grid, &p));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
@@ -203,6 +222,24 @@ static PetscErrorCode Coarsen(MPI_Comm comm, PetscInt to, PetscBool hysteresis, 
                  "call %" PetscInt_FMT ": %" PetscInt64_FMT " particles coarsened before the delay", calls, st.marked);
   }
   PetscCall(PffParticlesGetArrays(p, &a));
+  if (!hysteresis) {
+    /* stratified per cell of the target level: each of them had 8^(to + 1) candidates and keeps exactly 8, where
+       draws per block left some cells with half as many and others with twice (holes after a later split) */
+    const PetscInt nc = 16 >> to;
+    PetscInt      *count;
+    PetscCall(PetscCalloc1(nc * nc * nc, &count));
+    for (PetscInt i = 0; i < a.n; i++) {
+      PetscInt c[3];
+      for (int e = 0; e < 3; e++) c[e] = (PetscInt)a.x[3 * i + e] >> to;
+      count[c[0] + nc * (c[1] + nc * c[2])]++;
+    }
+    PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, count, nc * nc * nc, MPIU_INT, MPI_SUM, comm));
+    for (PetscInt c = 0; c < nc * nc * nc; c++)
+      PetscCheck(count[c] == 8, comm, PETSC_ERR_PLIB,
+                 "cell %" PetscInt_FMT " of level %" PetscInt_FMT " keeps %" PetscInt_FMT " particles, not 8", c, to,
+                 count[c]);
+    PetscCall(PetscFree(count));
+  }
   *hash = 0;
   for (PetscInt i = 0; i < a.n; i++) {
     PetscCheck(PffParticleWordLevel(a.word[i]) == (hysteresis ? 0 : to), PETSC_COMM_SELF, PETSC_ERR_PLIB,
@@ -268,7 +305,8 @@ int main(int argc, char **argv)
 {
   PetscFunctionBeginUser;
   PetscCall(PetscInitialize(&argc, &argv, NULL, help));
-  PetscCall(CaseSplit(PETSC_COMM_WORLD));
+  PetscCall(CaseSplit(PETSC_COMM_WORLD, 1.0));
+  PetscCall(CaseSplit(PETSC_COMM_WORLD, 0.75));
   PetscCall(CaseCoarsen(PETSC_COMM_WORLD, 1));
   PetscCall(CaseCoarsen(PETSC_COMM_WORLD, 2));
   PetscCall(PetscFinalize());
