@@ -497,6 +497,7 @@ static PetscErrorCode PffCorrectionDisplacement(PffFlow f, PffPressureStats *st)
   KSP       ksp;
   PetscReal rtol, atol, dtol;
   PetscInt  maxit, nlocal;
+  PetscBool guess;
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
@@ -510,10 +511,11 @@ static PetscErrorCode PffCorrectionDisplacement(PffFlow f, PffPressureStats *st)
   /* a fraction of a cell needs no 1e-8: the solve runs at its own tolerance, then the pressure's is back */
   PetscCall(PffPressureGetKSP(f->press, &ksp));
   PetscCall(KSPGetTolerances(ksp, &rtol, &atol, &dtol, &maxit));
+  PetscCall(KSPGetInitialGuessNonzero(ksp, &guess));
   PetscCall(KSPSetTolerances(ksp, f->volCorrRtol, atol, dtol, maxit));
   PetscCall(KSPSetInitialGuessNonzero(ksp, PETSC_FALSE));
   PetscCall(PffPressureProject(f->press, f->chUt, 1.0, f->chCdiv, f->chQ, st));
-  PetscCall(KSPSetInitialGuessNonzero(ksp, PETSC_TRUE));
+  PetscCall(KSPSetInitialGuessNonzero(ksp, guess));
   /* while the correction's tolerance is in force, which the message quotes */
   PetscCall(PffPressureCheckSolve(f->press, st, "Correction", f->step + 1, f->t,
                                   "loosen -flow_volume_correction_rtol or raise -pressure_ksp_max_it"));
