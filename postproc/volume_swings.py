@@ -3,6 +3,7 @@
 step). A volume that the correction and its control hold moves smoothly; a loop that lags or overshoots makes it swing
 with a period of two steps (docs/validation.md, "Holes after a grid change"). Prints one line:
     VOLSWING steps=<n> largest=<largest |change| in % of the first volume> alternating=<k> threshold=<%>
+             end=<drift of the last row, %> low=<lowest drift, %> high=<highest drift, %>
 where k counts the steps whose change and the previous step's are both above the threshold and of opposite sign.
 Fails (exit 1) when k exceeds --max-alternating or the largest change exceeds --max-step, or without the column.
 Usage: /usr/bin/python3 postproc/volume_swings.py <diag.csv> [--threshold 0.1] [--max-alternating 0] [--max-step 100]
@@ -32,7 +33,9 @@ def main():
     big = np.abs(d) > a.threshold
     alternating = int(np.sum(big[1:] & big[:-1] & (d[1:] * d[:-1] < 0)))
     largest = float(np.max(np.abs(d)))
-    print("VOLSWING steps=%d largest=%.4f alternating=%d threshold=%g" % (d.size, largest, alternating, a.threshold))
+    drift = 100.0 * (v / v[0] - 1)
+    print("VOLSWING steps=%d largest=%.4f alternating=%d threshold=%g end=%+.4f low=%+.4f high=%+.4f" %
+          (d.size, largest, alternating, a.threshold, drift[-1], drift.min(), drift.max()))
     if alternating > a.max_alternating or largest > a.max_step:
         print("VOLSWING: beyond the bounds (alternating %d > %d or largest %.4f > %g)" %
               (alternating, a.max_alternating, largest, a.max_step))

@@ -14,7 +14,8 @@
 #   PFF_EXTRA="-flow_volume_control 0" ...           options appended to every run; the run's name and output
 #                                                    directory carry them (spaces as _), e.g. the volume control's
 #                                                    rows of docs/validation.md, "The volume control on adaptive grids"
-# adaptive.log also gets the number of steps that changed the grid (blocks refined or coarsened).
+# adaptive.log also gets the number of steps that changed the grid (blocks refined or coarsened) and the liquid
+# volume's swings (postproc/volume_swings.py --threshold 0.2: largest step change, alternating steps, drift range).
 set -euo pipefail
 source "$(dirname "${BASH_SOURCE[0]}")/../setup.sh"
 W=${PFF_W:-64}
@@ -59,7 +60,10 @@ bench() {
   echo "$name,$W,$levels,$band,$ranks,$OMP_NUM_THREADS,$steps,$wall,$sps,$rss,$particles,$spike,$dev,$inside,${share:-0},$start,$load,$rev" | tee -a "$csv"
   local changes
   changes=$(grep -E '^step ' "$dir/log.txt" | grep -cE 'blocks \+[1-9]|blocks \+[0-9]+ -[1-9]' || true)
-  echo "# $name W=$W $rev: $line grid_changes=$changes" >>"$out/adaptive.log"
+  # the liquid volume's step-to-step swings (docs/validation.md, "Holes after a grid change"); never fails the run
+  local swings
+  swings=$($py "$PFF_ROOT/postproc/volume_swings.py" "$dir/rt3d_diag.csv" --threshold 0.2 --max-alternating 1000000 | head -n 1)
+  echo "# $name W=$W $rev: $line grid_changes=$changes $swings" >>"$out/adaptive.log"
 }
 
 for run in ${PFF_RUNS:-uniform adaptive}; do
