@@ -54,6 +54,16 @@ static inline uint32_t PffParticleWordSetLevel(uint32_t w, PetscInt l, PetscInt 
 {
   return (w & 0x0fffff0fu) | (uint32_t)l << 4 | (uint32_t)PetscMin(c, 15) << 28;
 }
+/* One adaptation's deferred-coarsening counter of *w for a particle that asks for level wish (clipped to [0, lmax]):
+   it counts while the particle asks for a coarser level than its own and resets otherwise. Returns the level the
+   particle asks for with the hold applied: its own while its coarsening is pending (PffParticlesAdaptCounters does
+   this for a whole store; the flow's adaptation inline in its pass over the particles). */
+static inline PetscInt PffParticleWordCountWish(uint32_t *w, PetscInt wish, PetscInt lmax, PetscInt delay)
+{
+  const PetscInt l = PffParticleWordLevel(*w), t = PetscClipInterval(wish, 0, lmax);
+  *w = PffParticleWordSetLevel(*w, l, t > l ? PetscMin(PffParticleWordCoarsen(*w) + 1, 15) : 0);
+  return PffParticleWordPending(*w, delay) ? l : t;
+}
 /* w with the flag bits set (on true) or cleared (on false) */
 static inline uint32_t PffParticleWordSetFlags(uint32_t w, uint32_t flags, PetscBool on)
 {

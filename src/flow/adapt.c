@@ -99,7 +99,7 @@ static inline PetscInt DualIndex(const PffFlowAdaptCtx *a, const PetscInt b[3])
 
 static inline PetscInt LevelOf(const PffFlowAdaptCtx *a, float d)
 {
-  const float l = (float)(a->band / (PetscReal)a->n0) * d; /* >= 0: the cast floors */
+  const float l = a->lscale * d; /* >= 0: the cast floors */
   return l >= (float)(a->levels - 1) ? a->levels - 1 : (PetscInt)l;
 }
 
@@ -306,7 +306,7 @@ static PetscErrorCode Distance(PffFlow f)
 
 /* Steps 6 and 1 over the binned particles: the level each particle asks for, l = min(L - 1,
    floor(beta d / n0)), into a->target; with counters, the deferred-coarsening counters advance and a
-   particle whose coarsening is pending asks for its own level instead (PffParticlesAdaptCounters), so a
+   particle whose coarsening is pending asks for its own level instead (PffParticleWordCountWish), so a
    block coarsens only after its particles asked for it -adapt_coarsen_delay times in a row. Then per
    block the finest level asked by the particles whose box x_p +- (2^l + margin) touches it, merged over
    ranks into map; blocks no particle touches take L - 1, blocks inactive at set-up stay inactive. Without
@@ -337,28 +337,12 @@ static PetscErrorCode TargetsAndMap(PffFlow f, PetscBool counters, PetscInt map[
     PetscCall(PetscMalloc1(a->ntarget, &a->target));
   }
   PetscCall(PetscMalloc1(54 * (size_t)PetscMax(nlocal, 1), &reach));
-  const float n0f    = (float)a->n0;
-  int8_t     *target = a->target;
-  {
-    const PffFlowAdaptCtx ac   = *a;
-    const float *const    x    = pa.x;
-    const PetscBool       more = (PetscBool)(ac.vlev || ac.nbox + ac.nsphere > 0); /* regions or vorticity */
-    /* in chunks: the dual cells of a chunk in a loop that vectorises, then their levels (the distance
-       interpolated only where a dual cell spans levels) */
-#pragma omp parallel for schedule(static)
-    for (PetscInt c0 = 0; c0 < pa.n; c0 += PFF_ADAPT_CHUNK) {
-      const PetscInt m = PetscMin(PFF_ADAPT_CHUNK, pa.n - c0);
-      int32_t        dual[PFF_ADAPT_CHUNK];
-      for (PetscInt j = 0; j < m; j++) dual[j] = DualCellOf(&ac, &x[3 * (c0 + j)]);
-      for (PetscInt j = 0; j < m; j++) {
-        const float   *g = &x[3 * (c0 + j)];
-        const PetscInt l = LevelAt(&ac, dual[j], g);
-        target[c0 + j]   = (int8_t)(more ? Ask(&ac, g, l) : l);
-      }
-    }
-  }
-  /* a particle whose coarsening is pending holds the grid at its level (the blocks' hysteresis) */
-  if (counters) PetscCall(PffParticlesAdaptCounters(f->part, target, a->delay));
+  const float           n0f    = (float)a->n0;
+  int8_t *const         target = a->target;
+  const PffFlowAdaptCtx ac     = *a;
+  const PetscBool       more   = (PetscBool)(ac.vlev || ac.nbox + ac.nsphere > 0); /* regions or vorticity */
+  /* one pass per block over its bin: the levels asked, the counters and the regions the particles' boxes reach,
+     each particle read once (three passes over the store before, a quarter of the adaptation's time) */
 #pragma omp parallel for schedule(dynamic, 1) reduction(&& : ok)
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo info;
@@ -373,24 +357,41 @@ static PetscErrorCode TargetsAndMap(PffFlow f, PetscBool counters, PetscInt map[
        the block along each axis); the loop only marks which (held, level, code) occur, a store without a
        dependence from one particle to the next, and the few marked codes are spread into the regions after it
        (most particles reach none but their own block) */
-    const float *const x  = pa.x;
-    const PetscInt     i0 = pa.start[lb], i1 = pa.start[lb + 1];
+    const float *const x = pa.x;
+    uint32_t *const    w = pa.word;
     float              rp[PFF_GRID_MAX_LEVELS];
-    uint8_t            seen[2][PFF_GRID_MAX_LEVELS][64];
+    uint8_t            seen[2 * PFF_GRID_MAX_LEVELS * 64]; /* [held][level][code] */
     memset(seen, 0, sizeof(seen));
     for (PetscInt l = 0; l <= lmax; l++) rp[l] = (float)((PetscInt)1 << l) + (float)a->margin;
-    for (PetscInt i = i0; i < i1; i++) {
-      const PetscInt l    = target[i];
-      const int      held = counters && PffParticleWordPending(pa.word[i], a->delay);
-      const float    ux = x[3 * i] - lo[0], uy = x[3 * i + 1] - lo[1], uz = x[3 * i + 2] - lo[2], rl = rp[l];
-      const int      code = (ux - rl < 0) | (ux + rl >= n0f) << 1 | (uy - rl < 0) << 2 | (uy + rl >= n0f) << 3 |
-                       (uz - rl < 0) << 4 | (uz + rl >= n0f) << 5;
-      seen[held][l][code] = 1;
+    /* in chunks: the dual cells of a chunk in a loop that vectorises, then their levels (the distance
+       interpolated only where a dual cell spans levels) */
+    for (PetscInt c0 = pa.start[lb]; c0 < pa.start[lb + 1]; c0 += PFF_ADAPT_CHUNK) {
+      const PetscInt m = PetscMin(PFF_ADAPT_CHUNK, pa.start[lb + 1] - c0);
+      int32_t        dual[PFF_ADAPT_CHUNK];
+      for (PetscInt j = 0; j < m; j++) dual[j] = DualCellOf(&ac, &x[3 * (c0 + j)]);
+      for (PetscInt j = 0; j < m; j++) {
+        const float *g = &x[3 * (c0 + j)];
+        PetscInt     l = LevelAt(&ac, dual[j], g);
+        if (more) l = Ask(&ac, g, l);
+        /* a particle whose coarsening is pending holds the grid at its level (the blocks' hysteresis) */
+        if (counters) l = PffParticleWordCountWish(&w[c0 + j], l, lmax, ac.delay);
+        target[c0 + j] = (int8_t)l;
+      }
+      int32_t key[PFF_ADAPT_CHUNK]; /* the codes in a loop that vectorises, then marked */
+      for (PetscInt j = 0; j < m; j++) {
+        const PetscInt i = c0 + j, l = target[i];
+        const int      held = counters && PffParticleWordPending(w[i], ac.delay);
+        const float    ux = x[3 * i] - lo[0], uy = x[3 * i + 1] - lo[1], uz = x[3 * i + 2] - lo[2], rl = rp[l];
+        const int      code = (ux - rl < 0) | (ux + rl >= n0f) << 1 | (uy - rl < 0) << 2 | (uy + rl >= n0f) << 3 |
+                         (uz - rl < 0) << 4 | (uz + rl >= n0f) << 5;
+        key[j] = (int32_t)((held * PFF_GRID_MAX_LEVELS + l) * 64 + code);
+      }
+      for (PetscInt j = 0; j < m; j++) seen[key[j]] = 1;
     }
     for (int held = 0; held < 2; held++)
       for (PetscInt l = 0; l <= lmax; l++)
         for (int code = 0; code < 64; code++) {
-          if (!seen[held][l][code]) continue;
+          if (!seen[(held * PFF_GRID_MAX_LEVELS + l) * 64 + code]) continue;
           PetscInt *rr = r + 27 * held, rlo[3], rhi[3];
           for (int d = 0; d < 3; d++) {
             rlo[d] = (code >> (2 * d)) & 1 ? 0 : 1;
@@ -473,9 +474,10 @@ PetscErrorCode PffFlowAdaptSetUp_Private(PffFlow f)
              "-adapt_levels %" PetscInt_FMT " is invalid: must be 0 (off) or in [2, -grid_levels = %" PetscInt_FMT "]",
              a->levels, nlevels);
   PetscCall(PffGridGetRaster(f->grid, nb, &level, NULL));
-  a->s  = (PetscInt)1 << (a->levels - 1);
-  a->is = 1.0f / (float)a->s;
-  a->m  = a->n0 / a->s;
+  a->lscale = (float)(a->band / (PetscReal)a->n0);
+  a->s      = (PetscInt)1 << (a->levels - 1);
+  a->is     = 1.0f / (float)a->s;
+  a->m      = a->n0 / a->s;
   for (int d = 0; d < 3; d++) a->C[d] = nb[d] * a->m;
   const PetscInt nblocks = nb[0] * nb[1] * nb[2], ntot = a->C[0] * a->C[1] * a->C[2];
   PetscCall(PetscMalloc4(nblocks, &a->base, nblocks, &a->request, ntot, &a->dist, ntot, &a->work));

@@ -273,8 +273,10 @@ PetscErrorCode PffFlowMaxParticleSpeed_Private(PffFlow f, PetscReal *umax)
     const float *v   = a.v;
     PetscReal    mx  = 0;
     int          bad = 0;
-    /* in threads and vectorised: s >= 0, so !(s <= max) holds exactly for NaN and +inf */
-#pragma omp parallel for reduction(max : mx) reduction(| : bad) schedule(static)
+    /* in threads and vectorised (simd: the stride-3 loads with the conversion to double kept it scalar, 7 ms per
+       step for 1.75 M particles); s >= 0, so !(s <= max) holds exactly for NaN and +inf, and a max is the same in
+       any order */
+#pragma omp parallel for simd reduction(max : mx) reduction(| : bad) schedule(static)
     for (PetscInt i = 0; i < a.n; i++) {
       const PetscReal vx = v[3 * i], vy = v[3 * i + 1], vz = v[3 * i + 2], s = vx * vx + vy * vy + vz * vz;
       mx = s > mx ? s : mx;

@@ -10,6 +10,7 @@
 typedef struct {
   PetscInt    levels, interval, delay; /* -adapt_levels (0: off), -adapt_interval, -adapt_coarsen_delay */
   PetscReal   band, margin;            /* -adapt_band (beta_bw), -adapt_margin (finest cells) */
+  float       lscale;                  /* beta_bw / n0: the level per finest cell of distance */
   PetscReal   pweight, imbalance;      /* -adapt_particle_weight, -adapt_imbalance */
   PetscInt64 *pwork;                   /* [nblocks] particle work per block */
   PetscInt    n0, s, m, C[3];          /* block size; lattice cell size s = 2^(levels-1), m per block, C per axis */

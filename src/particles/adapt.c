@@ -236,16 +236,6 @@ static void PlaceChildren(PffParticles p, PetscInt i, PetscInt r, PetscInt t, co
   }
 }
 
-/* One adaptation's deferred-coarsening counter of *w for a particle that asks for level wish (clipped to
-   [0, lmax]): it counts while the particle asks for a coarser level than its own and resets otherwise. Returns
-   the level the particle asks for with the hold applied: its own while its coarsening is pending. */
-static inline PetscInt CountWish(uint32_t *w, PetscInt wish, PetscInt lmax, PetscInt delay)
-{
-  const PetscInt l = PffParticleWordLevel(*w), t = PetscClipInterval(wish, 0, lmax);
-  *w = PffParticleWordSetLevel(*w, l, t > l ? PetscMin(PffParticleWordCoarsen(*w) + 1, 15) : 0);
-  return PffParticleWordPending(*w, delay) ? l : t;
-}
-
 PetscErrorCode PffParticlesAdaptCounters(PffParticles p, int8_t wish[], PetscInt delay)
 {
   const PetscInt n = p->n, lmax = p->nlevels - 1;
@@ -254,7 +244,7 @@ PetscErrorCode PffParticlesAdaptCounters(PffParticles p, int8_t wish[], PetscInt
   PetscCheck(delay >= 1 && delay <= 15, p->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "PffParticlesAdaptCounters: the coarsening delay %" PetscInt_FMT " must be in [1, 15]", delay);
 #pragma omp parallel for schedule(static)
-  for (PetscInt i = 0; i < n; i++) wish[i] = (int8_t)CountWish(&p->s.word[i], wish[i], lmax, delay);
+  for (PetscInt i = 0; i < n; i++) wish[i] = (int8_t)PffParticleWordCountWish(&p->s.word[i], wish[i], lmax, delay);
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -91,8 +91,8 @@ PetscErrorCode PffParticlesBin(PffParticles p)
    PFF_SORT_STAYS keep their order, so their destinations increase with their places. The others (the
    movers) are packed into a buffer; the stayers that move left are moved in ascending order and those
    that move right in descending order, so none overwrites a stayer not yet moved (a place a stayer
-   moves to is a mover's, a dropped particle's or an already moved stayer's); then the movers are unpacked. One
-   pass over the store instead of two per 4-byte lane, and scratch for the movers only. */
+   moves to is a mover's, a dropped particle's or an already moved stayer's), in runs; then the movers are
+   unpacked. One pass over the store instead of two per 4-byte lane, and scratch for the movers only. */
 static PetscErrorCode PffParticlesSortInPlace(PffParticles p, PetscInt movers)
 {
   const PetscInt n   = p->n;
@@ -113,13 +113,30 @@ static PetscErrorCode PffParticlesSortInPlace(PffParticles p, PetscInt movers)
       memcpy(buf + rec * (size_t)m + PFF_PARTICLE_BYTES, &dst[i], sizeof(int32_t));
       m++;
     }
-  for (PetscInt i = 0; i < n; i++) {
+  /* runs of stayers that keep their distance move as one memmove per field: between two movers or drops a
+     whole bin, and usually many, shift by the same offset (one run per field instead of one copy per particle
+     and field: the sort after a split of a few dozen particles moved every particle after them one by one) */
+  for (PetscInt i = 0; i < n;) {
     const PetscInt d = dst[i] & ~PFF_SORT_STAYS;
-    if (dst[i] != PFF_SORT_DROP && (dst[i] & PFF_SORT_STAYS) && d < i) PffParticlesMove_Private(p, d, i);
+    if (dst[i] == PFF_SORT_DROP || !(dst[i] & PFF_SORT_STAYS) || d >= i) {
+      i++;
+      continue;
+    }
+    PetscInt j = i + 1;
+    while (j < n && dst[j] == (int32_t)((d + (j - i)) | PFF_SORT_STAYS)) j++;
+    PffParticlesMoveRange_Private(p, d, i, j - i);
+    i = j;
   }
-  for (PetscInt i = n - 1; i >= 0; i--) {
+  for (PetscInt i = n - 1; i >= 0;) {
     const PetscInt d = dst[i] & ~PFF_SORT_STAYS;
-    if (dst[i] != PFF_SORT_DROP && (dst[i] & PFF_SORT_STAYS) && d > i) PffParticlesMove_Private(p, d, i);
+    if (dst[i] == PFF_SORT_DROP || !(dst[i] & PFF_SORT_STAYS) || d <= i) {
+      i--;
+      continue;
+    }
+    PetscInt j = i - 1; /* the run is (j, i] */
+    while (j >= 0 && dst[j] == (int32_t)((d - (i - j)) | PFF_SORT_STAYS)) j--;
+    PffParticlesMoveRange_Private(p, d - (i - j - 1), j + 1, i - j);
+    i = j;
   }
   for (PetscInt m = 0; m < movers; m++) {
     int32_t d;
@@ -158,32 +175,56 @@ PetscErrorCode PffParticlesSort_Private(PffParticles p)
   {
     const PetscInt th = omp_get_thread_num(), nth = omp_get_num_threads(), i0 = n * th / nth, i1 = n * (th + 1) / nth;
     PetscInt      *c = counts + (size_t)th * (size_t)(nl + 1);
-    for (PetscInt i = i0; i < i1; i++)
-      if (dst[i] != PFF_SORT_DROP) c[dst[i] & ~PFF_SORT_STAYS]++;
+    /* the particles come mostly in runs of one bin (binned before): a run's count stays in a register, where
+       c[b]++ per particle waited on its own store (about 5 ms per sort of 1.75 M particles) */
+    {
+      PetscInt cur = -1, run = 0;
+      for (PetscInt i = i0; i < i1; i++) {
+        if (dst[i] == PFF_SORT_DROP) continue;
+        const PetscInt b = dst[i] & ~PFF_SORT_STAYS;
+        if (b != cur) {
+          if (cur >= 0) c[cur] += run;
+          cur = b;
+          run = 0;
+        }
+        run++;
+      }
+      if (cur >= 0) c[cur] += run;
+    }
 #pragma omp barrier
-#pragma omp single
+#pragma omp          single
     {
       /* counts[th][lb] becomes the first slot of thread th's particles of block lb */
       PetscInt off = 0;
       for (PetscInt lb = 0; lb < nl; lb++) {
-        start[lb] = off;
-        for (PetscInt q = 0; q < nth; q++) {
-          PetscInt *cq = counts + (size_t)q * (size_t)(nl + 1), m = cq[lb];
-          cq[lb] = off;
-          off += m;
+                 start[lb] = off;
+                 for (PetscInt q = 0; q < nth; q++) {
+                   PetscInt *cq = counts + (size_t)q * (size_t)(nl + 1), m = cq[lb];
+                   cq[lb] = off;
+                   off += m;
         }
       }
       start[nl] = off;
     }
-    for (PetscInt i = i0; i < i1; i++) {
-      if (dst[i] == PFF_SORT_DROP) {
-        moved++;
-        continue;
+    {
+               PetscInt cur = -1, next = 0; /* the next slot of bin cur, in a register as above */
+               for (PetscInt i = i0; i < i1; i++) {
+                 if (dst[i] == PFF_SORT_DROP) {
+                   moved++;
+                   continue;
+        }
+                 const PetscInt b = dst[i] & ~PFF_SORT_STAYS;
+                 if (b != cur) {
+                   if (cur >= 0) c[cur] = next;
+          cur  = b;
+                   next = c[b];
+        }
+                 const int32_t stays = dst[i] & PFF_SORT_STAYS, d = (int32_t)next++;
+                 dst[i] = d | stays;
+                 moved += d != i;
+                 movers += !stays;
       }
-      const int32_t stays = dst[i] & PFF_SORT_STAYS, d = (int32_t)c[dst[i] & ~PFF_SORT_STAYS]++;
-      dst[i] = d | stays;
-      moved += d != i;
-      movers += !stays;
+               if (cur >= 0) c[cur] = next;
     }
   }
 

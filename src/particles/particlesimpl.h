@@ -131,16 +131,8 @@ static inline PetscInt PffParticlesLocate_Private(PffParticles p, const float g[
   return PffParticlesLocateReal_Private(p, r, level);
 }
 
-/* Moves particle src to slot dst (compaction after removals or sends). */
-static inline void PffParticlesMove_Private(PffParticles p, PetscInt dst, PetscInt src)
-{
-#define PFF_PARTICLE_FIELD_MOVE(name, type, k, f)                                                                      \
-  for (int c = 0; c < (k); c++) p->s.name[(k)*dst + c] = p->s.name[(k)*src + c];
-  PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_MOVE)
-#undef PFF_PARTICLE_FIELD_MOVE
-}
-
-/* Moves the particles [src, src + count) to [dst, dst + count), dst <= src (runs of a compaction). */
+/* Moves the particles [src, src + count) to [dst, dst + count); the ranges may overlap (runs of a compaction or a
+   sort). */
 static inline void PffParticlesMoveRange_Private(PffParticles p, PetscInt dst, PetscInt src, PetscInt count)
 {
 #define PFF_PARTICLE_FIELD_MOVE_RANGE(name, type, k, f)                                                                \
