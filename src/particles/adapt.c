@@ -253,24 +253,27 @@ PetscErrorCode PffParticlesAdaptLevels(PffParticles p, const int8_t target[], Pe
 {
   PffParticleAdaptStats st = {0};
   const PetscInt        n = p->n, lmax = p->nlevels - 1;
-  PetscInt64            extra = 0, nsplit = 0, marked = 0, removed = 0;
+  PetscInt64            extra = 0, nsplit = 0, marked = 0, removed = 0, h[256] = {0};
   PetscReal             vl0 = 0, va0 = 0, dl = 0, da = 0; /* volumes before, and their changes, per type */
 
   PetscFunctionBeginUser;
   PetscCheck(delay >= 1 && delay <= 15, p->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "PffParticlesAdaptLevels: the coarsening delay %" PetscInt_FMT " must be in [1, 15]", delay);
   PetscCall(PetscLogEventBegin(PFF_PartAdapt, 0, 0, 0, 0));
-  /* volumes, splits and coarsening candidates counted in threads (each particle on its own) */
-#pragma omp parallel for reduction(+ : extra, nsplit, marked, vl0, va0) schedule(static)
-  for (PetscInt i = 0; i < n; i++) {
-    const uint32_t  w = p->s.word[i];
-    const PetscInt  l = PffParticleWordLevel(w), t = PetscClipInterval((PetscInt)target[i], 0, lmax);
-    const PetscBool liquid = (PetscBool)(PffParticleWordType(w) == PFF_PARTICLE_LIQUID);
-    const PetscReal vol    = (PetscReal)((PetscInt64)1 << (3 * l));
-    if (liquid)
+  /* volumes from the particles per type and level (sums of integers 8^l, exact), splits and coarsening candidates
+     counted in threads (each particle on its own) */
+  PffParticlesWordHistogram_Private(p->s.word, n, h);
+  for (int b = 0; b < 256; b++) {
+    const PetscReal vol = (PetscReal)h[b] * (PetscReal)((PetscInt64)1 << (3 * PffParticleWordLevel((uint32_t)b)));
+    if (PffParticleWordType((uint32_t)b) == PFF_PARTICLE_LIQUID)
       vl0 += vol;
     else
       va0 += vol;
+  }
+#pragma omp parallel for reduction(+ : extra, nsplit, marked) schedule(static)
+  for (PetscInt i = 0; i < n; i++) {
+    const uint32_t w = p->s.word[i];
+    const PetscInt l = PffParticleWordLevel(w), t = PetscClipInterval((PetscInt)target[i], 0, lmax);
     if (t < l) {
       extra += ((PetscInt64)1 << (3 * (l - t))) - 1;
       nsplit++;

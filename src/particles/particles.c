@@ -343,8 +343,7 @@ PetscErrorCode PffParticlesGetTotals(PffParticles p, const PetscReal density[PFF
   /* a histogram of the word's low byte, in threads: the volumes are sums of integers 8^l, exact in any order */
   const uint32_t *word = p->s.word;
   const PetscInt  n    = p->n;
-#pragma omp parallel for reduction(+ : h[:256]) schedule(static)
-  for (PetscInt i = 0; i < n; i++) h[word[i] & 0xff]++;
+  PffParticlesWordHistogram_Private(word, n, h);
   for (int b = 0; b < 256; b++) {
     if (!h[b]) continue;
     const PetscInt t = PffParticleWordType((uint32_t)b), l = PffParticleWordLevel((uint32_t)b);
