@@ -14,12 +14,41 @@ static inline PetscReal PffPhi(PetscReal rt, PetscReal rtmin, PetscReal scale)
   return PetscMin(PetscSqrtReal(PetscMax(rt - rtmin, 0) / scale), 1.0);
 }
 
+/* The mean of one cell from its faces: lo[d], hi[d] the face phi below and above it along axis d, olo, ohi their open
+   fractions. Returns PETSC_FALSE (cell left alone) when bulkOnly and its open faces are not all 1 or all 0. */
+static inline PetscBool PffCellMean(const PetscReal lo[3], const PetscReal hi[3], const PetscReal olo[3],
+                                    const PetscReal ohi[3], PetscBool perAxis, PetscBool bulkOnly, float *out)
+{
+  PetscReal sum = 0, w = 0, all = 0, lo1 = 1, hi0 = 0, axes = 0, naxes = 0;
+  for (PetscInt d = 0; d < 3; d++) {
+    sum += olo[d] * lo[d] + ohi[d] * hi[d];
+    w += olo[d] + ohi[d];
+    if (perAxis && olo[d] + ohi[d] > 0) {
+      axes += (olo[d] * lo[d] + ohi[d] * hi[d]) / (olo[d] + ohi[d]);
+      naxes++;
+    }
+    all += lo[d] + hi[d];
+    if (olo[d] > 0) {
+      lo1 = PetscMin(lo1, lo[d]);
+      hi0 = PetscMax(hi0, lo[d]);
+    }
+    if (ohi[d] > 0) {
+      lo1 = PetscMin(lo1, hi[d]);
+      hi0 = PetscMax(hi0, hi[d]);
+    }
+  }
+  if (bulkOnly && !(w > 0 && (lo1 == 1 || hi0 == 0))) return PETSC_FALSE;
+  *out = (float)(w > 0 ? (perAxis ? axes / naxes : sum / w) : all / 6);
+  return PETSC_TRUE;
+}
+
 /* Cell phi = mean of the face phi over the cell's open faces (chPhiF's halo current); a cell with every
    face closed (inside a solid) keeps the plain mean. With bulkOnly only cells whose open faces are all 1
    (or all 0) are set, the others keep their value. The liquid model takes the mean over the axes of each
    axis' mean instead: its level set reads phi at the free surface, where the vertical faces differ from the
    horizontal ones, and the plain mean weighs them otherwise in a cell beside a wall (one side face fewer):
-   a still pool's surface cells read 0.930 at the walls against 0.939 inside, and the pool moved at 1.2e-2 m/s. */
+   a still pool's surface cells read 0.930 at the walls against 0.939 inside, and the pool moved at 1.2e-2 m/s.
+   Cells whose upper faces lie in the block read the block's own storage; the others go through the views. */
 static PetscErrorCode PffFlowCellPhase(PffFlow f, PetscInt nlocal, PetscBool bulkOnly)
 {
   const PetscBool perAxis = (PetscBool)(f->model == PFF_FLOW_LIQUID);
@@ -28,42 +57,37 @@ static PetscErrorCode PffFlowCellPhase(PffFlow f, PetscInt nlocal, PetscBool bul
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo   info;
     const PffView *vphi[3], *vopen[3];
-    float         *cell;
+    float         *cell, *phi[3], *open[3];
     PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
     PetscCall(PffGridGetBlockData(f->grid, f->chPhi, lb, 0, &cell));
     for (PetscInt d = 0; d < 3; d++) {
       PetscCall(PffGridGetBlockViews(f->grid, f->chPhiF, lb, d, &vphi[d]));
       PetscCall(PffGridGetBlockViews(f->grid, f->chOpen, lb, d, &vopen[d]));
+      PetscCall(PffGridGetBlockData(f->grid, f->chPhiF, lb, d, &phi[d]));
+      PetscCall(PffGridGetBlockData(f->grid, f->chOpen, lb, d, &open[d]));
     }
-    const PetscInt n = info.n;
+    const PetscInt n = info.n, st[3] = {1, n, n * n};
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt j = 0; j < n; j++)
         for (PetscInt i = 0; i < n; i++) {
-          PetscReal sum = 0, w = 0, all = 0, lo1 = 1, hi0 = 0, axes = 0, naxes = 0;
-          for (PetscInt d = 0; d < 3; d++) {
-            const PetscInt  e[3] = {d == 0, d == 1, d == 2};
-            const PetscReal lo   = *PffViewsAt(vphi[d], i, j, k, n),
-                            hi   = *PffViewsAt(vphi[d], i + e[0], j + e[1], k + e[2], n);
-            const PetscReal olo  = *PffViewsAt(vopen[d], i, j, k, n);
-            const PetscReal ohi  = *PffViewsAt(vopen[d], i + e[0], j + e[1], k + e[2], n);
-            sum += olo * lo + ohi * hi;
-            w += olo + ohi;
-            if (perAxis && olo + ohi > 0) {
-              axes += (olo * lo + ohi * hi) / (olo + ohi);
-              naxes++;
+          const PetscInt c = i + n * (j + n * k);
+          PetscReal      lo[3], hi[3], olo[3], ohi[3];
+          if (i < n - 1 && j < n - 1 && k < n - 1)
+            for (PetscInt d = 0; d < 3; d++) {
+              lo[d]  = phi[d][c];
+              hi[d]  = phi[d][c + st[d]];
+              olo[d] = open[d][c];
+              ohi[d] = open[d][c + st[d]];
             }
-            all += lo + hi;
-            if (olo > 0) {
-              lo1 = PetscMin(lo1, lo);
-              hi0 = PetscMax(hi0, lo);
+          else
+            for (PetscInt d = 0; d < 3; d++) {
+              const PetscInt e[3] = {d == 0, d == 1, d == 2};
+              lo[d]               = *PffViewsAt(vphi[d], i, j, k, n);
+              hi[d]               = *PffViewsAt(vphi[d], i + e[0], j + e[1], k + e[2], n);
+              olo[d]              = *PffViewsAt(vopen[d], i, j, k, n);
+              ohi[d]              = *PffViewsAt(vopen[d], i + e[0], j + e[1], k + e[2], n);
             }
-            if (ohi > 0) {
-              lo1 = PetscMin(lo1, hi);
-              hi0 = PetscMax(hi0, hi);
-            }
-          }
-          if (bulkOnly && !(w > 0 && (lo1 == 1 || hi0 == 0))) continue;
-          cell[i + n * (j + n * k)] = (float)(w > 0 ? (perAxis ? axes / naxes : sum / w) : all / 6);
+          (void)PffCellMean(lo, hi, olo, ohi, perAxis, bulkOnly, &cell[c]);
         }
   }
   PetscCall(PffGridHaloBegin(f->grid, f->chPhi));
@@ -111,9 +135,12 @@ PetscErrorCode PffFlowPhaseField_Private(PffFlow f)
     const PffView *vcell;
     PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
     PetscCall(PffGridGetBlockViews(f->grid, f->chPhi, lb, 0, &vcell));
+    float *cphi;
+    PetscCall(PffGridGetBlockData(f->grid, f->chPhi, lb, 0, &cphi));
     const PetscInt n = info.n;
     for (PetscInt d = 0; d < 3; d++) {
-      float *phi, *beta = NULL, *open;
+      float         *phi, *beta = NULL, *open;
+      const PetscInt sd = d == 0 ? 1 : (d == 1 ? n : n * n);
       PetscCall(PffGridGetBlockData(f->grid, f->chPhiF, lb, d, &phi));
       if (f->chBeta >= 0) PetscCall(PffGridGetBlockData(f->grid, f->chBeta, lb, d, &beta));
       PetscCall(PffGridGetBlockData(f->grid, f->chOpen, lb, d, &open));
@@ -122,7 +149,12 @@ PetscErrorCode PffFlowPhaseField_Private(PffFlow f)
           for (PetscInt i = 0; i < n; i++) {
             const PetscInt c = i + n * (j + n * k);
             PetscBool      mine, lower;
-            PffFlowFaceTags_Private(vcell, i, j, k, d, n, &lower, &mine);
+            /* the lower cell in the block: its own storage; on the block's lower side: the views */
+            if ((d == 0 ? i : (d == 1 ? j : k)) > 0) {
+              mine  = (PetscBool)(cphi[c] >= 0.5);
+              lower = (PetscBool)(cphi[c - sd] >= 0.5);
+            } else
+              PffFlowFaceTags_Private(vcell, i, j, k, d, n, &lower, &mine);
             /* across a closed face (wall, solid) the other side is not fluid: use this cell's tag */
             const PetscBool other = open[c] > 0 ? lower : mine;
             if (mine && other)

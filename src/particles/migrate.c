@@ -73,14 +73,21 @@ PetscErrorCode PffParticlesMigrate(PffParticles p, PffParticleStats *stats)
         lo[a] = ijk[a] == 0 ? PFF_PARTICLE_WALL_LO : (float)(ijk[a] * p->n0);
         hi[a] = (float)((ijk[a] + 1) * p->n0);
       }
-      for (PetscInt i = p->start[lb]; i < p->start[lb + 1]; i++) {
-        const float *x = &p->s.x[3 * i];
-        if (x[0] >= lo[0] && x[0] < hi[0] && x[1] >= lo[1] && x[1] < hi[1] && x[2] >= lo[2] && x[2] < hi[2])
-          dest[i] = (int32_t)lb | stays;
-        else {
-          PffMigrateLocate(p, i, level, owner, local, dest, &sent, &wrapped, &clamped, &nbad);
-          if (dest[i] == (int32_t)lb) dest[i] |= stays;
-        }
+      /* the box test in a branch-free loop that vectorises (as a branch per particle it was 3 % of the uniform
+         rt3d step), then the locate for the few outside */
+      const int32_t      in = (int32_t)lb | stays;
+      const PetscInt     i0 = p->start[lb], i1 = p->start[lb + 1];
+      const float *const xs = p->s.x;
+      for (PetscInt i = i0; i < i1; i++) {
+        const float *x = &xs[3 * i];
+        const int    inside =
+            (x[0] >= lo[0]) & (x[0] < hi[0]) & (x[1] >= lo[1]) & (x[1] < hi[1]) & (x[2] >= lo[2]) & (x[2] < hi[2]);
+        dest[i] = inside ? in : PFF_SORT_DROP;
+      }
+      for (PetscInt i = i0; i < i1; i++) {
+        if (dest[i] != PFF_SORT_DROP) continue;
+        PffMigrateLocate(p, i, level, owner, local, dest, &sent, &wrapped, &clamped, &nbad);
+        if (dest[i] == (int32_t)lb) dest[i] |= stays;
       }
     }
   } else if (oldStart && oldStart[nold] == n) {
