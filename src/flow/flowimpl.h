@@ -118,6 +118,14 @@ static inline PetscErrorCode PffFlowBlockData_Private(PffFlow f, PetscInt lb, Pe
 static inline void PffFlowFaceTags_Private(const PffView *vphi, PetscInt i, PetscInt j, PetscInt k, PetscInt d,
                                            PetscInt n, PetscBool *lo, PetscBool *hi)
 {
+  const PetscInt a = d == 0 ? i : (d == 1 ? j : k);
+  if (a > 0 && i < n && j < n && k < n && i >= 0 && j >= 0 && k >= 0) { /* both cells in the block's own storage */
+    const float   *own = vphi[13].ptr + vphi[13].off;
+    const PetscInt c = i + n * (j + n * k), st = d == 0 ? 1 : (d == 1 ? n : n * n);
+    *hi = (PetscBool)(own[c] >= 0.5);
+    *lo = (PetscBool)(own[c - st] >= 0.5);
+    return;
+  }
   *hi = (PetscBool)(*PffViewsAt(vphi, i, j, k, n) >= 0.5);
   *lo = (PetscBool)(*PffViewsAt(vphi, i - (d == 0), j - (d == 1), k - (d == 2), n) >= 0.5);
 }
@@ -131,14 +139,28 @@ static inline void PffFlowCellVolumes_Private(const PffView *vw[3], const PffVie
 {
   PetscReal w = 0, wref = 0;
   PetscInt  no = 0;
-  for (PetscInt d = 0; d < 3; d++)
-    for (PetscInt up = 0; up < 2; up++) {
-      const PetscInt ii = i + (up && d == 0), jj = j + (up && d == 1), kk = k + (up && d == 2);
-      if (*PffViewsAt(vo[d], ii, jj, kk, n) <= 0) continue;
-      w += *PffViewsAt(vw[d], ii, jj, kk, n);
-      wref += *PffViewsAt(vr[d], ii, jj, kk, n);
-      no++;
+  if (i < n - 1 && j < n - 1 && k < n - 1) { /* every face in the block's own storage (view 13): no region look-up */
+    const PetscInt c = i + n * (j + n * k);
+    for (PetscInt d = 0; d < 3; d++) {
+      const PffView *o = &vo[d][13], *vv = &vw[d][13], *r = &vr[d][13];
+      const PetscInt st = d == 0 ? 1 : (d == 1 ? n : n * n);
+      for (PetscInt up = 0; up < 2; up++) {
+        const PetscInt q = c + up * st;
+        if (o->ptr[o->off + q] <= 0) continue;
+        w += vv->ptr[vv->off + q];
+        wref += r->ptr[r->off + q];
+        no++;
+      }
     }
+  } else
+    for (PetscInt d = 0; d < 3; d++)
+      for (PetscInt up = 0; up < 2; up++) {
+        const PetscInt ii = i + (up && d == 0), jj = j + (up && d == 1), kk = k + (up && d == 2);
+        if (*PffViewsAt(vo[d], ii, jj, kk, n) <= 0) continue;
+        w += *PffViewsAt(vw[d], ii, jj, kk, n);
+        wref += *PffViewsAt(vr[d], ii, jj, kk, n);
+        no++;
+      }
   *wp    = w;
   *wrefp = wref;
   if (nopen) *nopen = no;
