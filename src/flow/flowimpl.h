@@ -113,13 +113,14 @@ static inline PetscErrorCode PffFlowBlockData_Private(PffFlow f, PetscInt lb, Pe
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Tags (cell phi >= 1/2, liquid) of the two cells of the lower d-face of cell (i, j, k) of an n^3 block:
-   hi the cell itself, lo its -d neighbour (through the halo of the cell view vphi). */
+/* Tags (cell phi >= 1/2, liquid) of the two cells of the lower d-face of cell (i, j, k) of an n^3 block (a cell of the
+   block itself): hi the cell itself, lo its -d neighbour, from the block's own storage (view 13) when it lies in the
+   block (the region look-up per read was most of the phase field's and the correction's face passes), else through
+   the halo of the cell view vphi. */
 static inline void PffFlowFaceTags_Private(const PffView *vphi, PetscInt i, PetscInt j, PetscInt k, PetscInt d,
                                            PetscInt n, PetscBool *lo, PetscBool *hi)
 {
-  const PetscInt a = d == 0 ? i : (d == 1 ? j : k);
-  if (a > 0 && i < n && j < n && k < n && i >= 0 && j >= 0 && k >= 0) { /* both cells in the block's own storage */
+  if ((d == 0 ? i : (d == 1 ? j : k)) > 0) {
     const float   *own = vphi[13].ptr + vphi[13].off;
     const PetscInt c = i + n * (j + n * k), st = d == 0 ? 1 : (d == 1 ? n : n * n);
     *hi = (PetscBool)(own[c] >= 0.5);

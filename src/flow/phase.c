@@ -135,12 +135,9 @@ PetscErrorCode PffFlowPhaseField_Private(PffFlow f)
     const PffView *vcell;
     PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
     PetscCall(PffGridGetBlockViews(f->grid, f->chPhi, lb, 0, &vcell));
-    float *cphi;
-    PetscCall(PffGridGetBlockData(f->grid, f->chPhi, lb, 0, &cphi));
     const PetscInt n = info.n;
     for (PetscInt d = 0; d < 3; d++) {
-      float         *phi, *beta = NULL, *open;
-      const PetscInt sd = d == 0 ? 1 : (d == 1 ? n : n * n);
+      float *phi, *beta = NULL, *open;
       PetscCall(PffGridGetBlockData(f->grid, f->chPhiF, lb, d, &phi));
       if (f->chBeta >= 0) PetscCall(PffGridGetBlockData(f->grid, f->chBeta, lb, d, &beta));
       PetscCall(PffGridGetBlockData(f->grid, f->chOpen, lb, d, &open));
@@ -149,12 +146,7 @@ PetscErrorCode PffFlowPhaseField_Private(PffFlow f)
           for (PetscInt i = 0; i < n; i++) {
             const PetscInt c = i + n * (j + n * k);
             PetscBool      mine, lower;
-            /* the lower cell in the block: its own storage; on the block's lower side: the views */
-            if ((d == 0 ? i : (d == 1 ? j : k)) > 0) {
-              mine  = (PetscBool)(cphi[c] >= 0.5);
-              lower = (PetscBool)(cphi[c - sd] >= 0.5);
-            } else
-              PffFlowFaceTags_Private(vcell, i, j, k, d, n, &lower, &mine);
+            PffFlowFaceTags_Private(vcell, i, j, k, d, n, &lower, &mine);
             /* across a closed face (wall, solid) the other side is not fluid: use this cell's tag */
             const PetscBool other = open[c] > 0 ? lower : mine;
             if (mine && other)

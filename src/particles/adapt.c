@@ -253,27 +253,24 @@ PetscErrorCode PffParticlesAdaptLevels(PffParticles p, const int8_t target[], Pe
 {
   PffParticleAdaptStats st = {0};
   const PetscInt        n = p->n, lmax = p->nlevels - 1;
-  PetscInt64            extra = 0, nsplit = 0, marked = 0, removed = 0, h[256] = {0};
+  PetscInt64            extra = 0, nsplit = 0, marked = 0, removed = 0;
   PetscReal             vl0 = 0, va0 = 0, dl = 0, da = 0; /* volumes before, and their changes, per type */
 
   PetscFunctionBeginUser;
   PetscCheck(delay >= 1 && delay <= 15, p->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "PffParticlesAdaptLevels: the coarsening delay %" PetscInt_FMT " must be in [1, 15]", delay);
   PetscCall(PetscLogEventBegin(PFF_PartAdapt, 0, 0, 0, 0));
-  /* volumes from the particles per type and level (sums of integers 8^l, exact), splits and coarsening candidates
-     counted in threads (each particle on its own) */
-  PffParticlesWordHistogram_Private(p->s.word, n, h);
-  for (int b = 0; b < 256; b++) {
-    const PetscReal vol = (PetscReal)h[b] * (PetscReal)((PetscInt64)1 << (3 * PffParticleWordLevel((uint32_t)b)));
-    if (PffParticleWordType((uint32_t)b) == PFF_PARTICLE_LIQUID)
+  /* volumes, splits and coarsening candidates counted in threads (each particle on its own) */
+#pragma omp parallel for reduction(+ : extra, nsplit, marked, vl0, va0) schedule(static)
+  for (PetscInt i = 0; i < n; i++) {
+    const uint32_t  w = p->s.word[i];
+    const PetscInt  l = PffParticleWordLevel(w), t = PetscClipInterval((PetscInt)target[i], 0, lmax);
+    const PetscBool liquid = (PetscBool)(PffParticleWordType(w) == PFF_PARTICLE_LIQUID);
+    const PetscReal vol    = (PetscReal)((PetscInt64)1 << (3 * l));
+    if (liquid)
       vl0 += vol;
     else
       va0 += vol;
-  }
-#pragma omp parallel for reduction(+ : extra, nsplit, marked) schedule(static)
-  for (PetscInt i = 0; i < n; i++) {
-    const uint32_t w = p->s.word[i];
-    const PetscInt l = PffParticleWordLevel(w), t = PetscClipInterval((PetscInt)target[i], 0, lmax);
     if (t < l) {
       extra += ((PetscInt64)1 << (3 * (l - t))) - 1;
       nsplit++;
@@ -314,6 +311,8 @@ PetscErrorCode PffParticlesAdaptLevels(PffParticles p, const int8_t target[], Pe
     PetscCall(PffGridGetLocalBlocks(p->grid, &nb));
     PetscCall(PffParticlesGetIntWork_Private(p, (size_t)(n + extra) + 1, &dst));
     PetscCall(PffParticlesReserve_Private(p, n + (PetscInt)extra)); /* the store may move */
+    PetscReal *x = NULL, *corner = NULL; /* a group's parent positions and its children's slots, cap each */
+    PetscInt   cap = 0;
     PetscCall(PetscMalloc1(nsplit, &item));
     for (PetscInt lb = 0; lb < nb; lb++) {
       const PetscInt i0 = p->start[lb], i1 = p->start[lb + 1];
@@ -335,21 +334,25 @@ PetscErrorCode PffParticlesAdaptLevels(PffParticles p, const int8_t target[], Pe
         const PetscInt t  = PetscClipInterval((PetscInt)target[ip], 0, lmax);
         const PetscInt np = g1 - g0, nc = (PetscInt)1 << (3 * (l - t));
         float          lo[3];
-        PetscReal      lor[3], *x, *corner;
+        PetscReal      lor[3];
         for (int a = 0; a < 3; a++) {
           (void)CellOfLevel(p, p->s.x[3 * ip + a], l, &lo[a]);
           lor[a] = lo[a];
         }
-        PetscCall(PetscMalloc2(3 * np, &x, 3 * nc * np, &corner));
+        if (nc * np > cap) { /* grown, not allocated per group */
+          PetscCall(PetscFree2(x, corner));
+          cap = PetscMax(nc * np, 2 * cap);
+          PetscCall(PetscMalloc2(3 * cap, &x, 3 * cap, &corner));
+        }
         for (PetscInt g = 0; g < np; g++)
           for (int a = 0; a < 3; a++) x[3 * g + a] = p->s.x[3 * item[g0 + g].i + a];
         PetscCall(AssignSlots(x, np, lor, (PetscReal)((PetscInt)1 << l), l - t, corner));
         for (PetscInt g = g0; g < g1; g++)
           PlaceChildren(p, item[g].i, l - t, t, lo, (float)((PetscInt)1 << l), corner + 3 * nc * (g - g0), lb, &m, dst);
-        PetscCall(PetscFree2(x, corner));
       }
     }
     PetscCall(PetscFree(item));
+    PetscCall(PetscFree2(x, corner));
     p->n = m;
     PetscCall(PffParticlesSort_Private(p)); /* bins again (the children are the movers) */
   }

@@ -332,6 +332,21 @@ PetscErrorCode PffParticlesRemove(PffParticles p)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* h[b] (256 values, zeroed by the caller) += the particles whose word's low byte (type and level) is b, in threads.
+   Four interleaved histograms per thread: neighbouring particles mostly share that byte, and one histogram's
+   increments waited on each other's stores. */
+static void PffParticlesWordHistogram(const uint32_t word[], PetscInt n, PetscInt64 h[256])
+{
+#pragma omp parallel reduction(+ : h[:256])
+  {
+    PetscInt64 q[4][256];
+    memset(q, 0, sizeof(q));
+#pragma omp for schedule(static)
+    for (PetscInt i = 0; i < n; i++) q[i & 3][word[i] & 0xff]++;
+    for (int b = 0; b < 256; b++) h[b] += q[0][b] + q[1][b] + q[2][b] + q[3][b];
+  }
+}
+
 PetscErrorCode PffParticlesGetTotals(PffParticles p, const PetscReal density[PFF_PARTICLE_NTYPES],
                                      PetscInt64 count[PFF_PARTICLE_NTYPES], PetscReal mass[PFF_PARTICLE_NTYPES])
 {
@@ -343,7 +358,7 @@ PetscErrorCode PffParticlesGetTotals(PffParticles p, const PetscReal density[PFF
   /* a histogram of the word's low byte, in threads: the volumes are sums of integers 8^l, exact in any order */
   const uint32_t *word = p->s.word;
   const PetscInt  n    = p->n;
-  PffParticlesWordHistogram_Private(word, n, h);
+  PffParticlesWordHistogram(word, n, h);
   for (int b = 0; b < 256; b++) {
     if (!h[b]) continue;
     const PetscInt t = PffParticleWordType((uint32_t)b), l = PffParticleWordLevel((uint32_t)b);

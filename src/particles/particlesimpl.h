@@ -131,23 +131,16 @@ static inline PetscInt PffParticlesLocate_Private(PffParticles p, const float g[
   return PffParticlesLocateReal_Private(p, r, level);
 }
 
-/* h[b] (256 values, zeroed by the caller) += the particles whose word's low byte (type and level) is b, in threads.
-   Four interleaved histograms per thread: neighbouring particles mostly share that byte, and one histogram's
-   increments waited on each other's stores. */
-static inline void PffParticlesWordHistogram_Private(const uint32_t word[], PetscInt n, PetscInt64 h[256])
+/* Moves particle src to slot dst (compaction after removals or sends). */
+static inline void PffParticlesMove_Private(PffParticles p, PetscInt dst, PetscInt src)
 {
-#pragma omp parallel reduction(+ : h[:256])
-  {
-    PetscInt64 q[4][256];
-    memset(q, 0, sizeof(q));
-#pragma omp for schedule(static)
-    for (PetscInt i = 0; i < n; i++) q[i & 3][word[i] & 0xff]++;
-    for (int b = 0; b < 256; b++) h[b] += q[0][b] + q[1][b] + q[2][b] + q[3][b];
-  }
+#define PFF_PARTICLE_FIELD_MOVE(name, type, k, f)                                                                      \
+  for (int c = 0; c < (k); c++) p->s.name[(k)*dst + c] = p->s.name[(k)*src + c];
+  PFF_PARTICLE_FIELDS(PFF_PARTICLE_FIELD_MOVE)
+#undef PFF_PARTICLE_FIELD_MOVE
 }
 
-/* Moves the particles [src, src + count) to [dst, dst + count); the ranges may overlap (runs of a compaction or a
-   sort). */
+/* Moves the particles [src, src + count) to [dst, dst + count), dst <= src (runs of a compaction). */
 static inline void PffParticlesMoveRange_Private(PffParticles p, PetscInt dst, PetscInt src, PetscInt count)
 {
 #define PFF_PARTICLE_FIELD_MOVE_RANGE(name, type, k, f)                                                                \
