@@ -37,10 +37,11 @@ typedef struct {
   PetscInt           its;   /* Krylov iterations */
   PetscReal          rnorm; /* final residual norm (relative to the rhs norm) */
   KSPConvergedReason reason;
-  PetscReal          divBefore; /* max |div u| (1/s) before the projection */
-  PetscReal          divAfter;  /* max |div u| after it, of the double-precision u before it is stored in the
+  PetscReal          divBefore; /* max |div u| (1/s) before the projection; -1 unless the divergence is monitored
+                                   (PffPressureSetMonitorDivergence) */
+  PetscReal divAfter;           /* max |div u| after it, of the double-precision u before it is stored in the
                                    float channel (PffPressureMaxDivergence of the channel adds float rounding,
-                                   about 1e-7 |u| / h) */
+                                   about 1e-7 |u| / h); -1 unless monitored */
   PetscLogDouble setupTime;     /* KSP/PC set-up inside Project (non-zero after SetCoefficients) */
   PetscLogDouble solveTime;     /* KSPSolve */
 } PffPressureStats;
@@ -51,7 +52,8 @@ typedef struct {
    bjacobi uses ICC(0) on its blocks unless -pressure_sub_pc_type is given), -pressure_assembly
    ptap|direct (how A is assembled, default ptap), -pressure_dirichlet_walls none|<list of xmin,xmax,ymin,ymax,
    zmin,zmax> (PffPressureSetDirichletWalls; default none), -pressure_operator aij|shell (the operator the
-   Krylov method applies, PffPressureSetOperatorType), and every other PETSc KSP/PC option under that prefix. */
+   Krylov method applies, PffPressureSetOperatorType), -pressure_monitor_divergence (PffPressureSetMonitorDivergence),
+   and every other PETSc KSP/PC option under that prefix. */
 PETSC_EXTERN PetscErrorCode PffPressureCreate(PffGrid grid, PffPressure *ps);
 PETSC_EXTERN PetscErrorCode PffPressureSetFromOptions(PffPressure ps);
 /* The operator that the Krylov method applies (the KSP's Amat): the assembled MATMPIAIJ A, or the
@@ -83,6 +85,10 @@ PETSC_EXTERN PetscErrorCode PffPressureGetSolveTraffic(PffPressure ps, const Pff
    Takes effect at the next SetCoefficients. Logically collective. */
 PETSC_EXTERN PetscErrorCode PffPressureSetOperatorType(PffPressure ps, PffPressureOperatorType type);
 PETSC_EXTERN PetscErrorCode PffPressureGetOperatorType(PffPressure ps, PffPressureOperatorType *type);
+/* Whether PffPressureProject measures the largest |div u| before and after the projection (the stats' divBefore
+   and divAfter, also printed by -info); option -pressure_monitor_divergence, default off: the two measures are two
+   divergence passes with their ghost exchange, about 3 % of an rt3d step. Logically collective. */
+PETSC_EXTERN PetscErrorCode PffPressureSetMonitorDivergence(PffPressure ps, PetscBool flg);
 
 /* Builds the numbering, the face list and the gradient once per grid topology (and the shell's
    communication plan when the operator type is shell). Collective. */

@@ -33,13 +33,28 @@ static PetscErrorCode PffPressureCopy(PffPressure ps, PetscInt ch, PffChannelKin
     PetscCall(VecGetArray(v, &a));
   for (PetscInt lb = 0; lb < ps->nlocal; lb++) {
     const PetscInt c0 = ps->blockStart[lb], nc = ps->blockStart[lb + 1] - c0;
-    for (PetscInt d = 0; d < ncomp; d++) {
-      float *data;
-      PetscCall(PffGridGetBlockData(ps->grid, ch, lb, d, &data));
-      if (toVec)
-        for (PetscInt c = 0; c < nc; c++) a[ncomp * (c0 + c) + d] = data[c];
-      else
-        for (PetscInt c = 0; c < nc; c++) data[c] = (float)PetscRealPart(a[ncomp * (c0 + c) + d]);
+    float         *data[3];
+    for (PetscInt d = 0; d < ncomp; d++) PetscCall(PffGridGetBlockData(ps->grid, ch, lb, d, &data[d]));
+    PetscScalar *restrict ab = a + ncomp * c0;
+    /* a face Vec interleaves the three components: one pass over it, not one strided pass per component */
+    if (ncomp == 1 && toVec)
+      for (PetscInt c = 0; c < nc; c++) ab[c] = data[0][c];
+    else if (ncomp == 1)
+      for (PetscInt c = 0; c < nc; c++) data[0][c] = (float)PetscRealPart(ab[c]);
+    else if (toVec) {
+      const float *restrict x = data[0], *restrict y = data[1], *restrict z = data[2];
+      for (PetscInt c = 0; c < nc; c++) {
+        ab[3 * c]     = x[c];
+        ab[3 * c + 1] = y[c];
+        ab[3 * c + 2] = z[c];
+      }
+    } else {
+      float *restrict x = data[0], *restrict y = data[1], *restrict z = data[2];
+      for (PetscInt c = 0; c < nc; c++) {
+        x[c] = (float)PetscRealPart(ab[3 * c]);
+        y[c] = (float)PetscRealPart(ab[3 * c + 1]);
+        z[c] = (float)PetscRealPart(ab[3 * c + 2]);
+      }
     }
   }
   if (toVec)

@@ -91,6 +91,8 @@ PetscErrorCode PffPressureSetFromOptions(PffPressure ps)
                            "under the matrix-free pffmg, aij with any other PC)",
                            "PffPressureSetOperatorType", PffPressureOperatorTypes, (PetscEnum)ps->operatorType,
                            (PetscEnum *)&ps->operatorType, &opset));
+  PetscCall(PetscOptionsBool("-pressure_monitor_divergence", "Measure max |div u| before and after each projection",
+                             "PffPressureSetMonitorDivergence", ps->monitorDivergence, &ps->monitorDivergence, NULL));
   PetscOptionsEnd();
   if (opset) ps->operatorTypeSet = PETSC_TRUE;
   /* parsed after the options block, so that a bad name leaves the options object closed */
@@ -338,7 +340,8 @@ PetscErrorCode PffPressureProject(PffPressure ps, PetscInt chU, PetscReal dt, Pe
              "pressure: time step dt = %g must be positive", (double)dt);
   PetscCall(PetscLogEventBegin(PFF_PressSolve, 0, 0, 0, 0));
   PetscCall(PffPressureChannelToVec_Private(ps, chU, PFF_CHANNEL_FACE, ps->uf));
-  PetscCall(PffPressureMaxDivergenceVec_Private(ps, ps->uf, &st.divBefore));
+  st.divBefore = st.divAfter = -1;
+  if (ps->monitorDivergence) PetscCall(PffPressureMaxDivergenceVec_Private(ps, ps->uf, &st.divBefore));
 
   /* b = -(V D u*_open + V c_div) / dt = (G^T M (open u*) - V c_div) / dt; closed faces end at u = 0,
      so their u* must not enter the balance */
@@ -379,7 +382,11 @@ PetscErrorCode PffPressureProject(PffPressure ps, PetscInt chU, PetscReal dt, Pe
 
   /* u = u* - dt beta G p on open faces, 0 on closed ones */
   PetscCall(PffPressureShellProjectVelocity_Private(ps, ps->S, ps->p, dt, ps->uf));
-  PetscCall(PffPressureMaxDivergenceVec_Private(ps, ps->uf, &st.divAfter));
+  if (ps->monitorDivergence) {
+    PetscCall(PffPressureMaxDivergenceVec_Private(ps, ps->uf, &st.divAfter));
+    PetscCall(PetscInfo(NULL, "pressure: max |div u| %g 1/s before the projection, %g after\n", (double)st.divBefore,
+                        (double)st.divAfter));
+  }
   PetscCall(PffPressureVecToChannel_Private(ps, ps->uf, PFF_CHANNEL_FACE, chU));
   PetscCall(PffPressureVecToChannel_Private(ps, ps->p, PFF_CHANNEL_CELL, chP));
   st.setupTime = t1 - t0;
@@ -446,6 +453,14 @@ PetscErrorCode PffPressureGetShellOperator(PffPressure ps, Mat *S)
   PetscCall(PffPressureCheckSetUp(ps, PETSC_TRUE));
   PetscCheck(S != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL output argument");
   *S = ps->S;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureSetMonitorDivergence(PffPressure ps, PetscBool flg)
+{
+  PetscFunctionBeginUser;
+  PetscCheck(ps != NULL, PETSC_COMM_SELF, PETSC_ERR_ARG_NULL, "pressure: NULL object");
+  ps->monitorDivergence = flg;
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

@@ -61,6 +61,7 @@ struct _n_PffPressure {
   PetscBool               operatorTypeSet; /* chosen by the user; otherwise shell under the matrix-free pffmg */
   PffPressureFailureType  onFailure;       /* -pressure_on_failure */
   PetscBool               subPCDefaultApplied;
+  PetscBool               monitorDivergence; /* -pressure_monitor_divergence: two divergence passes per solve */
 };
 
 /* Whether any wall is Dirichlet (then A is definite and has no null space). */

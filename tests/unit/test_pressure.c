@@ -296,6 +296,7 @@ static PetscErrorCode RunProjection(MPI_Comm comm, PetscBool graded, PetscBool p
   PetscCall(PffGridFillChannel(t.grid, c.uCh, RandomVelocity, &c));
   PetscCall(PffPressureCreate(t.grid, &ps));
   PetscCall(PffPressureSetFromOptions(ps));
+  PetscCall(PffPressureSetMonitorDivergence(ps, PETSC_TRUE)); /* off by default: divBefore/divAfter would be -1 */
   PetscCall(PffPressureGetKSP(ps, &ksp));
   PetscCall(KSPSetTolerances(ksp, 1e-10, 1e-50, PETSC_DEFAULT, 10000));
   PetscCall(KSPGetPC(ksp, &pc));
@@ -342,6 +343,8 @@ static PetscErrorCode TestProjection(void)
                               graded ? "graded" : "uniform", perxz ? "per x,z" : "closed", pcs[k], (int)w[0],
                               (double)w[1], (double)w[2], (double)w[3], (double)w[4], (double)w[5], (double)dp,
                               (double)du));
+        PetscCheck(w[1] > 0 && w[2] >= 0, PETSC_COMM_WORLD, PETSC_ERR_PLIB,
+                   "%s: the divergence was not measured (%g, %g)", pcs[k], (double)w[1], (double)w[2]);
         PetscCheck(w[2] <= 1e-7 * w[1], PETSC_COMM_WORLD, PETSC_ERR_PLIB, "%s: max |D u| %g -> %g, not 1e-7 smaller",
                    pcs[k], (double)w[1], (double)w[2]);
         PetscCheck(w[3] <= 1e-5 * w[1], PETSC_COMM_WORLD, PETSC_ERR_PLIB,
@@ -452,6 +455,7 @@ static PetscErrorCode Bench(PetscInt N)
       }
       if (a == 0) PetscCall(PffPressureDestroy(&ps));
     }
+    PetscCall(PffPressureSetMonitorDivergence(ps, PETSC_TRUE));
     PetscCall(PffPressureGetKSP(ps, &ksp));
     PetscCall(KSPGetPC(ksp, &pc));
     PetscCall(PCSetType(pc, pcs[k]));
