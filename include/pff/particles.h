@@ -221,7 +221,8 @@ PETSC_EXTERN PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal dens
 /* Trilinear interpolation of cell channel ch (ghosts current) at every particle, in float: fn receives
    the values of particles [i0, i0 + m) of one block and may change their words (for example flag
    them). fn runs in OpenMP threads, several calls at once, each on its own particles: it must be
-   thread-safe (shared counters need atomics). Not collective. */
+   thread-safe (shared counters need atomics). In a block whose cells and ghost layer hold one value c, every
+   particle gets c exactly (the interpolation would round it by a few 1e-8). Not collective. */
 typedef void (*PffParticleCellFn)(PetscInt i0, PetscInt m, const float val[], void *ctx);
 PETSC_EXTERN PetscErrorCode PffParticlesInterpolateCell(PffParticles p, PetscInt ch, PffParticleCellFn fn, void *ctx);
 

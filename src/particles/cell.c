@@ -1,7 +1,20 @@
 /* Cell-channel values at the particles (the escaped-particle stage reads the phase field there):
    block by block in threads, through ghost tiles of one layer and chunks of PFF_CHUNK particles in
-   float, like G2P, clamped at walls and holes as the grid's general path does. */
+   float, like G2P, clamped at walls and holes as the grid's general path does. A block whose tile holds
+   one value passes that value to each of its particles. */
 #include "particlesimpl.h"
+
+/* Whether the m values of a tile are one number (not NaN). Most blocks of a scene lie inside one phase, where the
+   phase field is 0 or 1 on the whole tile: their particles take that value as it is, without the interpolation,
+   which would give it rounded by the weights' sum (a few 1e-8). */
+static PetscBool PffTileConstant(const float *restrict t, PetscInt m)
+{
+  const float c   = t[0];
+  int         off = c != c;
+#pragma omp simd reduction(| : off)
+  for (PetscInt q = 0; q < m; q++) off |= t[q] != c;
+  return off ? PETSC_FALSE : PETSC_TRUE;
+}
 
 PetscErrorCode PffParticlesInterpolateCell(PffParticles p, PetscInt ch, PffParticleCellFn fn, void *ctx)
 {
@@ -21,6 +34,12 @@ PetscErrorCode PffParticlesInterpolateCell(PffParticles p, PetscInt ch, PffParti
     const PetscInt        i1 = p->start[lb + 1], n = b->n, mm = n + 2;
     int32_t               st[8];
     float                 lo[3], ih;
+    if (PffTileConstant(b->tile[0][0], mm * mm * mm)) { /* every stencil of the block reads one value */
+      float val[PFF_CHUNK];
+      for (PetscInt j = 0; j < PFF_CHUNK; j++) val[j] = b->tile[0][0][0];
+      for (PetscInt j0 = p->start[lb]; j0 < i1; j0 += PFF_CHUNK) fn(j0, PetscMin(PFF_CHUNK, i1 - j0), val, ctx);
+      continue;
+    }
     PffTileCorners_Private((int32_t)mm, st);
     PffBlockCorner_Private(p->n0, b->ijk, b->level, lo, &ih);
     for (PetscInt j0 = p->start[lb]; j0 < i1; j0 += PFF_CHUNK) {
