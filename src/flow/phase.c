@@ -153,8 +153,13 @@ PetscErrorCode PffFlowPhaseField_Private(PffFlow f)
               phi[c] = 1;
             else if (!mine && !other)
               phi[c] = 0;
-            if (beta) beta[c] = (float)(1.0 / (f->rho[1] + (PetscReal)phi[c] * (f->rho[0] - f->rho[1])));
           }
+      if (beta) { /* after the tags, in a loop of its own that vectorises its divisions */
+        const PetscReal rg = f->rho[1], dr = f->rho[0] - f->rho[1];
+        const PetscInt  n3 = n * n * n;
+#pragma omp simd
+        for (PetscInt c = 0; c < n3; c++) beta[c] = (float)(1.0 / (rg + (PetscReal)phi[c] * dr));
+      }
     }
   }
   /* cells whose faces are all cleaned to 1 (0) become exactly 1 (0), so FLIP noise in the bulk (where the
