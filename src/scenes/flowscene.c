@@ -407,10 +407,12 @@ static PetscErrorCode PffFlowSceneStart(PffFlowScene *fs)
 static PetscErrorCode PffFlowSceneDiagRow(PffFlowScene *fs, PetscInt step, PetscReal t, const PffFlowStepStats *st,
                                           PetscLogDouble wall)
 {
-  PetscReal umaxGrid, fraction;
-  char      extra[512] = "";
+  PetscReal  umaxGrid, fraction;
+  PetscInt64 cells;
+  char       extra[512] = "";
 
   PetscFunctionBeginUser;
+  PetscCall(PffGridGetCellCounts(fs->grid, NULL, &cells)); /* an adaptive grid's cost follows them */
   PetscCall(PffFlowGetDiagnostics(fs->flow, &umaxGrid, NULL));
   PetscCall(PffFlowGetVolumeControl(fs->flow, NULL, &fraction));
   fs->umaxGrid = umaxGrid;
@@ -419,10 +421,11 @@ static PetscErrorCode PffFlowSceneDiagRow(PffFlowScene *fs, PetscInt step, Petsc
   if (fs->diag) {
     fprintf(fs->diag,
             "%" PetscInt_FMT ",%.9e,%.9e,%.6e,%.6e,%" PetscInt64_FMT ",%" PetscInt_FMT
-            ",%.3e,%.6e,%.9e,%" PetscInt64_FMT ",%" PetscInt64_FMT ",%.4e,%.9e,%.6f%s\n",
+            ",%.3e,%.6e,%.9e,%" PetscInt64_FMT ",%" PetscInt64_FMT ",%.4e,%.9e,%.6f%s,%" PetscInt64_FMT "\n",
             step, (double)t, (double)(t / fs->timeUnit), (double)st->dt, (double)st->cfl, st->particles,
             st->pressure.its, (double)st->pressure.rnorm, (double)umaxGrid, (double)fs->liquidVolume,
-            st->bubblesDeleted, st->dropletCandidates, (double)wall, (double)fs->gasVolume, (double)fraction, extra);
+            st->bubblesDeleted, st->dropletCandidates, (double)wall, (double)fs->gasVolume, (double)fraction, extra,
+            cells);
     fflush(fs->diag);
   }
   PetscCall(PffFlowSceneCheckDrift(fs, step));
@@ -494,7 +497,7 @@ static PetscErrorCode PffFlowSceneRun(PffScene s)
     if (rank == 0 && !fseek(fs->diag, 0, SEEK_END) && ftell(fs->diag) == 0)
       fprintf(fs->diag,
               "step,t,t_over_t0,dt,cfl,particles,ksp_its,ksp_rnorm,umax_grid,liquid_volume,bubbles_deleted,"
-              "droplet_candidates,wall_s,gas_volume,liquid_target_fraction%s\n",
+              "droplet_candidates,wall_s,gas_volume,liquid_target_fraction%s,active_cells\n",
               fs->ops.diagHeader ? fs->ops.diagHeader : "");
   }
   PetscCall(PffFlowGetTime(fs->flow, &t, &step));
