@@ -132,6 +132,11 @@ PETSC_EXTERN PetscErrorCode PffPressureSetCoefficients(PffPressure ps, PetscInt 
    PffPressureCheckSolve(), which knows the step. The caller exchanges the halos of chU and chP afterwards. */
 PETSC_EXTERN PetscErrorCode PffPressureProject(PffPressure ps, PetscInt chU, PetscReal dt, PetscInt chCdiv,
                                                PetscInt chP, PffPressureStats *stats);
+/* The same projection with u* = 0: u <- -dt beta G p with dt A p = -V c_div, the velocity that c_div alone asks for
+   (the volume correction's displacement). chU's values are not read, so the caller need not zero them and no
+   divergence of u* is taken. chCdiv must be a channel. Collective. */
+PETSC_EXTERN PetscErrorCode PffPressureProjectSource(PffPressure ps, PetscInt chU, PetscReal dt, PetscInt chCdiv,
+                                                     PetscInt chP, PffPressureStats *stats);
 
 /* Max |D u| over owned cells of face channel chU (1/s), for checks and the step log. Collective. */
 PETSC_EXTERN PetscErrorCode PffPressureMaxDivergence(PffPressure ps, PetscInt chU, PetscReal *maxdiv);

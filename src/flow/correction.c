@@ -501,20 +501,13 @@ static PetscErrorCode PffCorrectionDisplacement(PffFlow f, PffPressureStats *st)
 
   PetscFunctionBeginUser;
   PetscCall(PffGridGetLocalBlocks(f->grid, &nlocal));
-  for (PetscInt lb = 0; lb < nlocal; lb++)
-    for (PetscInt d = 0; d < 3; d++) {
-      float   *u;
-      PetscInt n3 = 0;
-      PetscCall(PffFlowBlockData_Private(f, lb, d, 1, &f->chUt, &u, &n3));
-      PetscCall(PetscArrayzero(u, n3));
-    }
   /* a fraction of a cell needs no 1e-8: the solve runs at its own tolerance, then the pressure's is back */
   PetscCall(PffPressureGetKSP(f->press, &ksp));
   PetscCall(KSPGetTolerances(ksp, &rtol, &atol, &dtol, &maxit));
   PetscCall(KSPGetInitialGuessNonzero(ksp, &guess));
   PetscCall(KSPSetTolerances(ksp, f->volCorrRtol, atol, dtol, maxit));
   PetscCall(KSPSetInitialGuessNonzero(ksp, PETSC_FALSE));
-  PetscCall(PffPressureProject(f->press, f->chUt, 1.0, f->chCdiv, f->chQ, st));
+  PetscCall(PffPressureProjectSource(f->press, f->chUt, 1.0, f->chCdiv, f->chQ, st));
   PetscCall(KSPSetInitialGuessNonzero(ksp, guess));
   /* while the correction's tolerance is in force, which the message quotes */
   PetscCall(PffPressureCheckSolve(f->press, st, "Correction", f->step + 1, f->t,

@@ -327,8 +327,9 @@ static PetscErrorCode PffPressureApplySubPCDefault(PffPressure ps)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode PffPressureProject(PffPressure ps, PetscInt chU, PetscReal dt, PetscInt chCdiv, PetscInt chP,
-                                  PffPressureStats *stats)
+/* The projection of PffPressureProject, from u* in chU or, with fromRest, from u* = 0 (chU only written). */
+static PetscErrorCode PffPressureProjectFrom(PffPressure ps, PetscInt chU, PetscBool fromRest, PetscReal dt,
+                                             PetscInt chCdiv, PetscInt chP, PffPressureStats *stats)
 {
   PffPressureStats st = {0};
   PetscLogDouble   t0, t1, t2;
@@ -338,14 +339,20 @@ PetscErrorCode PffPressureProject(PffPressure ps, PetscInt chU, PetscReal dt, Pe
   PetscCall(PffPressureCheckSetUp(ps, PETSC_TRUE));
   PetscCheck(dt > 0 && PetscIsNormalReal(dt), ps->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "pressure: time step dt = %g must be positive", (double)dt);
+  PetscCheck(!fromRest || chCdiv >= 0, ps->comm, PETSC_ERR_ARG_WRONG, "pressure: a projection from rest needs c_div");
   PetscCall(PetscLogEventBegin(PFF_PressSolve, 0, 0, 0, 0));
-  PetscCall(PffPressureChannelToVec_Private(ps, chU, PFF_CHANNEL_FACE, ps->uf));
   st.divBefore = st.divAfter = -1;
-  if (ps->monitorDivergence) PetscCall(PffPressureMaxDivergenceVec_Private(ps, ps->uf, &st.divBefore));
-
-  /* b = -(V D u*_open + V c_div) / dt = (G^T M (open u*) - V c_div) / dt; closed faces end at u = 0,
-     so their u* must not enter the balance */
-  PetscCall(PffPressureShellDivergence_Private(ps, ps->S, ps->uf, PETSC_TRUE, ps->vcell));
+  if (fromRest) {
+    PetscCall(VecZeroEntries(ps->uf));
+    PetscCall(VecZeroEntries(ps->vcell)); /* the divergence of u* = 0 */
+    if (ps->monitorDivergence) st.divBefore = 0;
+  } else {
+    PetscCall(PffPressureChannelToVec_Private(ps, chU, PFF_CHANNEL_FACE, ps->uf));
+    if (ps->monitorDivergence) PetscCall(PffPressureMaxDivergenceVec_Private(ps, ps->uf, &st.divBefore));
+    /* b = -(V D u*_open + V c_div) / dt = (G^T M (open u*) - V c_div) / dt; closed faces end at u = 0,
+       so their u* must not enter the balance */
+    PetscCall(PffPressureShellDivergence_Private(ps, ps->S, ps->uf, PETSC_TRUE, ps->vcell));
+  }
   if (chCdiv >= 0) {
     PetscScalar       *b;
     const PetscScalar *y;
@@ -393,6 +400,22 @@ PetscErrorCode PffPressureProject(PffPressure ps, PetscInt chU, PetscReal dt, Pe
   st.solveTime = t2 - t1;
   PetscCall(PetscLogEventEnd(PFF_PressSolve, 0, 0, 0, 0));
   if (stats) *stats = st;
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureProject(PffPressure ps, PetscInt chU, PetscReal dt, PetscInt chCdiv, PetscInt chP,
+                                  PffPressureStats *stats)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffPressureProjectFrom(ps, chU, PETSC_FALSE, dt, chCdiv, chP, stats));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffPressureProjectSource(PffPressure ps, PetscInt chU, PetscReal dt, PetscInt chCdiv, PetscInt chP,
+                                        PffPressureStats *stats)
+{
+  PetscFunctionBeginUser;
+  PetscCall(PffPressureProjectFrom(ps, chU, PETSC_TRUE, dt, chCdiv, chP, stats));
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 

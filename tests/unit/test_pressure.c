@@ -357,6 +357,54 @@ static PetscErrorCode TestProjection(void)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* PffPressureProjectSource (u* = 0, the volume correction's displacement) against PffPressureProject of a zeroed
+   velocity, with a random c_div: the same velocity and pressure, although the channel holds a random velocity when
+   ProjectSource is called (it must not be read). */
+static PetscErrorCode TestProjectSource(void)
+{
+  const PetscInt  nbG[3]    = {4, 4, 4};
+  const PetscBool per[3]    = {PETSC_TRUE, PETSC_FALSE, PETSC_TRUE};
+  const PetscReal origin[3] = {0, 0, 0};
+
+  PetscFunctionBeginUser;
+  for (PetscInt graded = 0; graded < 2; graded++) {
+    PffTestCtx       t;
+    Case             c;
+    PffPressure      ps;
+    PffPressureStats st[2];
+    KSP              ksp;
+    PetscReal        su[2], sp[2];
+    PetscCall(PffTestCreateGrid(PETSC_COMM_WORLD, nbG, per, origin, 1.0 / 32, 8, 3, graded ? -1 : 0, 0, 5, &t));
+    PetscCall(CaseSetUp(&t, 1, &c));
+    PetscCall(PffGridFillChannel(t.grid, c.cdivCh, RandomVelocity, &c));
+    PetscCall(PffPressureCreate(t.grid, &ps));
+    PetscCall(PffPressureSetFromOptions(ps));
+    PetscCall(PffPressureGetKSP(ps, &ksp));
+    PetscCall(KSPSetTolerances(ksp, 1e-10, 1e-50, PETSC_DEFAULT, 10000));
+    PetscCall(PffPressureSetUp(ps));
+    PetscCall(PffPressureSetCoefficients(ps, c.betaCh, c.openCh));
+    for (PetscInt k = 0; k < 2; k++) {
+      PetscCall(PffGridFillChannel(t.grid, c.uCh, k == 0 ? RandomVelocity : PffTestZero, &c));
+      PetscCall(PffGridFillChannel(t.grid, c.pCh, PffTestZero, &c));
+      if (k == 0)
+        PetscCall(PffPressureProjectSource(ps, c.uCh, c.dt, c.cdivCh, c.pCh, &st[k]));
+      else
+        PetscCall(PffPressureProject(ps, c.uCh, c.dt, c.cdivCh, c.pCh, &st[k]));
+      PetscCall(ChannelReduce(&t, c.uCh, 3, 0, &su[k]));
+      PetscCall(ChannelReduce(&t, c.pCh, 2, 0, &sp[k]));
+    }
+    PetscCall(PetscPrintf(PETSC_COMM_WORLD, "source   %-7s its %d / %d  sum u^2 %.9e / %.9e  sum V p^2 %.9e / %.9e\n",
+                          graded ? "graded" : "uniform", (int)st[0].its, (int)st[1].its, (double)su[0], (double)su[1],
+                          (double)sp[0], (double)sp[1]));
+    PetscCheck(su[1] > 0 && st[0].its == st[1].its && PetscAbsReal(su[0] - su[1]) <= 1e-12 * su[1] &&
+                   PetscAbsReal(sp[0] - sp[1]) <= 1e-12 * sp[1],
+               PETSC_COMM_WORLD, PETSC_ERR_PLIB, "ProjectSource differs from Project of u* = 0");
+    PetscCall(PffPressureDestroy(&ps));
+    PetscCall(PffGridDestroy(&t.grid));
+  }
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /* Hydrostatic balance: beta = 1/rho layered (rho = 1000 below y = 0.5), u* = dt g: u = 0. The graded
    grid refines along y only, so every level boundary is a y-face and the balance stays exact (a level
    boundary across x or z puts fine and coarse cells at different heights on one face: not exact). */
@@ -495,6 +543,7 @@ int main(int argc, char **argv)
   else {
     PetscCall(TestOperator());
     PetscCall(TestProjection());
+    PetscCall(TestProjectSource());
     PetscCall(TestHydrostatic());
   }
   PetscCall(PetscFinalize());
