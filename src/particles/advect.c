@@ -245,6 +245,18 @@ PetscErrorCode PffParticlesAdvect(PffParticles p, PetscInt chU, PetscReal dt, Pf
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* Bit t set when particles [i0, i1) hold one of type t. */
+static inline unsigned PffBlockTypes(const uint32_t *restrict w, PetscInt i0, PetscInt i1)
+{
+  unsigned types = 0;
+  /* clang-format 14 takes the reduction's operator for an expression */
+  // clang-format off
+#pragma omp simd reduction(|:types)
+  // clang-format on
+  for (PetscInt i = i0; i < i1; i++) types |= 1u << PffParticleWordType(w[i]);
+  return types;
+}
+
 PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const PetscInt chU[PFF_PARTICLE_NTYPES], PetscReal dt,
                                          PffSolidFn solid, void *solidctx, PffParticleStats *stats)
 {
@@ -293,7 +305,9 @@ PetscErrorCode PffParticlesAdvectPerType(PffParticles p, const PetscInt chU[PFF_
 #pragma omp parallel for reduction(max : maxsub) reduction(+ : nclamp) schedule(dynamic, 1)
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
     PffSampleBlock tb;
-    if (!PffSamplerBlockTiles_Private(p, &sampler, lb, &tb)) continue;
+    /* one channel, or the channel of each type the block holds: a block inside one phase fills one tile */
+    const unsigned need = sampler.nch > 1 ? PffBlockTypes(p->s.word, p->start[lb], p->start[lb + 1]) : 1u;
+    if (!PffSamplerBlockTiles_Private(p, &sampler, lb, need, &tb)) continue;
     PffAdvectBlockChunks(p, &sampler, &tb, blocks, level, lb, dt, &maxsub, &nclamp);
   }
 

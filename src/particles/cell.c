@@ -29,7 +29,7 @@ PetscErrorCode PffParticlesInterpolateCell(PffParticles p, PetscInt ch, PffParti
 #pragma omp parallel for schedule(dynamic, 1)
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
     PffSampleBlock tb;
-    if (!PffSamplerBlockTiles_Private(p, &s, lb, &tb)) continue;
+    if (!PffSamplerBlockTiles_Private(p, &s, lb, ~0u, &tb)) continue;
     const PffSampleBlock *b  = &tb;
     const PetscInt        i1 = p->start[lb + 1], n = b->n, mm = n + 2;
     int32_t               st[8];

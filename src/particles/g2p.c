@@ -29,7 +29,7 @@ PetscErrorCode PffParticlesG2P(PffParticles p, PetscInt chU, PetscInt chDU, cons
 #pragma omp parallel for schedule(dynamic, 1)
   for (PetscInt lb = 0; lb < p->nlocal; lb++) {
     PffSampleBlock tb;
-    if (!PffSamplerBlockTiles_Private(p, &s, lb, &tb)) continue;
+    if (!PffSamplerBlockTiles_Private(p, &s, lb, ~0u, &tb)) continue;
     const PffSampleBlock *b  = &tb;
     const PetscInt        i0 = p->start[lb], i1 = p->start[lb + 1];
     /* every stencil of a binned particle lies in the tiles: chunks of particles, float weights, no branch */

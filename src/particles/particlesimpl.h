@@ -452,7 +452,10 @@ PETSC_INTERN PetscErrorCode PffSamplerCreate_Private(PffParticles, PetscInt nch,
 PETSC_INTERN PetscErrorCode PffSamplerDestroy_Private(PffSampler *);
 /* The calling thread's copy of block lb's table entry, with its tiles built in the thread's buffer (valid
    until the thread's next call); PETSC_FALSE, and nothing built, when the block holds no particle. */
-PETSC_INTERN PetscBool PffSamplerBlockTiles_Private(PffParticles, const PffSampler *, PetscInt lb, PffSampleBlock *);
+/* Fills the thread's tiles of block lb for the channels k whose bit is set in need (the others keep their place in the
+   thread's buffer, unfilled); false when the block has no particles. */
+PETSC_INTERN PetscBool PffSamplerBlockTiles_Private(PffParticles, const PffSampler *, PetscInt lb, unsigned need,
+                                                    PffSampleBlock *);
 
 /* Position of grid point g (grid units) in cell units of local block lb's level, from its lower corner,
    as PffGridInterpolateFrom() computes it for the world point origin + h0 g: on a periodic axis the

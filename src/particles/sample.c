@@ -101,7 +101,8 @@ PetscErrorCode PffSamplerCreate_Private(PffParticles p, PetscInt nch, const Pets
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscBool PffSamplerBlockTiles_Private(PffParticles p, const PffSampler *s, PetscInt lb, PffSampleBlock *tb)
+PetscBool PffSamplerBlockTiles_Private(PffParticles p, const PffSampler *s, PetscInt lb, unsigned need,
+                                       PffSampleBlock *tb)
 {
   const PetscInt gw = s->gw;
 
@@ -111,14 +112,15 @@ PetscBool PffSamplerBlockTiles_Private(PffParticles p, const PffSampler *s, Pets
   float         *base = s->tiles + s->tstride * (size_t)omp_get_thread_num();
   for (PetscInt k = 0; k < s->nch; k++)
     for (PetscInt d = 0; d < s->ncomp; d++) {
-      float *tile = base + (size_t)(k * s->ncomp + d) * (size_t)(m * m * m);
+      float *tile    = base + (size_t)(k * s->ncomp + d) * (size_t)(m * m * m);
+      tb->tile[k][d] = tile;
+      if (!((need >> k) & 1)) continue;
       /* the own cells row by row from the block's array, the ghost shell from the views */
       for (PetscInt kk = 0; kk < n; kk++)
         for (PetscInt jj = 0; jj < n; jj++)
           memcpy(&tile[gw + m * ((jj + gw) + m * (kk + gw))], &tb->data[k][d][n * (jj + n * kk)],
                  sizeof(float) * (size_t)n);
       PffTileShell_Private(s->views[6 * lb + 3 * k + d], n, gw, tile, PETSC_FALSE);
-      tb->tile[k][d] = tile;
     }
   return PETSC_TRUE;
 }
