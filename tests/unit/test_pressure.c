@@ -275,6 +275,26 @@ static PetscErrorCode ChannelReduce(const PffTestCtx *t, PetscInt ch, PetscInt m
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* A pressure on the case's grid and coefficients, solving to rtol, with PC pctype (NULL: the default). */
+static PetscErrorCode CasePressure(const PffTestCtx *t, const Case *c, PetscReal rtol, PCType pctype, PffPressure *ps)
+{
+  KSP ksp;
+
+  PetscFunctionBeginUser;
+  PetscCall(PffPressureCreate(t->grid, ps));
+  PetscCall(PffPressureSetFromOptions(*ps));
+  PetscCall(PffPressureGetKSP(*ps, &ksp));
+  PetscCall(KSPSetTolerances(ksp, rtol, 1e-50, PETSC_DEFAULT, 10000));
+  if (pctype) {
+    PC pc;
+    PetscCall(KSPGetPC(ksp, &pc));
+    PetscCall(PCSetType(pc, pctype));
+  }
+  PetscCall(PffPressureSetUp(*ps));
+  PetscCall(PffPressureSetCoefficients(*ps, c->betaCh, c->openCh));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /* out = {its, divBefore, divAfter (double), divAfter (float channel), |p - mean|_V, sum u^2} */
 static PetscErrorCode RunProjection(MPI_Comm comm, PetscBool graded, PetscBool perxz, PCType pctype, PetscReal out[6])
 {
@@ -285,8 +305,6 @@ static PetscErrorCode RunProjection(MPI_Comm comm, PetscBool graded, PetscBool p
   Case             c;
   PffPressure      ps;
   PffPressureStats st;
-  KSP              ksp;
-  PC               pc;
   PetscReal        vp, v, var;
 
   PetscFunctionBeginUser;
@@ -294,15 +312,8 @@ static PetscErrorCode RunProjection(MPI_Comm comm, PetscBool graded, PetscBool p
                               graded ? -1 : 0, 0, 5, &t));
   PetscCall(CaseSetUp(&t, 1, &c));
   PetscCall(PffGridFillChannel(t.grid, c.uCh, RandomVelocity, &c));
-  PetscCall(PffPressureCreate(t.grid, &ps));
-  PetscCall(PffPressureSetFromOptions(ps));
+  PetscCall(CasePressure(&t, &c, 1e-10, pctype, &ps));
   PetscCall(PffPressureSetMonitorDivergence(ps, PETSC_TRUE)); /* off by default: divBefore/divAfter would be -1 */
-  PetscCall(PffPressureGetKSP(ps, &ksp));
-  PetscCall(KSPSetTolerances(ksp, 1e-10, 1e-50, PETSC_DEFAULT, 10000));
-  PetscCall(KSPGetPC(ksp, &pc));
-  PetscCall(PCSetType(pc, pctype));
-  PetscCall(PffPressureSetUp(ps));
-  PetscCall(PffPressureSetCoefficients(ps, c.betaCh, c.openCh));
   PetscCall(PffPressureProject(ps, c.uCh, c.dt, c.cdivCh, c.pCh, &st));
   PetscCheck(st.reason > 0, comm, PETSC_ERR_NOT_CONVERGED, "projection with %s did not converge: %s", pctype,
              KSPConvergedReasons[st.reason]);
@@ -372,17 +383,11 @@ static PetscErrorCode TestProjectSource(void)
     Case             c;
     PffPressure      ps;
     PffPressureStats st[2];
-    KSP              ksp;
     PetscReal        su[2], sp[2];
     PetscCall(PffTestCreateGrid(PETSC_COMM_WORLD, nbG, per, origin, 1.0 / 32, 8, 3, graded ? -1 : 0, 0, 5, &t));
     PetscCall(CaseSetUp(&t, 1, &c));
     PetscCall(PffGridFillChannel(t.grid, c.cdivCh, RandomVelocity, &c));
-    PetscCall(PffPressureCreate(t.grid, &ps));
-    PetscCall(PffPressureSetFromOptions(ps));
-    PetscCall(PffPressureGetKSP(ps, &ksp));
-    PetscCall(KSPSetTolerances(ksp, 1e-10, 1e-50, PETSC_DEFAULT, 10000));
-    PetscCall(PffPressureSetUp(ps));
-    PetscCall(PffPressureSetCoefficients(ps, c.betaCh, c.openCh));
+    PetscCall(CasePressure(&t, &c, 1e-10, NULL, &ps));
     for (PetscInt k = 0; k < 2; k++) {
       PetscCall(PffGridFillChannel(t.grid, c.uCh, k == 0 ? RandomVelocity : PffTestZero, &c));
       PetscCall(PffGridFillChannel(t.grid, c.pCh, PffTestZero, &c));
@@ -421,7 +426,6 @@ static PetscErrorCode TestHydrostatic(void)
     Case             c;
     PffPressure      ps;
     PffPressureStats st;
-    KSP              ksp;
     PetscReal        umax;
 
     for (PetscInt b = 0; b < 16; b++) request[b] = graded ? map[(b / nb[0]) % nb[1]] : 0;
@@ -440,12 +444,7 @@ static PetscErrorCode TestHydrostatic(void)
     t.blen = n0 * t.h0;
     PetscCall(CaseSetUp(&t, 3, &c));
     PetscCall(PffGridFillChannel(t.grid, c.uCh, Gravity, &c));
-    PetscCall(PffPressureCreate(t.grid, &ps));
-    PetscCall(PffPressureSetFromOptions(ps));
-    PetscCall(PffPressureGetKSP(ps, &ksp));
-    PetscCall(KSPSetTolerances(ksp, 1e-12, 1e-50, PETSC_DEFAULT, 10000));
-    PetscCall(PffPressureSetUp(ps));
-    PetscCall(PffPressureSetCoefficients(ps, c.betaCh, c.openCh));
+    PetscCall(CasePressure(&t, &c, 1e-12, NULL, &ps));
     PetscCall(PffPressureProject(ps, c.uCh, c.dt, -1, c.pCh, &st));
     PetscCall(ChannelReduce(&t, c.uCh, 4, 0, &umax));
     PetscCall(PetscPrintf(PETSC_COMM_WORLD, "hydrostatic %-8s its %3d  max |u| / |dt g| = %.2e\n",
