@@ -17,10 +17,10 @@
    rotation in a walled box keeps every particle inside and the count; zero velocity with a sphere
    solid leaves no particle inside the sphere, and pushed equals the number that were inside.
    Cell values at the particles (PffParticlesInterpolateCell, float tiles in threads) agree with
-   PffGridInterpolate to 2e-6 on a graded periodic grid and on walled ones, and the callback sees
-   every particle once. Beside walls (whose ghosts hold junk that the grid's general path, clamping
-   there, never reads): G2P with alpha 0 agrees with PffGridInterpolate to 2e-6 relative, and a
-   uniform field along the walls moves every particle by u t to 1e-6 of the box, on 1 and 2 levels.
+   PffGridInterpolate to 2e-6 on a graded periodic grid and on walled ones, also where a plateau makes whole tiles
+   one value (passed without interpolating), and the callback sees every particle once. Beside walls (whose ghosts hold
+   junk that the grid's general path, clamping there, never reads): G2P with alpha 0 agrees with PffGridInterpolate to
+   2e-6 relative, and a uniform field along the walls moves every particle by u t to 1e-6 of the box, on 1 and 2 levels.
 
    Sample run:  mpiexec -n 4 ./test_particles_transfer
    Prints the same lines on any number of ranks. */
@@ -505,6 +505,13 @@ static PetscReal Wavy(const PetscReal x[3], PetscInt comp, void *ctx)
   return 0.5 + 0.3 * PetscSinReal(2 * PETSC_PI * x[0] / 1.5) * PetscCosReal(2 * PETSC_PI * x[1]) + 0.2 * x[2];
 }
 
+/* Wavy with a plateau of 0.75 for -0.1 < x < 0.6: the tiles of the blocks at 0 <= x < 0.5 (and their ghost layer)
+   hold one value, which PffParticlesInterpolateCell hands to their particles without interpolating. */
+static PetscReal Plateau(const PetscReal x[3], PetscInt comp, void *ctx)
+{
+  return x[0] > -0.1 && x[0] < 0.6 ? 0.75 : Wavy(x, comp, ctx);
+}
+
 typedef struct {
   float     *val;
   PetscInt64 calls; /* particles received */
@@ -521,7 +528,7 @@ static void StoreCell(PetscInt i0, PetscInt m, const float val[], void *ctx)
 /* PffParticlesInterpolateCell against the grid's PffGridInterpolate at the particles' world positions,
    on a graded periodic grid and on grids walled in z, whose wall ghosts hold junk (particles within a cell of
    a wall go point by point). */
-static PetscErrorCode TestCellInterpolation(PetscInt nlevels, PetscBool wallz)
+static PetscErrorCode TestCellInterpolation(PetscInt nlevels, PetscBool wallz, PetscBool plateau)
 {
   const PetscInt  nb[3]       = {3, 2, 2};
   const PetscBool periodic[3] = {PETSC_TRUE, PETSC_TRUE, (PetscBool)!wallz};
@@ -536,7 +543,7 @@ static PetscErrorCode TestCellInterpolation(PetscInt nlevels, PetscBool wallz)
   PetscCall(PffTestCreateGrid(PETSC_COMM_WORLD, nb, periodic, origin, 1.0 / 16, N0, nlevels, nlevels > 1 ? -1 : 0, 0, 9,
                               &ctx));
   PetscCall(PffGridAddChannel(ctx.grid, "phi", PFF_CHANNEL_CELL, 1, &ch));
-  PetscCall(PffGridFillChannel(ctx.grid, ch, Wavy, NULL));
+  PetscCall(PffGridFillChannel(ctx.grid, ch, plateau ? Plateau : Wavy, NULL));
   PetscCall(PffGridHaloBegin(ctx.grid, ch));
   PetscCall(PffGridHaloEnd(ctx.grid, ch));
   if (wallz) { /* junk that the general path, which clamps at walls, never reads */
@@ -559,8 +566,9 @@ static PetscErrorCode TestCellInterpolation(PetscInt nlevels, PetscBool wallz)
   /* float weights and values against the grid's double path */
   PetscCheck(err <= 2e-6, ctx.comm, PETSC_ERR_PLIB, "cell interpolation differs from PffGridInterpolate by %g",
              (double)err);
-  PetscCall(PetscPrintf(ctx.comm, "cell values at particles (%" PetscInt_FMT " level%s, %s): max difference %.1e\n",
-                        nlevels, nlevels > 1 ? "s" : "", wallz ? "walls in z" : "periodic", (double)err));
+  PetscCall(PetscPrintf(ctx.comm, "cell values at particles (%" PetscInt_FMT " level%s, %s%s): max difference %.1e\n",
+                        nlevels, nlevels > 1 ? "s" : "", wallz ? "walls in z" : "periodic",
+                        plateau ? ", a plateau" : "", (double)err));
   PetscCall(PffParticlesDestroy(&part));
   PetscCall(PffGridDestroy(&ctx.grid));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -680,9 +688,11 @@ int main(int argc, char **argv)
     PetscCall(TestUniformAdvection(PETSC_TRUE, k ? 0.4 : 2.5));
   }
   PetscCall(TestWalledRotationAndSolid());
-  PetscCall(TestCellInterpolation(2, PETSC_FALSE));
-  PetscCall(TestCellInterpolation(1, PETSC_TRUE));
-  PetscCall(TestCellInterpolation(2, PETSC_TRUE));
+  PetscCall(TestCellInterpolation(2, PETSC_FALSE, PETSC_FALSE));
+  PetscCall(TestCellInterpolation(1, PETSC_TRUE, PETSC_FALSE));
+  PetscCall(TestCellInterpolation(2, PETSC_TRUE, PETSC_FALSE));
+  PetscCall(TestCellInterpolation(1, PETSC_FALSE, PETSC_TRUE));
+  PetscCall(TestCellInterpolation(2, PETSC_TRUE, PETSC_TRUE));
   PetscCall(TestG2PMatchesGrid(1));
   PetscCall(TestG2PMatchesGrid(2));
   PetscCall(TestWalledUniformAdvection(1));
