@@ -63,7 +63,9 @@ typedef struct {
   PetscReal haloBytesMean; /* mean of the same over ranks */
 } PffPartitionQuality;
 
-/* Region index 0..26 of block-local cell (i, j, k) for a block with n cells per axis; 13 is the block itself. */
+/* Region index 0..26 of block-local cell (i, j, k) for a block with n cells per axis; PFF_REGION_SELF is the block
+   itself (its view reads the block's own storage). */
+#define PFF_REGION_SELF 13
 static inline PetscInt PffRegionIndex(PetscInt i, PetscInt j, PetscInt k, PetscInt n)
 {
   const PetscInt rx = i < 0 ? 0 : (i >= n ? 2 : 1), ry = j < 0 ? 0 : (j >= n ? 2 : 1),

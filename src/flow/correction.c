@@ -25,7 +25,6 @@
    (PffRegionDirection; PFF_REGION_SELF the block itself), the depth in b's own cells of b's slab toward that
    neighbour (0: none; at most a block's 64 cells, so a byte: the raster may hold millions of blocks). A depth along
    PFF_REGION_SELF means the whole block. */
-#define PFF_REGION_SELF 13
 
 /* A box of finest-cell units relative to a block's lower corner: [lo, hi) per axis */
 typedef struct {

@@ -114,14 +114,14 @@ static inline PetscErrorCode PffFlowBlockData_Private(PffFlow f, PetscInt lb, Pe
 }
 
 /* Tags (cell phi >= 1/2, liquid) of the two cells of the lower d-face of cell (i, j, k) of an n^3 block (a cell of the
-   block itself): hi the cell itself, lo its -d neighbour, from the block's own storage (view 13) when it lies in the
-   block (the region look-up per read was most of the phase field's and the correction's face passes), else through
-   the halo of the cell view vphi. */
+   block itself): hi the cell itself, lo its -d neighbour, from the block's own storage (PFF_REGION_SELF) when it lies
+   in the block (the region look-up per read was most of the phase field's and the correction's face passes), else
+   through the halo of the cell view vphi. */
 static inline void PffFlowFaceTags_Private(const PffView *vphi, PetscInt i, PetscInt j, PetscInt k, PetscInt d,
                                            PetscInt n, PetscBool *lo, PetscBool *hi)
 {
   if ((d == 0 ? i : (d == 1 ? j : k)) > 0) {
-    const float   *own = vphi[13].ptr + vphi[13].off;
+    const float   *own = vphi[PFF_REGION_SELF].ptr + vphi[PFF_REGION_SELF].off;
     const PetscInt c = i + n * (j + n * k), st = d == 0 ? 1 : (d == 1 ? n : n * n);
     *hi = (PetscBool)(own[c] >= 0.5);
     *lo = (PetscBool)(own[c - st] >= 0.5);
@@ -140,28 +140,20 @@ static inline void PffFlowCellVolumes_Private(const PffView *vw[3], const PffVie
 {
   PetscReal w = 0, wref = 0;
   PetscInt  no = 0;
-  if (i < n - 1 && j < n - 1 && k < n - 1) { /* every face in the block's own storage (view 13): no region look-up */
-    const PetscInt c = i + n * (j + n * k);
-    for (PetscInt d = 0; d < 3; d++) {
-      const PffView *o = &vo[d][13], *vv = &vw[d][13], *r = &vr[d][13];
-      const PetscInt st = d == 0 ? 1 : (d == 1 ? n : n * n);
-      for (PetscInt up = 0; up < 2; up++) {
-        const PetscInt q = c + up * st;
-        if (o->ptr[o->off + q] <= 0) continue;
-        w += vv->ptr[vv->off + q];
-        wref += r->ptr[r->off + q];
-        no++;
-      }
+  /* inside: every face lies in the block's own storage, read without a region look-up */
+  const PetscBool inside = (PetscBool)(i < n - 1 && j < n - 1 && k < n - 1);
+  const PetscInt  c      = i + n * (j + n * k);
+  for (PetscInt d = 0; d < 3; d++)
+    for (PetscInt up = 0; up < 2; up++) {
+      const PetscInt ii = i + (up && d == 0), jj = j + (up && d == 1), kk = k + (up && d == 2);
+      const PetscInt q = c + up * (d == 0 ? 1 : (d == 1 ? n : n * n));
+      const PffView *o = &vo[d][PFF_REGION_SELF], *vv = &vw[d][PFF_REGION_SELF], *r = &vr[d][PFF_REGION_SELF];
+      const float   *po = inside ? o->ptr + o->off + q : PffViewsAt(vo[d], ii, jj, kk, n);
+      if (*po <= 0) continue;
+      w += inside ? vv->ptr[vv->off + q] : *PffViewsAt(vw[d], ii, jj, kk, n);
+      wref += inside ? r->ptr[r->off + q] : *PffViewsAt(vr[d], ii, jj, kk, n);
+      no++;
     }
-  } else
-    for (PetscInt d = 0; d < 3; d++)
-      for (PetscInt up = 0; up < 2; up++) {
-        const PetscInt ii = i + (up && d == 0), jj = j + (up && d == 1), kk = k + (up && d == 2);
-        if (*PffViewsAt(vo[d], ii, jj, kk, n) <= 0) continue;
-        w += *PffViewsAt(vw[d], ii, jj, kk, n);
-        wref += *PffViewsAt(vr[d], ii, jj, kk, n);
-        no++;
-      }
   *wp    = w;
   *wrefp = wref;
   if (nopen) *nopen = no;

@@ -15,9 +15,9 @@ static inline PetscReal PffPhi(PetscReal rt, PetscReal rtmin, PetscReal scale)
 }
 
 /* The mean of one cell from its faces: lo[d], hi[d] the face phi below and above it along axis d, olo, ohi their open
-   fractions. Returns PETSC_FALSE (cell left alone) when bulkOnly and its open faces are not all 1 or all 0. */
-static inline PetscBool PffCellMean(const PetscReal lo[3], const PetscReal hi[3], const PetscReal olo[3],
-                                    const PetscReal ohi[3], PetscBool perAxis, PetscBool bulkOnly, float *out)
+   fractions, into *out; with bulkOnly a cell whose open faces are not all 1 or all 0 is left alone. */
+static inline void PffCellMean(const PetscReal lo[3], const PetscReal hi[3], const PetscReal olo[3],
+                               const PetscReal ohi[3], PetscBool perAxis, PetscBool bulkOnly, float *out)
 {
   PetscReal sum = 0, w = 0, all = 0, lo1 = 1, hi0 = 0, axes = 0, naxes = 0;
   for (PetscInt d = 0; d < 3; d++) {
@@ -37,9 +37,8 @@ static inline PetscBool PffCellMean(const PetscReal lo[3], const PetscReal hi[3]
       hi0 = PetscMax(hi0, hi[d]);
     }
   }
-  if (bulkOnly && !(w > 0 && (lo1 == 1 || hi0 == 0))) return PETSC_FALSE;
+  if (bulkOnly && !(w > 0 && (lo1 == 1 || hi0 == 0))) return;
   *out = (float)(w > 0 ? (perAxis ? axes / naxes : sum / w) : all / 6);
-  return PETSC_TRUE;
 }
 
 /* Cell phi = mean of the face phi over the cell's open faces (chPhiF's halo current); a cell with every
@@ -87,7 +86,7 @@ static PetscErrorCode PffFlowCellPhase(PffFlow f, PetscInt nlocal, PetscBool bul
               olo[d]              = *PffViewsAt(vopen[d], i, j, k, n);
               ohi[d]              = *PffViewsAt(vopen[d], i + e[0], j + e[1], k + e[2], n);
             }
-          (void)PffCellMean(lo, hi, olo, ohi, perAxis, bulkOnly, &cell[c]);
+          PffCellMean(lo, hi, olo, ohi, perAxis, bulkOnly, &cell[c]);
         }
   }
   PetscCall(PffGridHaloBegin(f->grid, f->chPhi));

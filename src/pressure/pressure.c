@@ -343,8 +343,7 @@ static PetscErrorCode PffPressureProjectFrom(PffPressure ps, PetscInt chU, Petsc
   PetscCall(PetscLogEventBegin(PFF_PressSolve, 0, 0, 0, 0));
   st.divBefore = st.divAfter = -1;
   if (fromRest) {
-    PetscCall(VecZeroEntries(ps->uf));
-    PetscCall(VecZeroEntries(ps->vcell)); /* the divergence of u* = 0 */
+    PetscCall(VecZeroEntries(ps->uf)); /* the divergence of u* = 0 is 0: b below reads no vcell */
     if (ps->monitorDivergence) st.divBefore = 0;
   } else {
     PetscCall(PffPressureChannelToVec_Private(ps, chU, PFF_CHANNEL_FACE, ps->uf));
@@ -355,15 +354,15 @@ static PetscErrorCode PffPressureProjectFrom(PffPressure ps, PetscInt chU, Petsc
   }
   if (chCdiv >= 0) {
     PetscScalar       *b;
-    const PetscScalar *y;
+    const PetscScalar *y = NULL;
     PetscCall(PffPressureChannelToVec_Private(ps, chCdiv, PFF_CHANNEL_CELL, ps->b));
     PetscCall(VecGetArray(ps->b, &b));
-    PetscCall(VecGetArrayRead(ps->vcell, &y));
+    if (!fromRest) PetscCall(VecGetArrayRead(ps->vcell, &y));
     for (PetscInt lb = 0; lb < ps->nlocal; lb++) {
       const PetscReal h = ps->hblock[lb], v = h * h * h;
-      for (PetscInt c = ps->blockStart[lb]; c < ps->blockStart[lb + 1]; c++) b[c] = y[c] - v * b[c];
+      for (PetscInt c = ps->blockStart[lb]; c < ps->blockStart[lb + 1]; c++) b[c] = (fromRest ? 0 : y[c]) - v * b[c];
     }
-    PetscCall(VecRestoreArrayRead(ps->vcell, &y));
+    if (!fromRest) PetscCall(VecRestoreArrayRead(ps->vcell, &y));
     PetscCall(VecRestoreArray(ps->b, &b));
   } else
     PetscCall(VecCopy(ps->vcell, ps->b));

@@ -412,13 +412,13 @@ static PetscErrorCode PffFlowSceneDiagRow(PffFlowScene *fs, PetscInt step, Petsc
   char       extra[512] = "";
 
   PetscFunctionBeginUser;
-  PetscCall(PffGridGetCellCounts(fs->grid, NULL, &cells)); /* an adaptive grid's cost follows them */
   PetscCall(PffFlowGetDiagnostics(fs->flow, &umaxGrid, NULL));
   PetscCall(PffFlowGetVolumeControl(fs->flow, NULL, &fraction));
   fs->umaxGrid = umaxGrid;
   PetscCall(PffFlowSceneVolumes(fs));
   if (fs->ops.diagnose) PetscCall(fs->ops.diagnose(fs, t, extra, sizeof(extra)));
   if (fs->diag) {
+    PetscCall(PffGridGetCellCounts(fs->grid, NULL, &cells)); /* an adaptive grid's cost follows them */
     fprintf(fs->diag,
             "%" PetscInt_FMT ",%.9e,%.9e,%.6e,%.6e,%" PetscInt64_FMT ",%" PetscInt_FMT
             ",%.3e,%.6e,%.9e,%" PetscInt64_FMT ",%" PetscInt64_FMT ",%.4e,%.9e,%.6f%s,%" PetscInt64_FMT "\n",
