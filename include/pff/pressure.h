@@ -174,7 +174,9 @@ PETSC_EXTERN PetscErrorCode PffKSPDefaultSubICC(KSP ksp, const char prefix[]);
    sweeps without adaptivity, 2), -pffmg_omega (6/7), -pffmg_theta_sigmas (2), -pffmg_max_levels, -pffmg_rescale (coarse
    coefficients consistent with the coarse discretisation, default true), -pffmg_kcycle (most flexible-CG steps per
    coarse correction, default 4; 0 = V-cycle), -pffmg_kcycle_rtol (a coarse correction stops when its residual has
-   fallen by this factor, default 0.25; 0 = always -pffmg_kcycle steps), -pffmg_correction (coarse-correction scale, 1),
+   fallen by this factor, default 0.25; 0 = always -pffmg_kcycle steps), -pffmg_kcycle_ratio (a level gets the K-cycle
+   only if the level above has at least this many times its rows, default 2.5; the others one cycle), -pffmg_correction
+   (coarse-correction scale, 1),
    and the coarsest-level KSP under pressure_pffmg_coarse_ (default preonly + redundant LU). The functions below need
    pffmg as the PC and a KSPSetUp or solve before them. */
 typedef struct {

@@ -28,6 +28,7 @@
 #define PFF_MG_RESCALE_DEFAULT PETSC_TRUE
 #define PFF_MG_KCYCLE_DEFAULT 4
 #define PFF_MG_KCYCLE_RTOL_DEFAULT 0.25
+#define PFF_MG_KCYCLE_RATIO_DEFAULT 2.5
 #define PFF_MG_COARSE_MAX_DEFAULT 4096
 #define PFF_MG_OPERATOR_DEFAULT PFF_MG_OPERATOR_STENCIL
 #define PFF_MG_OMP_MIN_ROWS_DEFAULT 32768
@@ -212,8 +213,15 @@ static PetscErrorCode PffMGSetUp(PC pc)
   if (mg->built && (mg->Apc != A || mg->topology != state)) PetscCall(PffMGDestroyLevels_Private(mg));
   if (!mg->built) PetscCall(PffMGBuildLevels_Private(mg));
   PetscCall(PffMGUpdateOperators_Private(mg, A));
-  for (PetscInt L = 1; L + 1 < mg->nlevels; L++)
-    if (mg->opt.kcycleIts > 0) PetscCall(PffMGSetUpKCycle(mg, L));
+  for (PetscInt L = 1; L + 1 < mg->nlevels; L++) {
+    PetscInt nf, nc;
+    PetscCall(MatGetSize(mg->lev[L - 1].A, &nf, NULL));
+    PetscCall(MatGetSize(mg->lev[L].A, &nc, NULL));
+    if (mg->opt.kcycleIts > 0 && (PetscReal)nf >= mg->opt.kcycleRatio * (PetscReal)nc)
+      PetscCall(PffMGSetUpKCycle(mg, L));
+    else
+      PetscCall(KSPDestroy(&mg->lev[L].kcycle));
+  }
   mg->stats.levels = mg->nlevels;
   PetscCall(PetscLogEventEnd(PFF_MGSetUp, 0, 0, 0, 0));
   PetscFunctionReturn(PETSC_SUCCESS);
@@ -285,6 +293,7 @@ static PetscErrorCode PCCreate_PffMG(PC pc)
   mg->opt.rescale        = PFF_MG_RESCALE_DEFAULT;
   mg->opt.kcycleIts      = PFF_MG_KCYCLE_DEFAULT;
   mg->opt.kcycleRtol     = PFF_MG_KCYCLE_RTOL_DEFAULT;
+  mg->opt.kcycleRatio    = PFF_MG_KCYCLE_RATIO_DEFAULT;
   mg->opt.coarseMax      = PFF_MG_COARSE_MAX_DEFAULT;
   mg->opt.operatorType   = PFF_MG_OPERATOR_DEFAULT;
   mg->opt.ompMinRows     = PFF_MG_OMP_MIN_ROWS_DEFAULT;
@@ -389,6 +398,10 @@ PetscErrorCode PffPressureMGSetFromOptions_Private(PC pc)
       PffOptionsReal("-pffmg_kcycle_rtol",
                      "A coarse correction stops when its residual falls by this factor (0: always -pffmg_kcycle steps)",
                      "PffPressureMG", mg->opt.kcycleRtol, &mg->opt.kcycleRtol, NULL));
+  PetscCall(
+      PffOptionsReal("-pffmg_kcycle_ratio",
+                     "K-cycle only on levels with at most 1/ratio of the rows of the level above (others: V-cycle)",
+                     "PffPressureMG", mg->opt.kcycleRatio, &mg->opt.kcycleRatio, NULL));
   PetscCall(PffOptionsBoundedInt("-pffmg_coarse_max",
                                  "Uniform coarse levels below the block raster until at most this many cells",
                                  "PffPressureMG", mg->opt.coarseMax, &mg->opt.coarseMax, NULL, 1));

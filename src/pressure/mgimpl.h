@@ -62,12 +62,13 @@ typedef struct {
   PetscReal         omega;
   PetscReal         thetaSigmas; /* theta = mean + thetaSigmas * std of log10 of the block maxima */
   PetscInt          maxLevels;
-  PetscInt          coarseMax;  /* add uniform levels below the raster until at most this many cells */
-  PetscReal         correction; /* coarse-grid correction scale */
-  PetscInt          kcycleIts;  /* flexible-CG steps per coarse correction, 0: V-cycle */
-  PetscReal         kcycleRtol; /* a coarse correction stops early at this residual reduction; 0: always kcycleIts */
-  PetscBool         rescale;    /* rediscretisation-consistent coarse coefficients (mglevels.c) */
-  PetscInt          ompMinRows; /* fewest rows per rank for a level's smoothing and products to fork threads */
+  PetscInt          coarseMax;   /* add uniform levels below the raster until at most this many cells */
+  PetscReal         correction;  /* coarse-grid correction scale */
+  PetscInt          kcycleIts;   /* flexible-CG steps per coarse correction, 0: V-cycle */
+  PetscReal         kcycleRtol;  /* a coarse correction stops early at this residual reduction; 0: always kcycleIts */
+  PetscReal         kcycleRatio; /* K-cycle on a level only if the level above has at least this many times its rows */
+  PetscBool         rescale;     /* rediscretisation-consistent coarse coefficients (mglevels.c) */
+  PetscInt          ompMinRows;  /* fewest rows per rank for a level's smoothing and products to fork threads */
 } PffMGOptions;
 
 /* One multigrid level. Rows are the owned cells: owned blocks in local (Morton) order, cells x

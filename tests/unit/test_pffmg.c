@@ -542,6 +542,62 @@ static PetscErrorCode TestKCycle(void)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
+/* The K-cycle only below strong coarsening (-pressure_pffmg_kcycle_ratio): on the graded grid the first coarse level
+   keeps the coarse block's cells and holds 1/3.1 of the finest level's rows. With the ratio at 4 that level gets one
+   cycle instead of up to four flexible-CG steps: fewer cell updates per iteration, the same residual, at most four
+   iterations more (three here: a level at 1/3.1 is still worth its K-cycle, which is why the default is 2.5).
+   At the default the graded grid keeps the K-cycle on every level (the same iterations and updates as ratio 0). */
+static PetscErrorCode TestKCycleRatio(void)
+{
+  const char *const ratio[3] = {"4", "0", NULL};
+  PetscInt          its[3], n[2];
+  PetscReal         rn[3], upd[3];
+
+  PetscFunctionBeginUser;
+  {
+    PffTestCtx  t;
+    Bubbly      c;
+    PffPressure ps;
+    Mat         A;
+    PetscCall(CreateCase(PETSC_COMM_WORLD, 32, 8, PETSC_TRUE, 1e3, &t, &c));
+    PetscCall(CreatePressure(&t, &c, 1e-8, &ps));
+    for (PetscInt L = 0; L < 2; L++) {
+      PetscCall(PffPressureMGGetLevel(ps, L, &A, NULL));
+      PetscCall(MatGetSize(A, &n[L], NULL));
+    }
+    PetscCall(PffPressureDestroy(&ps));
+    PetscCall(PffGridDestroy(&t.grid));
+  }
+  PetscCheck(4 * n[1] > n[0] && 5 * n[1] < 2 * n[0], PETSC_COMM_WORLD, PETSC_ERR_PLIB,
+             "kcycle ratio: the graded case's level 1 has %" PetscInt_FMT " rows of level 0's %" PetscInt_FMT
+             ", not between 1/4 and 1/2.5",
+             n[1], n[0]);
+  for (PetscInt k = 0; k < 3; k++) {
+    PffMGStats mst;
+    if (ratio[k])
+      PetscCall(PetscOptionsSetValue(NULL, "-pressure_pffmg_kcycle_ratio", ratio[k]));
+    else
+      PetscCall(PetscOptionsClearValue(NULL, "-pressure_pffmg_kcycle_ratio"));
+    PetscCall(Solve(PETSC_COMM_WORLD, PETSC_TRUE, 1e3, &its[k], &rn[k], &mst));
+    PetscCheck(rn[k] <= 1e-8, PETSC_COMM_WORLD, PETSC_ERR_PLIB, "kcycle ratio %s: residual %g above 1e-8",
+               ratio[k] ? ratio[k] : "default", (double)rn[k]);
+    upd[k] = (PetscReal)mst.cellUpdates / (PetscReal)its[k];
+  }
+  PetscCheck(upd[0] < upd[1] && its[0] <= its[1] + 4, PETSC_COMM_WORLD, PETSC_ERR_PLIB,
+             "kcycle ratio 4: %" PetscInt_FMT " iterations, %g cell updates each; ratio 0: %" PetscInt_FMT
+             " iterations, %g cell updates each",
+             its[0], (double)upd[0], its[1], (double)upd[1]);
+  PetscCheck(its[2] == its[1] && upd[2] == upd[1], PETSC_COMM_WORLD, PETSC_ERR_PLIB,
+             "kcycle ratio: the default changed the graded case (%" PetscInt_FMT " iterations, %g cell updates each)",
+             its[2], (double)upd[2]);
+  PetscCall(PetscPrintf(
+      PETSC_COMM_WORLD,
+      "kcycle ratio graded bubbly 32^3 (levels 0, 1: %" PetscInt_FMT ", %" PetscInt_FMT " rows): ratio 4 %" PetscInt_FMT
+      " iterations, %.0f cell updates each; ratio 0 and default %" PetscInt_FMT " iterations, %.0f cell updates each\n",
+      n[0], n[1], its[0], (double)upd[0], its[1], (double)upd[1]));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 /* The per-level log events (-log_view's MGLevel0 ... MGLevel7+): level 0's is entered twice per V-cycle (before and
    after the coarse correction); each level above the coarsest at least as often as the one above it (the K-cycle
    visits a coarser level once or more per visit of the finer one); the coarsest never (MGCoarse times it); and
@@ -734,6 +790,7 @@ int main(int argc, char **argv)
   PetscCall(TestSolve(PETSC_TRUE, PETSC_FALSE));
   PetscCall(TestSolve(PETSC_TRUE, PETSC_TRUE));
   PetscCall(TestKCycle());
+  PetscCall(TestKCycleRatio());
   PetscCall(TestAdaptive());
   PetscCall(TestActivationTurned());
   PetscCall(TestNewCoefficients());
