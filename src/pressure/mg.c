@@ -217,10 +217,15 @@ static PetscErrorCode PffMGSetUp(PC pc)
     PetscInt nf, nc;
     PetscCall(MatGetSize(mg->lev[L - 1].A, &nf, NULL));
     PetscCall(MatGetSize(mg->lev[L].A, &nc, NULL));
-    if (mg->opt.kcycleIts > 0 && (PetscReal)nf >= mg->opt.kcycleRatio * (PetscReal)nc)
+    const PetscBool k = (PetscBool)(mg->opt.kcycleIts > 0 && (PetscReal)nf >= mg->opt.kcycleRatio * (PetscReal)nc);
+    if (k)
       PetscCall(PffMGSetUpKCycle(mg, L));
     else
       PetscCall(KSPDestroy(&mg->lev[L].kcycle));
+    PetscCall(PetscInfo(pc,
+                        "pffmg: level %" PetscInt_FMT " of %" PetscInt_FMT ": %" PetscInt_FMT
+                        " rows (1/%.2f of the level above), %s\n",
+                        L, mg->nlevels, nc, (double)nf / (double)PetscMax(nc, 1), k ? "K-cycle" : "one cycle"));
   }
   mg->stats.levels = mg->nlevels;
   PetscCall(PetscLogEventEnd(PFF_MGSetUp, 0, 0, 0, 0));

@@ -48,6 +48,7 @@ typedef struct {
   PffMGReal *cghost;            /* [nslot] */
   PetscSF    sfSlot;            /* owned cf -> cghost */
   Mat        Aview;             /* assembled copy for PffPressureMGGetLevel, or NULL */
+  PetscInt   nclosed, *closed;  /* level 0: the rows with no open face and no Dirichlet term (inside solids) */
 } PffMGStencil;
 
 /* Options (prefix pressure_pffmg_), defaults beside PffMGCreate in mg.c. */

@@ -424,6 +424,7 @@ PetscErrorCode PffMGStencilDestroy_Private(PffMGLevel *lv)
   PetscCall(PetscFree(st->ghostRow));
   PetscCall(PetscFree4(st->cf, st->dx, st->ds, st->cghost));
   PetscCall(PetscFree2(st->adf, st->idf));
+  PetscCall(PetscFree(st->closed));
   PetscCall(PetscSFDestroy(&st->sfSlot));
   PetscCall(MatDestroy(&st->Aview));
   PetscCall(PetscFree(lv->st));
@@ -570,6 +571,7 @@ PetscErrorCode PffMGStencilUpdate_Private(PffMG *mg, PetscInt L)
     st->val[e]       = st->fac[e] * (r < 3 * nr ? st->cf[r] : st->cghost[r - 3 * nr]);
   }
   for (PetscInt r = 0; r < nr; r++) st->ds[r] = 0;
+  st->nclosed = 0;
   for (PetscInt e = 0; e < st->ndiag; e++) {
     const PetscInt r = st->dref[e];
     st->ds[st->drow[e]] += (PetscReal)st->dfac[e] * (r < 3 * nr ? st->cf[r] : st->cghost[r - 3 * nr]);
@@ -580,9 +582,17 @@ PetscErrorCode PffMGStencilUpdate_Private(PffMG *mg, PetscInt L)
       for (PetscInt j = 0; j < n; j++)
         for (PetscInt i = 0; i < n; i++) {
           const PetscInt r = o + i + n * (j + n * k);
-          if (L == 0 && DiagonalInBlock(st, nr, r, i, j, k, n) + st->ds[r] + st->dx[r] == 0)
-            st->dx[r] = 1; /* no open face and no Dirichlet term */
-          st->ds[r] += st->dx[r];
+          /* no open face and no Dirichlet term (inside a solid): an identity row on level 0, kept out of dx, which
+             Algorithm 1 sums into the coarse cells: there it acted as a Dirichlet condition p = 0 at the solid's
+             cells, a wall that is not there, and the K-cycle, which solves the coarse problems more exactly than one
+             cycle, took twice the FCG iterations of a V-cycle in the dam breaks with their obstacle */
+          const PetscBool closed =
+              (PetscBool)(L == 0 && DiagonalInBlock(st, nr, r, i, j, k, n) + st->ds[r] + st->dx[r] == 0);
+          st->ds[r] += st->dx[r] + (closed ? 1 : 0);
+          if (closed) {
+            if (st->nclosed % 1024 == 0) PetscCall(PetscRealloc(sizeof(PetscInt) * (st->nclosed + 1024), &st->closed));
+            st->closed[st->nclosed++] = r;
+          }
           /* a zero row is legitimate on a coarse level: a cell that aggregates a region whose every outer
              face is closed (on the last level, a closed box of one block); it is not relaxed, as on the
              AIJ levels, and the pinned coarsest operator takes care of it */
@@ -1202,6 +1212,9 @@ PetscErrorCode PffMGStencilProlongAdd_Private(PffMG *mg, PetscInt L, Vec cxv, Ve
       for (PetscInt i = 0; i < nf; i++) xr[q * nf + i] += cr[o + (i >> s)];
     }
   }
+  /* P leaves the cells inside solids alone (their identity rows are not part of the coarse operator, see
+     PffMGStencilUpdate_Private), so x stays 0 there and so does their residual */
+  for (PetscInt e = 0; e < lv->st->nclosed; e++) x[lv->st->closed[e]] = 0;
   PetscCall(VecRestoreArray(xv, &x));
   PetscCall(VecRestoreArrayRead(cxv, &cx));
   PetscFunctionReturn(PETSC_SUCCESS);
