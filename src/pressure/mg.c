@@ -418,6 +418,9 @@ PetscErrorCode PffPressureMGSetFromOptions_Private(PC pc)
              "-pressure_pffmg_omega %g is invalid: must lie in (0, 2)", (double)mg->opt.omega);
   PetscCheck(mg->opt.kcycleRtol >= 0 && mg->opt.kcycleRtol < 1, mg->comm, PETSC_ERR_ARG_OUTOFRANGE,
              "-pressure_pffmg_kcycle_rtol %g is invalid: must lie in [0, 1)", (double)mg->opt.kcycleRtol);
+  PetscCheck(mg->opt.kcycleRatio >= 0, mg->comm, PETSC_ERR_ARG_OUTOFRANGE,
+             "-pressure_pffmg_kcycle_ratio %g is invalid: must be >= 0 (0: the K-cycle on every level)",
+             (double)mg->opt.kcycleRatio);
   PetscCall(KSPSetFromOptions(mg->coarse));
   mg->optionsRead = PETSC_TRUE;
   PetscFunctionReturn(PETSC_SUCCESS);
