@@ -211,7 +211,8 @@ static PetscErrorCode PffMGSetUp(PC pc)
   /* a new operator, or one of a new topology: a freed Mat's address can come back for the next one */
   if (mg->built) PetscCall(PffGridGetTopologyState(mg->grid, &state));
   if (mg->built && (mg->Apc != A || mg->topology != state)) PetscCall(PffMGDestroyLevels_Private(mg));
-  if (!mg->built) PetscCall(PffMGBuildLevels_Private(mg));
+  const PetscBool rebuilt = (PetscBool)!mg->built;
+  if (rebuilt) PetscCall(PffMGBuildLevels_Private(mg));
   PetscCall(PffMGUpdateOperators_Private(mg, A));
   for (PetscInt L = 1; L + 1 < mg->nlevels; L++) {
     PetscInt nf, nc;
@@ -222,10 +223,11 @@ static PetscErrorCode PffMGSetUp(PC pc)
       PetscCall(PffMGSetUpKCycle(mg, L));
     else
       PetscCall(KSPDestroy(&mg->lev[L].kcycle));
-    PetscCall(PetscInfo(pc,
-                        "pffmg: level %" PetscInt_FMT " of %" PetscInt_FMT ": %" PetscInt_FMT
-                        " rows (1/%.2f of the level above), %s\n",
-                        L, mg->nlevels, nc, (double)nf / (double)PetscMax(nc, 1), k ? "K-cycle" : "one cycle"));
+    if (rebuilt) /* the rows follow the grid: once per hierarchy, not every step */
+      PetscCall(PetscInfo(pc,
+                          "pffmg: level %" PetscInt_FMT " of %" PetscInt_FMT ": %" PetscInt_FMT
+                          " rows (1/%.2f of the level above), %s\n",
+                          L, mg->nlevels, nc, (double)nf / (double)PetscMax(nc, 1), k ? "K-cycle" : "one cycle"));
   }
   mg->stats.levels = mg->nlevels;
   PetscCall(PetscLogEventEnd(PFF_MGSetUp, 0, 0, 0, 0));

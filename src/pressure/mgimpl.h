@@ -49,6 +49,7 @@ typedef struct {
   PetscSF    sfSlot;            /* owned cf -> cghost */
   Mat        Aview;             /* assembled copy for PffPressureMGGetLevel, or NULL */
   PetscInt   nclosed, *closed;  /* level 0: the rows with no open face and no Dirichlet term (inside solids) */
+  PetscInt   closedCap;         /* room in closed */
 } PffMGStencil;
 
 /* Options (prefix pressure_pffmg_), defaults beside PffMGCreate in mg.c. */

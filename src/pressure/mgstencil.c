@@ -590,7 +590,10 @@ PetscErrorCode PffMGStencilUpdate_Private(PffMG *mg, PetscInt L)
               (PetscBool)(L == 0 && DiagonalInBlock(st, nr, r, i, j, k, n) + st->ds[r] + st->dx[r] == 0);
           st->ds[r] += st->dx[r] + (closed ? 1 : 0);
           if (closed) {
-            if (st->nclosed % 1024 == 0) PetscCall(PetscRealloc(sizeof(PetscInt) * (st->nclosed + 1024), &st->closed));
+            if (st->nclosed == st->closedCap) { /* grows only: the set is found again at every update */
+              st->closedCap = PetscMax(1024, 2 * st->closedCap);
+              PetscCall(PetscRealloc(sizeof(PetscInt) * (size_t)st->closedCap, &st->closed));
+            }
             st->closed[st->nclosed++] = r;
           }
           /* a zero row is legitimate on a coarse level: a cell that aggregates a region whose every outer
