@@ -584,8 +584,8 @@ PetscErrorCode PffMGStencilUpdate_Private(PffMG *mg, PetscInt L)
           const PetscInt r = o + i + n * (j + n * k);
           /* no open face and no Dirichlet term (inside a solid): an identity row on level 0, kept out of dx, which
              Algorithm 1 sums into the coarse cells: there it acted as a Dirichlet condition p = 0 at the solid's
-             cells, a wall that is not there, and the K-cycle, which solves the coarse problems more exactly than one
-             cycle, took twice the FCG iterations of a V-cycle in the dam breaks with their obstacle */
+             cells, a wall that is not there, and the K-cycle, which solves the coarse problems more exactly, took
+             more FCG iterations than a V-cycle in the dam breaks with their obstacle (docs/benchmarks.md) */
           const PetscBool closed =
               (PetscBool)(L == 0 && DiagonalInBlock(st, nr, r, i, j, k, n) + st->ds[r] + st->dx[r] == 0);
           st->ds[r] += st->dx[r] + (closed ? 1 : 0);

@@ -600,7 +600,7 @@ static PetscErrorCode TestKCycleRatio(void)
 
 /* A solid obstacle: the faces of a box on the floor are closed, so its cells have no open face and get identity rows
    on level 0. Those rows must not reach the coarse levels, where they acted as p = 0 at the solid (a wall that is not
-   there: the K-cycle then took twice the iterations of the V-cycle in the dam breaks, tested on the real scene by
+   there: the K-cycle then took more iterations than the V-cycle in the dam breaks, tested on the real scene by
    dam_break_solid_its in tests/postproc), so the prolongation leaves the cells inside the solid alone: one
    application of the preconditioner to a random vector that is 0 there must return 0 there, and not elsewhere. */
 static PetscBool InBox(const PetscReal y[3])
