@@ -212,11 +212,19 @@ PETSC_EXTERN PetscErrorCode PffParticlesGetKernelSum(PffParticles p, PetscReal *
    gives chMass = density * rho~_0 at every level. chVolume (a face channel, or -1) receives the
    type-blind particle volume sum_p t_fp V_p / 8^l_f with the trilinear weight t_fp of the same 2 x 2 x 2
    faces (a partition of unity: its expectation is the same for a lattice and for randomly placed
-   particles, which Eq. 6's kernel sum is not, by 1.7 %), for the volume correction (docs/flow.md). Splatting is
+   particles, which Eq. 6's kernel sum is not, by 1.7 %), for the liquid model's volume correction (docs/tallcell.md;
+   the two-phase model measures on the cell centres, PffParticlesSplatVolume). Splatting is
    lock-free by 8-colour blocks (OpenMP); contributions to ghost faces are summed into their owners by the reverse halo.
    Collective. */
 PETSC_EXTERN PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTICLE_NTYPES],
                                             PetscInt chMass, PetscInt chMom, PetscInt chVolume);
+
+/* Zeroes the cell channel chVolume (one component, halo width >= 1) and accumulates the particles' volume on the cell
+   centres, chVolume[c] = sum_p t_cp 8^l_p: t_cp the trilinear weight of cell centre c of the lattice of the block the
+   particle lies in, 8^l_p its volume in level-0 particles. Absolute volumes, so the reverse halo's conservative
+   cross-level transfer keeps each particle's volume whole across level boundaries (walls drop what lies beyond them).
+   The measure of the two-phase volume correction (docs/flow.md). Lock-free by 8-colour blocks (OpenMP). Collective. */
+PETSC_EXTERN PetscErrorCode PffParticlesSplatVolume(PffParticles p, PetscInt chVolume);
 
 /* Trilinear interpolation of cell channel ch (ghosts current) at every particle, in float: fn receives
    the values of particles [i0, i0 + m) of one block and may change their words (for example flag

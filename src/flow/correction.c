@@ -105,12 +105,15 @@ static PetscErrorCode PffReferenceSeed(const PetscReal x[3], PetscInt *type, Pet
 #define PFF_REFERENCE_BATCH ((PetscInt64)1 << 20)
 
 /* Owned values of src copied (add = false) or added to dst on the cells of local block lb that mask marks, or on
-   all of them for mask NULL (face channels of one component: a cell owns its lower faces) */
-static PetscErrorCode PffCopyFaceChannel(PffGrid grid, PetscInt lb, PetscInt src, PetscInt dst, const PetscBool mask[],
-                                         PetscBool add)
+   all of them for mask NULL (cell or face channels of one width; a cell owns its lower faces) */
+static PetscErrorCode PffCopyChannel(PffGrid grid, PetscInt lb, PetscInt src, PetscInt dst, const PetscBool mask[],
+                                     PetscBool add)
 {
+  PffChannelKind kind;
+
   PetscFunctionBeginUser;
-  for (PetscInt d = 0; d < 3; d++) {
+  PetscCall(PffGridGetChannelInfo(grid, src, NULL, &kind, NULL, NULL));
+  for (PetscInt d = 0; d < (kind == PFF_CHANNEL_FACE ? 3 : 1); d++) {
     float   *s, *t;
     PetscInt n3 = 0;
     PetscCall(PffFlowGridBlockData_Private(grid, lb, d, 1, &src, &s, &n3));
@@ -232,12 +235,12 @@ static PetscErrorCode ReferenceLattice(PffFlow f, const uint8_t depth[], PetscBo
     c0 = c1;
     /* the kernel sum of Eq. 6 for the same lattice normalises Eq. 7 (phase.c); mass, momentum and volume land in
        working channels that every step overwrites */
-    PetscCall(PffParticlesP2G(ref, one, f->chMass, f->chUt, f->chVol));
+    PetscCall(PffFlowSplat_Private(f, ref, one));
     for (PetscInt lb = 0; lb < nlocal; lb++) {
       if (!whole[lb] && !copy[lb]) continue;
-      PetscCall(PffCopyFaceChannel(f->grid, lb, f->chMass, f->chMassRef, copy[lb], (PetscBool)(k > 0)));
+      PetscCall(PffCopyChannel(f->grid, lb, f->chMass, f->chMassRef, copy[lb], (PetscBool)(k > 0)));
       if (f->chVolRef >= 0)
-        PetscCall(PffCopyFaceChannel(f->grid, lb, f->chVol, f->chVolRef, copy[lb], (PetscBool)(k > 0)));
+        PetscCall(PffCopyChannel(f->grid, lb, f->chVol, f->chVolRef, copy[lb], (PetscBool)(k > 0)));
     }
   }
   PetscCall(PffParticlesDestroy(&ref));
@@ -431,25 +434,23 @@ static PetscErrorCode PffCorrectionSource(PffFlow f)
   /* first pass: s into c_div (-1 where no face is open), the totals */
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PffBlockInfo   info;
-    const PffView *vw[3], *vr[3], *vo[3];
-    float         *cdiv, *phi;
+    const PffView *vo[3];
+    float         *cdiv, *phi, *vw, *vr;
     PetscCall(PffGridGetBlockInfo(f->grid, lb, &info));
     PetscCall(PffGridGetBlockData(f->grid, f->chCdiv, lb, 0, &cdiv));
     PetscCall(PffGridGetBlockData(f->grid, f->chPhi, lb, 0, &phi));
-    for (PetscInt d = 0; d < 3; d++) {
-      PetscCall(PffGridGetBlockViews(f->grid, f->chVol, lb, d, &vw[d]));
-      PetscCall(PffGridGetBlockViews(f->grid, f->chVolRef, lb, d, &vr[d]));
-      PetscCall(PffGridGetBlockViews(f->grid, f->chOpen, lb, d, &vo[d]));
-    }
+    PetscCall(PffGridGetBlockData(f->grid, f->chVol, lb, 0, &vw));
+    PetscCall(PffGridGetBlockData(f->grid, f->chVolRef, lb, 0, &vr));
+    for (PetscInt d = 0; d < 3; d++) PetscCall(PffGridGetBlockViews(f->grid, f->chOpen, lb, d, &vo[d]));
     const PetscInt  n  = info.n;
     const PetscReal vc = info.h * info.h * info.h;
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt j = 0; j < n; j++)
         for (PetscInt i = 0; i < n; i++) {
-          const PetscInt c = i + n * (j + n * k);
-          PetscReal      w, wref;
-          PffFlowCellVolumes_Private(vw, vr, vo, i, j, k, n, &w, &wref, NULL);
-          if (wref <= 0) {
+          const PetscInt  c = i + n * (j + n * k);
+          const PetscReal w = vw[c], wref = vr[c];
+          /* a cell inside a solid may hold a lattice particle's kernel tail: it has no open face and no source */
+          if (wref <= 0 || !PffFlowCellOpen_Private(vo, i, j, k, n)) {
             cdiv[c] = -1;
             continue;
           }
@@ -531,8 +532,6 @@ static PetscErrorCode PffCorrectionDisplacement(PffFlow f, PffPressureStats *st)
 PetscErrorCode PffFlowVolumeCorrection_Private(PffFlow f, PffFlowStepStats *st)
 {
   PetscFunctionBeginUser;
-  PetscCall(PffGridHaloBegin(f->grid, f->chVol));
-  PetscCall(PffGridHaloEnd(f->grid, f->chVol));
   PetscCall(PffCorrectionSource(f));
   PetscCall(PffCorrectionDisplacement(f, &st->correction));
   PetscFunctionReturn(PETSC_SUCCESS);

@@ -332,8 +332,10 @@ PetscErrorCode PffFlowSetUp(PffFlow f)
   if (f->model == PFF_FLOW_LIQUID) PetscCall(PffFlowLiquidBandSetUp_Private(f));
   /* the volume correction needs the projection and moves particles, so a prescribed field has none */
   if (!f->prescribed && f->usePressure && f->volCorr > 0) {
-    PetscCall(PffGridAddChannel(f->grid, "volume", PFF_CHANNEL_FACE, 1, &f->chVol));
-    PetscCall(PffGridAddChannel(f->grid, "volume_ref", PFF_CHANNEL_FACE, 1, &f->chVolRef));
+    /* the two-phase measure is on the cell centres (PffParticlesSplatVolume), the liquid model's on the faces */
+    const PffChannelKind vkind = f->model == PFF_FLOW_TWO_PHASE ? PFF_CHANNEL_CELL : PFF_CHANNEL_FACE;
+    PetscCall(PffGridAddChannel(f->grid, "volume", vkind, 1, &f->chVol));
+    PetscCall(PffGridAddChannel(f->grid, "volume_ref", vkind, 1, &f->chVolRef));
     PetscCall(PffGridAddChannel(f->grid, "cdiv", PFF_CHANNEL_CELL, 1, &f->chCdiv));
     /* the liquid model's correction is local (liquidcorr.c): no potential; chUa is the liquid's advection */
     if (f->model == PFF_FLOW_TWO_PHASE)

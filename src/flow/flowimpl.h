@@ -159,6 +159,21 @@ static inline void PffFlowCellVolumes_Private(const PffView *vw[3], const PffVie
   if (nopen) *nopen = no;
 }
 
+/* Whether cell (i, j, k) of an n^3 block has an open face (vo: the open fractions' face views) */
+static inline PetscBool PffFlowCellOpen_Private(const PffView *vo[3], PetscInt i, PetscInt j, PetscInt k, PetscInt n)
+{
+  const PetscBool inside = (PetscBool)(i < n - 1 && j < n - 1 && k < n - 1);
+  const PetscInt  c      = i + n * (j + n * k);
+  for (PetscInt d = 0; d < 3; d++) {
+    const PffView *o = &vo[d][PFF_REGION_SELF];
+    if (o->ptr[o->off + c] > 0) return PETSC_TRUE;
+    const PetscInt ii = i + (d == 0), jj = j + (d == 1), kk = k + (d == 2);
+    const PetscInt q  = c + (d == 0 ? 1 : (d == 1 ? n : n * n));
+    if ((inside ? o->ptr[o->off + q] : *PffViewsAt(vo[d], ii, jj, kk, n)) > 0) return PETSC_TRUE;
+  }
+  return PETSC_FALSE;
+}
+
 /* The face neighbours of cell (i, j, k) of an n^3 block that are walls (across the block's holes) or whose value in the
    cell view v is >= thr (above) or < thr (!above): the liquid model's tests of an enclosed void and of an interior
    cell. */
@@ -181,6 +196,10 @@ static inline PetscInt PffFlowFaceNeighbours_Private(const PffBlockInfo *info, c
 }
 
 /* adapt.c */
+/* P2G of particles part (the flow's, or a reference lattice) into chMass and chUt, and their volume into chVol when
+   there is a volume correction: on the cell centres in the two-phase model, on the faces (with P2G) in the liquid
+   model. Collective. */
+PETSC_INTERN PetscErrorCode PffFlowSplat_Private(PffFlow, PffParticles part, const PetscReal density[]);
 PETSC_INTERN PetscErrorCode PffFlowAdaptSetUp_Private(PffFlow);
 PETSC_INTERN PetscErrorCode PffFlowAdaptDestroy_Private(PffFlow);
 PETSC_INTERN PetscErrorCode PffFlowAdapt_Private(PffFlow, PffFlowAdaptStats *);

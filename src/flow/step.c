@@ -8,7 +8,18 @@
 static PetscLogStage PffFlowStages[PFF_FLOW_NSTAGES];
 static PetscBool     PffFlowStagesRegistered = PETSC_FALSE;
 
-static PetscErrorCode PffFlowRegisterStages(void)
+/* the volume on the cell centres in the two-phase model (volume.c explains why), with P2G's faces in the liquid model */
+PetscErrorCode PffFlowSplat_Private(PffFlow f, PffParticles part, const PetscReal density[])
+{
+  const PetscBool cells = (PetscBool)(f->chVol >= 0 && f->model == PFF_FLOW_TWO_PHASE);
+
+  PetscFunctionBeginUser;
+  PetscCall(PffParticlesP2G(part, density, f->chMass, f->chUt, cells ? -1 : f->chVol));
+  if (cells) PetscCall(PffParticlesSplatVolume(part, f->chVol));
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
+PetscErrorCode PffFlowRegisterStages(void)
 {
   PetscFunctionBeginUser;
   if (PffFlowStagesRegistered) PetscFunctionReturn(PETSC_SUCCESS);
@@ -56,7 +67,7 @@ static PetscErrorCode PffFlowTransfer(PffFlow f, PffFlowStepStats *st)
 
   PetscFunctionBeginUser;
   PetscCall(PffStageBegin(PFF_STAGE_P2G, &t0));
-  PetscCall(PffParticlesP2G(f->part, f->rho, f->chMass, f->chUt, f->chVol));
+  PetscCall(PffFlowSplat_Private(f, f->part, f->rho));
   if (f->band > 0) PetscCall(PffFlowLiquidBandFill_Private(f));
   PetscCall(PffStageEnd(st, PFF_STAGE_P2G, t0));
   PetscCall(PffStageBegin(PFF_STAGE_PHASE, &t0));

@@ -182,13 +182,34 @@ static void PffSplatBlock(const PffParticleSoA *s, PetscInt i0, PetscInt i1, con
     }
 }
 
+void PffParticlesColourOrder_Private(PffParticles p, const PffBlockInfo info[], PetscInt colour[], PetscInt order[],
+                                     PetscInt cstart[28])
+{
+  PetscInt fill[27];
+
+  for (int c = 0; c < 28; c++) cstart[c] = 0;
+  for (PetscInt lb = 0; lb < p->nlocal; lb++) {
+    PetscInt c = 0;
+    for (int a = 0, m = 1; a < 3; a++, m *= 3) {
+      const PetscInt  ia  = info[lb].ijk[a];
+      const PetscBool odd = (PetscBool)(p->periodic[a] && (p->nb[a] & 1) && ia == p->nb[a] - 1);
+      c += m * (odd ? 2 : (ia & 1));
+    }
+    colour[lb] = c;
+    cstart[c + 1]++;
+  }
+  for (int c = 0; c < 27; c++) cstart[c + 1] += cstart[c];
+  for (int c = 0; c < 27; c++) fill[c] = cstart[c];
+  for (PetscInt lb = 0; lb < p->nlocal; lb++) order[fill[colour[lb]]++] = lb;
+}
+
 PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTICLE_NTYPES], PetscInt chMass,
                                PetscInt chMom, PetscInt chVolume)
 {
   PffBlockInfo   *info;
   const PffView **views;
   float         **data;
-  PetscInt       *order, cstart[28] = {0};
+  PetscInt       *order, cstart[28];
 
   PetscFunctionBeginUser;
   PetscCall(PffParticlesCheckBinned_Private(p, "PffParticlesP2G")); /* may rebin after an adapt */
@@ -231,24 +252,7 @@ PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTI
   PetscCall(PffGridZeroChannel(p->grid, chMom));
   if (nv) PetscCall(PffGridZeroChannel(p->grid, chVolume));
 
-  /* blocks sorted by colour (counting sort) */
-
-  for (PetscInt lb = 0; lb < nlocal; lb++) {
-    PetscInt c = 0;
-    for (int a = 0, m = 1; a < 3; a++, m *= 3) {
-      const PetscInt  ia  = info[lb].ijk[a];
-      const PetscBool odd = (PetscBool)(p->periodic[a] && (p->nb[a] & 1) && ia == p->nb[a] - 1);
-      c += m * (odd ? 2 : (ia & 1));
-    }
-    colour[lb] = c;
-    cstart[c + 1]++;
-  }
-  for (int c = 0; c < 27; c++) cstart[c + 1] += cstart[c];
-  {
-    PetscInt fill[27];
-    for (int c = 0; c < 27; c++) fill[c] = cstart[c];
-    for (PetscInt lb = 0; lb < nlocal; lb++) order[fill[colour[lb]]++] = lb;
-  }
+  PffParticlesColourOrder_Private(p, info, colour, order, cstart);
 
   const PffParticleSoA *s     = &p->s;
   const PetscInt       *start = p->start;
