@@ -239,8 +239,7 @@ static PetscErrorCode ReferenceLattice(PffFlow f, const uint8_t depth[], PetscBo
     for (PetscInt lb = 0; lb < nlocal; lb++) {
       if (!whole[lb] && !copy[lb]) continue;
       PetscCall(PffCopyChannel(f->grid, lb, f->chMass, f->chMassRef, copy[lb], (PetscBool)(k > 0)));
-      if (f->chVolRef >= 0)
-        PetscCall(PffCopyChannel(f->grid, lb, f->chVol, f->chVolRef, copy[lb], (PetscBool)(k > 0)));
+      if (f->chVolRef >= 0) PetscCall(PffCopyChannel(f->grid, lb, f->chVol, f->chVolRef, copy[lb], (PetscBool)(k > 0)));
     }
   }
   PetscCall(PffParticlesDestroy(&ref));

@@ -168,7 +168,7 @@ static inline PetscBool PffFlowCellOpen_Private(const PffView *vo[3], PetscInt i
     const PffView *o = &vo[d][PFF_REGION_SELF];
     if (o->ptr[o->off + c] > 0) return PETSC_TRUE;
     const PetscInt ii = i + (d == 0), jj = j + (d == 1), kk = k + (d == 2);
-    const PetscInt q  = c + (d == 0 ? 1 : (d == 1 ? n : n * n));
+    const PetscInt q = c + (d == 0 ? 1 : (d == 1 ? n : n * n));
     if ((inside ? o->ptr[o->off + q] : *PffViewsAt(vo[d], ii, jj, kk, n)) > 0) return PETSC_TRUE;
   }
   return PETSC_FALSE;

@@ -8,7 +8,8 @@
 static PetscLogStage PffFlowStages[PFF_FLOW_NSTAGES];
 static PetscBool     PffFlowStagesRegistered = PETSC_FALSE;
 
-/* the volume on the cell centres in the two-phase model (volume.c explains why), with P2G's faces in the liquid model */
+/* the volume on the cell centres in the two-phase model (volume.c explains why), with P2G's faces in the liquid model
+ */
 PetscErrorCode PffFlowSplat_Private(PffFlow f, PffParticles part, const PetscReal density[])
 {
   const PetscBool cells = (PetscBool)(f->chVol >= 0 && f->model == PFF_FLOW_TWO_PHASE);

@@ -35,7 +35,7 @@ static void PffSplatVolumeBlock(const PffParticleSoA *s, PetscInt i0, PetscInt i
     PffChunkLattice_Private(&s->x[3 * j0], cnt, lo, ih, n, &L);
     for (PetscInt j = 0; j < cnt; j++) {
       const float tx = L.th[0][j], ty = L.th[1][j], tz = L.th[2][j];
-      float      *t  = tile + (L.ih[0][j] + 1) + m * ((L.ih[1][j] + 1) + m * (L.ih[2][j] + 1));
+      float      *t     = tile + (L.ih[0][j] + 1) + m * ((L.ih[1][j] + 1) + m * (L.ih[2][j] + 1));
       const float wz[2] = {vol[j] * (1 - tz), vol[j] * tz}, wy[2] = {1 - ty, ty};
       for (int dk = 0; dk < 2; dk++)
         for (int dj = 0; dj < 2; dj++) {
@@ -57,10 +57,10 @@ static void PffSplatVolumeBlock(const PffParticleSoA *s, PetscInt i0, PetscInt i
 
 PetscErrorCode PffParticlesSplatVolume(PffParticles p, PetscInt chVolume)
 {
-  PffChannelKind kind;
-  PetscInt       ncomp, width, cstart[28], *order, *colour;
-  const char    *name;
-  PffBlockInfo  *info;
+  PffChannelKind  kind;
+  PetscInt        ncomp, width, cstart[28], *order, *colour;
+  const char     *name;
+  PffBlockInfo   *info;
   const PffView **views;
   float         **data, *tiles;
 

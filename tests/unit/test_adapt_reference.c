@@ -4,11 +4,11 @@
    A 32^3 box of 8^3 blocks on three levels: level 1 with a 2 x 2 x 2 cluster of level-0 blocks and a level-2
    corner. Map B moves the cluster by one block along x and the level-2 block to another corner, so that most blocks
    keep their level and some of them see a neighbour change. Two cases: a closed box with a solid sphere, and a box
-   periodic along x and z. Per raster block, channel (mass_ref, volume_ref) and face component the test sums the
-   values with weights that differ from face to face, on the adapted flow and on a flow set up on map B, and requires
-   them to agree to 1e-5 of the block's sum of |values| (the lattice is splatted in other batches, so rounding may
-   differ). It also requires that some blocks which kept their level changed their reference: the slabs are what the
-   test checks.
+   periodic along x and z. Per raster block, channel (mass_ref on the faces, volume_ref on the cells) and component the
+   test sums the values with weights that differ from face to face, on the adapted flow and on a flow set up on map B,
+   and requires them to agree to 1e-5 of the block's sum of |values| (the lattice is splatted in other batches, so
+   rounding may differ). It also requires that some blocks which kept their level changed their reference: the slabs are
+   what the test checks.
 
    Sample run:  mpiexec -n 4 ./test_adapt_reference
    Prints one line per case. */
@@ -93,7 +93,9 @@ static PetscErrorCode Sums(MPI_Comm comm, PffGrid grid, PetscReal sums[])
       PffBlockInfo info;
       PetscCall(PffGridGetBlockInfo(grid, lb, &info));
       const PetscInt n3 = info.n * info.n * info.n;
-      for (PetscInt d = 0; d < 3; d++) {
+      PffChannelKind kind;
+      PetscCall(PffGridGetChannelInfo(grid, ch, NULL, &kind, NULL, NULL));
+      for (PetscInt d = 0; d < (kind == PFF_CHANNEL_FACE ? 3 : 1); d++) {
         float     *v;
         PetscReal *s = &sums[((info.gid * 2 + m) * 3 + d) * 2];
         PetscCall(PffGridGetBlockData(grid, ch, lb, d, &v));

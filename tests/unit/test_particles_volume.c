@@ -1,15 +1,14 @@
 /* Unit test of PffParticlesSplatVolume (the cell-centre volume of the two-phase correction) at any rank count.
 
-   Conservation: jittered particles on a 3-level periodic grid (layers of levels 0, 1, 2, 1), moved 4 steps by a uniform field so that
-   particles of every level sit in blocks of every other level and beside every level boundary: the channel summed
-   over all owned cells equals the particles' volume (sum of 8^l_p) to 1e-6 relative. With the transfer across level
-   boundaries in densities (each value divided by 8^level, as P2G's faces are) the sum is off by several per cent, and
-   a particle's volume is then counted differently on the two sides of a boundary, which is what let the multi-level
-   pools pack particles beside their level boundaries (src/particles/volume.c).
-   Lattice: an unjittered lattice gives 8^(l + 1) in every cell of a level-l block that lies more than one cell from a
-   block of another level (1e-6 relative); the largest deviation beside level boundaries is printed.
-   Locality: a single particle at a random place adds its volume to at most the 8 cells around it on a uniform grid,
-   with the trilinear weights (1e-6).
+   Conservation: jittered particles on a 3-level periodic grid (layers of levels 0, 1, 2, 1), moved 4 steps by a uniform
+   field so that particles of every level sit in blocks of every other level and beside every level boundary: the
+   channel summed over all owned cells equals the particles' volume (sum of 8^l_p) to 1e-6 relative. With the transfer
+   across level boundaries in densities (each value divided by 8^level, as P2G's faces are) the sum is off by several
+   per cent, and a particle's volume is then counted differently on the two sides of a boundary, which is what let the
+   multi-level pools pack particles beside their level boundaries (src/particles/volume.c). Lattice: an unjittered
+   lattice gives 8^(l + 1) in every cell of a level-l block that lies more than one cell from a block of another level
+   (1e-6 relative); the largest deviation beside level boundaries is printed. Locality: a single particle at a random
+   place adds its volume to at most the 8 cells around it on a uniform grid, with the trilinear weights (1e-6).
 
    Sample run:  mpiexec -n 4 ./test_particles_volume
    Prints the same lines on any number of ranks. */
@@ -86,7 +85,7 @@ static PetscErrorCode TestConservation(void)
   PetscReal        vp, vg;
 
   PetscFunctionBeginUser;
-  PetscInt         request[16];
+  PetscInt request[16];
   /* layers of blocks along x at levels 0, 1, 2, 1 (periodic), with one level-1 block in the level-0 layer */
   for (PetscInt b = 0; b < 16; b++) request[b] = (PetscInt[]){0, 1, 2, 1}[b % 4];
   request[4] = 1;
@@ -103,8 +102,9 @@ static PetscErrorCode TestConservation(void)
   PetscCall(PffParticlesSplatVolume(part, chV));
   PetscCall(ParticleVolume(part, ctx.comm, &vp));
   PetscCall(ChannelSum(&ctx, chV, &vg));
-  PetscCall(PetscPrintf(ctx.comm, "conservation (%" PetscInt_FMT " levels): particle volume %.1f, on the cells %.1f, "
-                                  "relative difference %.1e\n",
+  PetscCall(PetscPrintf(ctx.comm,
+                        "conservation (%" PetscInt_FMT " levels): particle volume %.1f, on the cells %.1f, "
+                        "relative difference %.1e\n",
                         nlev, (double)vp, (double)vg, (double)PetscAbsReal(vg / vp - 1)));
   PetscCheck(nlev == 3, ctx.comm, PETSC_ERR_PLIB, "the test grid has %" PetscInt_FMT " levels, not 3", nlev);
   PetscCheck(PetscAbsReal(vg / vp - 1) <= 1e-6, ctx.comm, PETSC_ERR_PLIB,
@@ -190,8 +190,8 @@ static PetscErrorCode TestWeights(void)
   for (uint64_t trial = 0; trial < 20; trial++) {
     PffParticleStats st;
     PetscReal        x[3], v[3] = {0, 0, 0}, g[3];
-    const uint8_t    type       = PFF_PARTICLE_LIQUID;
-    const int8_t     level      = 0;
+    const uint8_t    type  = PFF_PARTICLE_LIQUID;
+    const int8_t     level = 0;
     for (int a = 0; a < 3; a++) {
       /* grid units in [0, 16), on the store's float grid */
       g[a] = (PetscReal)(float)(16 * PffTestUniform01(PffTestKey(trial, (uint64_t)a, 7, 1)));
@@ -207,7 +207,8 @@ static PetscErrorCode TestWeights(void)
       PetscCall(PffGridGetBlockInfo(ctx.grid, lb, &info));
       PetscCall(PffGridGetBlockData(ctx.grid, chV, lb, 0, &w));
       for (PetscInt c = 0; c < N0 * N0 * N0; c++) {
-        const PetscInt cc[3] = {info.ijk[0] * N0 + c % N0, info.ijk[1] * N0 + (c / N0) % N0, info.ijk[2] * N0 + c / (N0 * N0)};
+        const PetscInt cc[3]  = {info.ijk[0] * N0 + c % N0, info.ijk[1] * N0 + (c / N0) % N0,
+                                 info.ijk[2] * N0 + c / (N0 * N0)};
         PetscReal      expect = 1;
         for (int a = 0; a < 3; a++) { /* periodic distance of the cell centre, in cells */
           PetscReal dd = PetscAbsReal((PetscReal)cc[a] + 0.5 - g[a]);
