@@ -182,6 +182,25 @@ static void PffSplatBlock(const PffParticleSoA *s, PetscInt i0, PetscInt i1, con
     }
 }
 
+PetscErrorCode PffParticlesSplatScratch_Private(PffParticles p, PffScratchSlot slot, PetscInt nviews,
+                                                PffBlockInfo **info, const PffView ***views, float ***data,
+                                                PetscInt **order, PetscInt **colour)
+{
+  const size_t n        = (size_t)p->nlocal;
+  const size_t bytes[5] = {sizeof(PffBlockInfo) * n, sizeof(const PffView *) * (size_t)nviews * n,
+                           sizeof(float *) * (size_t)nviews * n, sizeof(PetscInt) * n, sizeof(PetscInt) * n};
+  void        *ptrs[5];
+
+  PetscFunctionBeginUser;
+  PetscCall(PffParticlesGetScratch_Private(p, slot, 5, bytes, ptrs));
+  *info   = (PffBlockInfo *)ptrs[0];
+  *views  = (const PffView **)ptrs[1];
+  *data   = (float **)ptrs[2];
+  *order  = (PetscInt *)ptrs[3];
+  *colour = (PetscInt *)ptrs[4];
+  PetscFunctionReturn(PETSC_SUCCESS);
+}
+
 void PffParticlesColourOrder_Private(PffParticles p, const PffBlockInfo info[], PetscInt colour[], PetscInt order[],
                                      PetscInt cstart[28])
 {
@@ -209,7 +228,7 @@ PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTI
   PffBlockInfo   *info;
   const PffView **views;
   float         **data;
-  PetscInt       *order, cstart[28];
+  PetscInt       *order = NULL, *colour = NULL, cstart[28];
 
   PetscFunctionBeginUser;
   PetscCall(PffParticlesCheckBinned_Private(p, "PffParticlesP2G")); /* may rebin after an adapt */
@@ -221,19 +240,7 @@ PetscErrorCode PffParticlesP2G(PffParticles p, const PetscReal density[PFF_PARTI
   if (chVolume >= 0) PetscCall(PffCheckFaceChannel(p->grid, chVolume, "P2G volume"));
   const PetscInt nv = chVolume >= 0 ? 3 : 0, stride = 6 + nv;
   PetscCall(PetscLogEventBegin(PFF_P2G, 0, 0, 0, 0));
-  PetscInt *colour;
-  {
-    const size_t bytes[5] = {sizeof(PffBlockInfo) * (size_t)nlocal, sizeof(const PffView *) * (size_t)(stride * nlocal),
-                             sizeof(float *) * (size_t)(stride * nlocal), sizeof(PetscInt) * (size_t)nlocal,
-                             sizeof(PetscInt) * (size_t)nlocal};
-    void        *ptrs[5];
-    PetscCall(PffParticlesGetScratch_Private(p, PFF_SCRATCH_P2G, 5, bytes, ptrs));
-    info   = (PffBlockInfo *)ptrs[0];
-    views  = (const PffView **)ptrs[1];
-    data   = (float **)ptrs[2];
-    order  = (PetscInt *)ptrs[3];
-    colour = (PetscInt *)ptrs[4];
-  }
+  PetscCall(PffParticlesSplatScratch_Private(p, PFF_SCRATCH_P2G, stride, &info, &views, &data, &order, &colour));
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PetscCall(PffGridGetBlockInfo(p->grid, lb, &info[lb]));
     for (PetscInt comp = 0; comp < 3; comp++) {

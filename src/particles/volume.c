@@ -58,7 +58,7 @@ static void PffSplatVolumeBlock(const PffParticleSoA *s, PetscInt i0, PetscInt i
 PetscErrorCode PffParticlesSplatVolume(PffParticles p, PetscInt chVolume)
 {
   PffChannelKind  kind;
-  PetscInt        ncomp, width, cstart[28], *order, *colour;
+  PetscInt        ncomp, width, cstart[28], *order = NULL, *colour = NULL;
   const char     *name;
   PffBlockInfo   *info;
   const PffView **views;
@@ -72,18 +72,7 @@ PetscErrorCode PffParticlesSplatVolume(PffParticles p, PetscInt chVolume)
              name);
   const PetscInt nlocal = p->nlocal;
   PetscCall(PetscLogEventBegin(PFF_P2G, 0, 0, 0, 0));
-  {
-    const size_t bytes[5] = {sizeof(PffBlockInfo) * (size_t)nlocal, sizeof(const PffView *) * (size_t)nlocal,
-                             sizeof(float *) * (size_t)nlocal, sizeof(PetscInt) * (size_t)nlocal,
-                             sizeof(PetscInt) * (size_t)nlocal};
-    void        *ptrs[5];
-    PetscCall(PffParticlesGetScratch_Private(p, PFF_SCRATCH_VOLUME, 5, bytes, ptrs));
-    info   = (PffBlockInfo *)ptrs[0];
-    views  = (const PffView **)ptrs[1];
-    data   = (float **)ptrs[2];
-    order  = (PetscInt *)ptrs[3];
-    colour = (PetscInt *)ptrs[4];
-  }
+  PetscCall(PffParticlesSplatScratch_Private(p, PFF_SCRATCH_VOLUME, 1, &info, &views, &data, &order, &colour));
   for (PetscInt lb = 0; lb < nlocal; lb++) {
     PetscCall(PffGridGetBlockInfo(p->grid, lb, &info[lb]));
     PetscCall(PffGridGetBlockViews(p->grid, chVolume, lb, 0, &views[lb]));

@@ -93,6 +93,23 @@ static inline void PffTestRandomMap(const PetscInt nb[3], PetscInt nlevels, Pets
   }
 }
 
+/* Whether cell or face c of a block lies more than reach cells from every neighbour block of another level. */
+static inline PetscBool PffTestAwayFromLevelJumps(const PffTestCtx *ctx, const PffBlockInfo *info, const PetscInt c[3],
+                                                  PetscInt reach)
+{
+  const PetscInt n = info->n;
+  for (PetscInt r = 0; r < 27; r++) {
+    PetscInt d[3], near = 1;
+    PffRegionDirection(r, d);
+    for (int a = 0; a < 3; a++)
+      if ((d[a] < 0 && c[a] > reach) || (d[a] > 0 && c[a] < n - 1 - reach)) near = 0;
+    if (r == PFF_REGION_SELF || !near) continue;
+    const PetscInt nbr = PffRasterNeighbour(ctx->nb, ctx->periodic, info->ijk, d);
+    if (nbr >= 0 && ctx->level[nbr] != info->level) return PETSC_FALSE;
+  }
+  return PETSC_TRUE;
+}
+
 /* A grid of nb blocks of n0 cells with the levels of PffTestRandomMap. */
 static inline PetscErrorCode PffTestCreateGrid(MPI_Comm comm, const PetscInt nb[3], const PetscBool periodic[3],
                                                const PetscReal origin[3], PetscReal h0, PetscInt n0, PetscInt nlevels,

@@ -71,22 +71,6 @@ static PetscErrorCode CreateParticles(PffTestCtx *ctx, const char jitter[], PffS
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Whether face (i, j, k) of block gid is more than 2 cells from every neighbour of another level. */
-static PetscBool AwayFromLevelJumps(const PffTestCtx *ctx, const PffBlockInfo *info, const PetscInt c[3])
-{
-  const PetscInt n = info->n;
-  for (PetscInt r = 0; r < 27; r++) {
-    PetscInt d[3], near = 1;
-    PffRegionDirection(r, d);
-    for (int a = 0; a < 3; a++)
-      if ((d[a] < 0 && c[a] > 2) || (d[a] > 0 && c[a] < n - 3)) near = 0;
-    if (r == 13 || !near) continue;
-    const PetscInt nbr = PffRasterNeighbour(ctx->nb, ctx->periodic, info->ijk, d);
-    if (nbr >= 0 && ctx->level[nbr] != info->level) return PETSC_FALSE;
-  }
-  return PETSC_TRUE;
-}
-
 static PetscErrorCode TestKernelSum(PetscInt nlevels, PetscInt uniform)
 {
   const PetscInt  nb[3]       = {3, 2, 2};
@@ -115,7 +99,7 @@ static PetscErrorCode TestKernelSum(PetscInt nlevels, PetscInt uniform)
       for (PetscInt c = 0; c < n * n * n; c++) {
         const PetscInt  cc[3] = {c % n, (c / n) % n, c / (n * n)};
         const PetscReal e     = PetscAbsReal((PetscReal)m[c] / (density[0] * rho0) - 1);
-        const int       at    = AwayFromLevelJumps(&ctx, &info, cc) ? 0 : 1;
+        const int       at    = PffTestAwayFromLevelJumps(&ctx, &info, cc, 2) ? 0 : 1;
         err[at]               = PetscMax(err[at], e);
         PetscCheck(PetscAbsReal((PetscReal)mom[c] - V0[comp] * (PetscReal)m[c]) <= 1e-5 * PetscAbsReal((PetscReal)m[c]),
                    PETSC_COMM_SELF, PETSC_ERR_PLIB, "momentum is not v * mass at a face");

@@ -114,22 +114,6 @@ static PetscErrorCode TestConservation(void)
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* Whether cell c of a block is more than one cell from every neighbour block of another level */
-static PetscBool AwayFromLevelJumps(const PffTestCtx *ctx, const PffBlockInfo *info, const PetscInt c[3])
-{
-  const PetscInt n = info->n;
-  for (PetscInt r = 0; r < 27; r++) {
-    PetscInt d[3], near = 1;
-    PffRegionDirection(r, d);
-    for (int a = 0; a < 3; a++)
-      if ((d[a] < 0 && c[a] > 1) || (d[a] > 0 && c[a] < n - 2)) near = 0;
-    if (r == PFF_REGION_SELF || !near) continue;
-    const PetscInt nbr = PffRasterNeighbour(ctx->nb, ctx->periodic, info->ijk, d);
-    if (nbr >= 0 && ctx->level[nbr] != info->level) return PETSC_FALSE;
-  }
-  return PETSC_TRUE;
-}
-
 static PetscErrorCode TestLattice(void)
 {
   const PetscInt  nb[3]       = {3, 2, 2};
@@ -154,7 +138,7 @@ static PetscErrorCode TestLattice(void)
     const PetscReal expect = (PetscReal)(8u << (3 * info.level));
     for (PetscInt c = 0; c < n * n * n; c++) {
       const PetscInt cc[3] = {c % n, (c / n) % n, c / (n * n)};
-      const int      at    = AwayFromLevelJumps(&ctx, &info, cc) ? 0 : 1;
+      const int      at    = PffTestAwayFromLevelJumps(&ctx, &info, cc, 1) ? 0 : 1;
       err[at]              = PetscMax(err[at], PetscAbsReal((PetscReal)w[c] / expect - 1));
     }
   }
