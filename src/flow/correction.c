@@ -260,8 +260,9 @@ static PetscErrorCode ReferenceLattice(PffFlow f, const uint8_t depth[], PetscBo
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* The lattice on the regions of depth when there are any, then volume_ref's halo in any case: a re-partition moves
-   blocks without changing their levels. Collective. */
+/* The lattice on the regions of depth when there are any, then, for the liquid model, which reads volume_ref's faces
+   through their halo, that halo in any case: a re-partition moves blocks without changing their levels (the two-phase
+   measure reads its own cells only). Collective. */
 static PetscErrorCode ReferenceRegions(PffFlow f, const uint8_t depth[], PetscBool trim)
 {
   PetscInt  nb[3];
@@ -271,7 +272,7 @@ static PetscErrorCode ReferenceRegions(PffFlow f, const uint8_t depth[], PetscBo
   PetscCall(PffGridGetRaster(f->grid, nb, NULL, NULL));
   for (PetscInt b = 0; b < 27 * nb[0] * nb[1] * nb[2] && !any; b++) any = (PetscBool)(depth[b] > 0);
   if (any) PetscCall(ReferenceLattice(f, depth, trim));
-  if (f->chVolRef >= 0) {
+  if (f->chVolRef >= 0 && f->model == PFF_FLOW_LIQUID) {
     PetscCall(PffGridHaloBegin(f->grid, f->chVolRef));
     PetscCall(PffGridHaloEnd(f->grid, f->chVolRef));
   }

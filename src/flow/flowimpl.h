@@ -159,7 +159,8 @@ static inline void PffFlowCellVolumes_Private(const PffView *vw[3], const PffVie
   if (nopen) *nopen = no;
 }
 
-/* Whether cell (i, j, k) of an n^3 block has an open face (vo: the open fractions' face views) */
+/* Whether cell (i, j, k) of an n^3 block has an open face (vo: the open fractions' face views, its upper faces through
+   their halo): a fluid cell, not one inside a solid */
 static inline PetscBool PffFlowCellOpen_Private(const PffView *vo[3], PetscInt i, PetscInt j, PetscInt k, PetscInt n)
 {
   const PetscBool inside = (PetscBool)(i < n - 1 && j < n - 1 && k < n - 1);
@@ -196,10 +197,6 @@ static inline PetscInt PffFlowFaceNeighbours_Private(const PffBlockInfo *info, c
 }
 
 /* adapt.c */
-/* P2G of particles part (the flow's, or a reference lattice) into chMass and chUt, and their volume into chVol when
-   there is a volume correction: on the cell centres in the two-phase model, on the faces (with P2G) in the liquid
-   model. Collective. */
-PETSC_INTERN PetscErrorCode PffFlowSplat_Private(PffFlow, PffParticles part, const PetscReal density[]);
 PETSC_INTERN PetscErrorCode PffFlowAdaptSetUp_Private(PffFlow);
 PETSC_INTERN PetscErrorCode PffFlowAdaptDestroy_Private(PffFlow);
 PETSC_INTERN PetscErrorCode PffFlowAdapt_Private(PffFlow, PffFlowAdaptStats *);
@@ -210,6 +207,11 @@ PETSC_INTERN PetscErrorCode PffFlowLiquidProject_Private(PffFlow, PetscReal dt, 
 PETSC_INTERN PetscErrorCode PffFlowLiquidG2P_Private(PffFlow, const PetscReal alpha[]);
 PETSC_INTERN PetscErrorCode PffFlowLiquidQuadtree_Private(PffFlow, PffSeedFn, void *);
 PETSC_INTERN PetscErrorCode PffFlowCheckTopology_Private(PffFlow);
+/* step.c */
+/* P2G of particles part (the flow's, or a reference lattice) into chMass and chUt, and their volume into chVol when
+   there is a volume correction: on the cell centres in the two-phase model, on the faces (with P2G) in the liquid
+   model. Collective. */
+PETSC_INTERN PetscErrorCode PffFlowSplat_Private(PffFlow, PffParticles part, const PetscReal density[]);
 /* phase.c */
 PETSC_INTERN PetscErrorCode PffFlowPhaseField_Private(PffFlow);
 /* correction.c */

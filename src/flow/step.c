@@ -8,8 +8,7 @@
 static PetscLogStage PffFlowStages[PFF_FLOW_NSTAGES];
 static PetscBool     PffFlowStagesRegistered = PETSC_FALSE;
 
-/* the volume on the cell centres in the two-phase model (volume.c explains why), with P2G's faces in the liquid model
- */
+/* the two-phase model's volume on the cell centres: src/particles/volume.c says why */
 PetscErrorCode PffFlowSplat_Private(PffFlow f, PffParticles part, const PetscReal density[])
 {
   const PetscBool cells = (PetscBool)(f->chVol >= 0 && f->model == PFF_FLOW_TWO_PHASE);
@@ -20,7 +19,7 @@ PetscErrorCode PffFlowSplat_Private(PffFlow f, PffParticles part, const PetscRea
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-PetscErrorCode PffFlowRegisterStages(void)
+static PetscErrorCode PffFlowRegisterStages(void)
 {
   PetscFunctionBeginUser;
   if (PffFlowStagesRegistered) PetscFunctionReturn(PETSC_SUCCESS);

@@ -11,15 +11,6 @@
    driver after each step; it does not update the phase field. */
 #include "flowimpl.h"
 
-/* A cell with at least one open face (its upper faces through the halo of chOpen). */
-static inline PetscBool FluidCell(const PffView *const vopen[3], PetscInt i, PetscInt j, PetscInt k, PetscInt n)
-{
-  for (PetscInt d = 0; d < 3; d++)
-    if (*PffViewsAt(vopen[d], i, j, k, n) > 0 || *PffViewsAt(vopen[d], i + (d == 0), j + (d == 1), k + (d == 2), n) > 0)
-      return PETSC_TRUE;
-  return PETSC_FALSE;
-}
-
 PetscErrorCode PffFlowGetPhaseVolumes(PffFlow f, PetscReal *liquid, PetscReal *gas)
 {
   PetscInt  nlocal;
@@ -41,7 +32,7 @@ PetscErrorCode PffFlowGetPhaseVolumes(PffFlow f, PetscReal *liquid, PetscReal *g
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt j = 0; j < n; j++)
         for (PetscInt i = 0; i < n; i++) {
-          if (!FluidCell(vopen, i, j, k, n)) continue;
+          if (!PffFlowCellOpen_Private(vopen, i, j, k, n)) continue;
           const PetscReal p = (PetscReal)phi[i + n * (j + n * k)];
           s[0] += p;
           s[1] += 1 - p;
@@ -78,7 +69,7 @@ PetscErrorCode PffFlowGetLiquidExtent(PffFlow f, PetscReal front[2], PetscReal c
     for (PetscInt k = 0; k < n; k++)
       for (PetscInt j = 0; j < n; j++)
         for (PetscInt i = 0; i < n; i++) {
-          if (!FluidCell(vopen, i, j, k, n)) continue;
+          if (!PffFlowCellOpen_Private(vopen, i, j, k, n)) continue;
           const PetscReal p    = (PetscReal)phi[i + n * (j + n * k)];
           const PetscReal x[3] = {info.lo[0] + (i + 0.5) * h, info.lo[1] + (j + 0.5) * h, info.lo[2] + (k + 0.5) * h};
           if (p >= 0.5) {

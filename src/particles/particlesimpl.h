@@ -444,19 +444,19 @@ static inline void PffChunkLatticeOf_Private(const PffChunkLattice *L, int d, co
   }
 }
 
-/* The ghost shell (the gw layers beyond the block) of a block tile of (n + 2 gw)^3 floats from cell -gw, copied
-   from the block's views (add false) or added to them (add true; zeros skipped). */
-/* The local blocks in splat order: colour[lb] (0..26) from the parity of the raster coordinates (on a periodic axis
-   with an odd block count the last block gets colour 2, since it touches block 0), order[] the blocks sorted by
-   colour (stable), cstart[c] .. cstart[c + 1] - 1 the range of colour c in it. Two blocks of one colour never write
-   the same cell or face of a tile with one ghost layer. */
 /* The scratch of a splat over the local blocks (slot): per block its info, nviews view and data pointers (block lb's at
    [nviews lb, nviews (lb + 1))), and the colour order's two arrays, valid until the slot's next use. */
 PETSC_INTERN PetscErrorCode PffParticlesSplatScratch_Private(PffParticles, PffScratchSlot slot, PetscInt nviews,
                                                              PffBlockInfo **info, const PffView ***views, float ***data,
                                                              PetscInt **order, PetscInt **colour);
-PETSC_INTERN void           PffParticlesColourOrder_Private(PffParticles, const PffBlockInfo info[], PetscInt colour[],
-                                                            PetscInt order[], PetscInt cstart[28]);
+/* The local blocks in splat order: colour[lb] (0..26) from the parity of the raster coordinates (on a periodic axis
+   with an odd block count the last block gets colour 2, since it touches block 0), order[] the blocks sorted by
+   colour (stable), cstart[c] .. cstart[c + 1] - 1 the range of colour c in it. Two blocks of one colour never write
+   the same cell or face of a tile with one ghost layer. */
+PETSC_INTERN void PffParticlesColourOrder_Private(PffParticles, const PffBlockInfo info[], PetscInt colour[],
+                                                  PetscInt order[], PetscInt cstart[28]);
+/* The ghost shell (the gw layers beyond the block) of a block tile of (n + 2 gw)^3 floats from cell -gw, copied
+   from the block's views (add false) or added to them (add true; zeros skipped). */
 PETSC_INTERN void PffTileShell_Private(const PffView *views, PetscInt n, PetscInt gw, float *tile, PetscBool add);
 /* A sampler of nch channels whose tiles hold gw ghost layers (the channels' halos must be as wide). */
 PETSC_INTERN PetscErrorCode PffSamplerCreate_Private(PffParticles, PetscInt nch, const PetscInt ch[], PetscInt gw,

@@ -44,32 +44,26 @@ static PetscErrorCode CreateParticles(PffTestCtx *ctx, const char jitter[], PffP
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
-/* The particles' volume in level-0 particles, summed in double over all ranks */
-static PetscErrorCode ParticleVolume(PffParticles part, MPI_Comm comm, PetscReal *v)
+/* The particles' volume in level-0 particles (vp) and the channel summed over all owned cells (vg), in double over
+   all ranks */
+static PetscErrorCode Totals(PffTestCtx *ctx, PffParticles part, PetscInt ch, PetscReal *vp, PetscReal *vg)
 {
   PffParticleArrays a;
+  PetscReal         v[2] = {0, 0};
 
   PetscFunctionBeginUser;
   PetscCall(PffParticlesGetArrays(part, &a));
-  *v = 0;
-  for (PetscInt i = 0; i < a.n; i++) *v += (PetscReal)(1u << (3 * PffParticleWordLevel(a.word[i])));
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, v, 1, MPIU_REAL, MPI_SUM, comm));
-  PetscFunctionReturn(PETSC_SUCCESS);
-}
-
-/* The channel summed over all owned cells, in double */
-static PetscErrorCode ChannelSum(PffTestCtx *ctx, PetscInt ch, PetscReal *sum)
-{
-  PetscFunctionBeginUser;
-  *sum = 0;
+  for (PetscInt i = 0; i < a.n; i++) v[0] += (PetscReal)(1u << (3 * PffParticleWordLevel(a.word[i])));
   for (PetscInt lb = 0; lb < ctx->nlocal; lb++) {
     PffBlockInfo info;
     float       *w;
     PetscCall(PffGridGetBlockInfo(ctx->grid, lb, &info));
     PetscCall(PffGridGetBlockData(ctx->grid, ch, lb, 0, &w));
-    for (PetscInt c = 0; c < info.n * info.n * info.n; c++) *sum += (PetscReal)w[c];
+    for (PetscInt c = 0; c < info.n * info.n * info.n; c++) v[1] += (PetscReal)w[c];
   }
-  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, sum, 1, MPIU_REAL, MPI_SUM, ctx->comm));
+  PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, v, 2, MPIU_REAL, MPI_SUM, ctx->comm));
+  *vp = v[0];
+  *vg = v[1];
   PetscFunctionReturn(PETSC_SUCCESS);
 }
 
@@ -100,8 +94,7 @@ static PetscErrorCode TestConservation(void)
   /* 4 steps of 1.7 finest cells: every particle leaves its sub-cell, many their block */
   for (PetscInt s = 0; s < 4; s++) PetscCall(PffParticlesAdvect(part, chU, 1.7 * ctx.h0 / u[0], NULL, NULL, &st));
   PetscCall(PffParticlesSplatVolume(part, chV));
-  PetscCall(ParticleVolume(part, ctx.comm, &vp));
-  PetscCall(ChannelSum(&ctx, chV, &vg));
+  PetscCall(Totals(&ctx, part, chV, &vp, &vg));
   PetscCall(PetscPrintf(ctx.comm,
                         "conservation (%" PetscInt_FMT " levels): particle volume %.1f, on the cells %.1f, "
                         "relative difference %.1e\n",
@@ -143,8 +136,7 @@ static PetscErrorCode TestLattice(void)
     }
   }
   PetscCallMPI(MPI_Allreduce(MPI_IN_PLACE, err, 2, MPIU_REAL, MPI_MAX, ctx.comm));
-  PetscCall(ParticleVolume(part, ctx.comm, &vp));
-  PetscCall(ChannelSum(&ctx, chV, &vg));
+  PetscCall(Totals(&ctx, part, chV, &vp, &vg));
   PetscCall(PetscPrintf(ctx.comm,
                         "lattice (2 levels): max relative deviation from 8^(l+1) %.1e away from level boundaries, %.3f "
                         "beside them; total %.1e off\n",
