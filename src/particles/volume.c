@@ -7,13 +7,12 @@
    around it, across level boundaries as well (walls drop the part beyond them, which the lattice reference holds
    too).
 
-   Why cell centres and not the faces of P2G: the face measure of a cell, summed over its six faces, weighs a
-   particle by where it sits in the cell, and at a level boundary the faces mix the two levels' lattices. A particle
-   a fraction of a cell below a coarse-fine boundary counted half as much in its coarse cell as one in the cell's
-   middle, so the correction could meet its target by packing particles into that sliver instead of moving volume:
-   the multi-level pools gathered a few per cent of a cell layer there within a few hundred steps, lowered their
-   surface, and the volume control, chasing the lost phase-field volume, drove them to 1-2 m/s within 1000 steps
-   (docs/validation.md, "Long still pools on multi-level grids"). */
+   Why cell centres and not the faces of P2G: the face measure of a cell sums its six faces, and at a level boundary
+   those faces hold values moved across levels in densities (P2G's "8^-l_f" is not applied to them, up to 157 % off
+   for a lattice; only the lattice reference hid that). With it the multi-level still pools lost phase-field volume at
+   their surface (0.51 % in 1000 steps without the volume control), the control lowered its target without end, and
+   the pools reached 1-2 m/s within 1000 steps; with the cell measure they lose 0.02 % and stay below 0.01 m/s
+   (docs/validation.md, "Long still pools on multi-level grids", which also shows what it does not change). */
 #include "particlesimpl.h"
 #include <omp.h>
 

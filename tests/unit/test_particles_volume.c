@@ -2,13 +2,12 @@
 
    Conservation: jittered particles on a 3-level periodic grid (layers of levels 0, 1, 2, 1), moved 4 steps by a uniform
    field so that particles of every level sit in blocks of every other level and beside every level boundary: the
-   channel summed over all owned cells equals the particles' volume (sum of 8^l_p) to 1e-6 relative. With the transfer
-   across level boundaries in densities (each value divided by 8^level, as P2G's faces are) the sum is off by several
-   per cent, and a particle's volume is then counted differently on the two sides of a boundary, which is what let the
-   multi-level pools pack particles beside their level boundaries (src/particles/volume.c). Lattice: an unjittered
-   lattice gives 8^(l + 1) in every cell of a level-l block that lies more than one cell from a block of another level
-   (1e-6 relative); the largest deviation beside level boundaries is printed. Locality: a single particle at a random
-   place adds its volume to at most the 8 cells around it on a uniform grid, with the trilinear weights (1e-6).
+   channel summed over all owned cells equals the particles' volume (sum of 8^l_p) to 1e-6 relative. With the values
+   in densities (each divided by its block's 8^level, as P2G's faces are) the cells hold about a quarter of it and the
+   test fails. Lattice: an unjittered lattice gives 8^(l + 1) in every cell of a level-l block that lies more than one
+   cell from a block of another level (1e-6 relative); the largest deviation beside level boundaries is printed.
+   Locality: a single particle at a random place adds its volume to at most the 8 cells around it on a uniform grid,
+   with the trilinear weights (1e-6).
 
    Sample run:  mpiexec -n 4 ./test_particles_volume
    Prints the same lines on any number of ranks. */
